@@ -1,0 +1,1 @@
+//! The film: linear HDR accumulation, AOVs, and EXR/PNG output.

@@ -1,0 +1,14 @@
+//! splitray: a Vulkan-native ray tracing and light transport engine.
+//!
+//! Layers, bottom to top:
+//! - [`vk`]: the only place with `unsafe` and raw `ash` — instance, device, streams,
+//!   buffers, pipelines, command recording, profiling.
+//! - [`shaders`]: SPIR-V compiled from `glsl/` at build time.
+//! - [`scene`], [`film`]: scene input and image output (CPU only).
+//! - [`trace`]: the `Tracer` interface and its implementations.
+//! - [`integrator`]: what is computed along the rays.
+//! - [`render`]: ties a scene, a tracer and an integrator into a film.
+
+pub mod film;
+pub mod scene;
+pub mod shaders;
