@@ -46,9 +46,18 @@ fn main() {
                 println!("cargo:warning={line}");
             }
         }
-        panic!("{} shader(s) failed to compile:\n{}", errors.len(), errors.join("\n"));
+        panic!(
+            "{} shader(s) failed to compile:\n{}",
+            errors.len(),
+            errors.join("\n")
+        );
     }
-    writeln!(table, "/// Every kernel, for lookup by name.\npub const ALL: &[Kernel] = &[{}];", names.join(", ")).unwrap();
+    writeln!(
+        table,
+        "/// Every kernel, for lookup by name.\npub const ALL: &[Kernel] = &[{}];",
+        names.join(", ")
+    )
+    .unwrap();
     std::fs::write(out_dir.join("shaders.rs"), table).expect("cannot write shaders.rs");
 }
 

@@ -12,3 +12,4 @@
 pub mod film;
 pub mod scene;
 pub mod shaders;
+pub mod vk;

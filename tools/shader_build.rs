@@ -10,6 +10,7 @@ use std::fmt;
 use std::path::{Path, PathBuf};
 
 /// One compiled SPIR-V module.
+#[derive(Debug)]
 pub struct CompiledKernel {
     /// `dir_stem` style identifier, e.g. `trace_brute_force` or `test_copy__wide`.
     pub name: String,
@@ -65,7 +66,10 @@ fn parse_variants(source: &str) -> Vec<Variant> {
 /// becomes `trace_brute_force`.
 pub fn kernel_name(glsl_root: &Path, file: &Path) -> String {
     let rel = file.strip_prefix(glsl_root).unwrap_or(file);
-    let mut name = rel.with_extension("").to_string_lossy().replace(['/', '\\', '-', '.'], "_");
+    let mut name = rel
+        .with_extension("")
+        .to_string_lossy()
+        .replace(['/', '\\', '-', '.'], "_");
     name.make_ascii_lowercase();
     name
 }

@@ -1,0 +1,277 @@
+//! Buffers allocated through gpu-allocator, with upload and readback.
+//!
+//! Every engine buffer is a storage buffer that can also be copied, filled and read as
+//! indirect arguments. On devices whose memory is host-visible (lavapipe, integrated
+//! GPUs), device buffers are allocated mapped and transfers are plain copies; elsewhere
+//! they go through staging buffers on the main stream.
+
+use ash::vk;
+use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
+use gpu_allocator::MemoryLocation;
+
+use super::device::Gpu;
+use super::error::{CallContext, Result, VkError};
+
+/// Where a buffer lives.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MemoryKind {
+    /// Fastest memory for the GPU (mapped too when the device is host-visible anyway).
+    Device,
+    /// Host-written, GPU-read.
+    Upload,
+    /// GPU-written, host-read.
+    Readback,
+}
+
+/// A buffer and its memory. Dropping it frees both: the caller must make sure the GPU
+/// is done with it (wait on the timeline point of the last submission using it).
+pub struct Buffer {
+    gpu: Gpu,
+    pub(crate) raw: vk::Buffer,
+    allocation: Option<Allocation>,
+    /// Size in bytes as requested (the Vulkan buffer is at least 4 bytes).
+    size: u64,
+    name: String,
+}
+
+impl std::fmt::Debug for Buffer {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Buffer")
+            .field("name", &self.name)
+            .field("size", &self.size)
+            .finish()
+    }
+}
+
+/// A byte range of a buffer, for binding to a kernel.
+#[derive(Clone, Copy, Debug)]
+pub struct BufferSlice<'a> {
+    pub buffer: &'a Buffer,
+    pub offset: u64,
+    pub size: u64,
+}
+
+impl<'a> From<&'a Buffer> for BufferSlice<'a> {
+    fn from(buffer: &'a Buffer) -> Self {
+        buffer.slice(0, buffer.size())
+    }
+}
+
+impl Gpu {
+    /// Whether device-local memory is also host-visible, so no staging is needed.
+    pub fn unified_memory(&self) -> bool {
+        self.0.info.is_cpu()
+    }
+
+    /// Allocates a buffer of `size` bytes (contents undefined).
+    pub fn create_buffer(&self, name: &str, size: u64, kind: MemoryKind) -> Result<Buffer> {
+        let limit = self.0.info.limits.max_storage_buffer_range;
+        if size > limit {
+            return Err(VkError::BufferTooLarge {
+                name: name.to_string(),
+                size,
+                limit,
+            });
+        }
+        // Vulkan forbids empty buffers; round up so vkCmdFillBuffer's 4-byte rule holds.
+        let vk_size = size.max(4).next_multiple_of(4);
+        let families: Vec<u32> = {
+            let mut f: Vec<u32> = self.0.streams.iter().map(|s| s.family).collect();
+            f.sort_unstable();
+            f.dedup();
+            f
+        };
+        let mut info = vk::BufferCreateInfo::default().size(vk_size).usage(
+            vk::BufferUsageFlags::STORAGE_BUFFER
+                | vk::BufferUsageFlags::TRANSFER_SRC
+                | vk::BufferUsageFlags::TRANSFER_DST
+                | vk::BufferUsageFlags::INDIRECT_BUFFER,
+        );
+        // Streams on several queue families share buffers without ownership transfers.
+        info = if families.len() > 1 {
+            info.sharing_mode(vk::SharingMode::CONCURRENT)
+                .queue_family_indices(&families)
+        } else {
+            info.sharing_mode(vk::SharingMode::EXCLUSIVE)
+        };
+        let device = &self.0.raw;
+        // SAFETY: valid device and create info.
+        let raw = unsafe { device.create_buffer(&info, None) }.call("vkCreateBuffer")?;
+        // SAFETY: raw was just created on this device.
+        let requirements = unsafe { device.get_buffer_memory_requirements(raw) };
+        let location = match kind {
+            MemoryKind::Device if self.unified_memory() => MemoryLocation::CpuToGpu,
+            MemoryKind::Device => MemoryLocation::GpuOnly,
+            MemoryKind::Upload => MemoryLocation::CpuToGpu,
+            MemoryKind::Readback => MemoryLocation::GpuToCpu,
+        };
+        let allocation = self
+            .0
+            .allocator
+            .lock()
+            .unwrap()
+            .allocate(&AllocationCreateDesc {
+                name,
+                requirements,
+                location,
+                linear: true,
+                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+            });
+        let allocation = match allocation {
+            Ok(a) => a,
+            Err(source) => {
+                // SAFETY: unused buffer of this device.
+                unsafe { device.destroy_buffer(raw, None) };
+                return Err(VkError::Alloc {
+                    name: name.to_string(),
+                    source,
+                });
+            }
+        };
+        // SAFETY: memory and offset come from the allocator for this buffer's requirements.
+        unsafe { device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) }
+            .call("vkBindBufferMemory")?;
+        self.0.memory.add(allocation.size());
+        self.set_object_name(raw, name);
+        Ok(Buffer {
+            gpu: self.clone(),
+            raw,
+            allocation: Some(allocation),
+            size,
+            name: name.to_string(),
+        })
+    }
+
+    /// Creates a device buffer holding `data`. Returns once the data is on the GPU.
+    pub fn upload<T: bytemuck::Pod>(&self, name: &str, data: &[T]) -> Result<Buffer> {
+        let bytes: &[u8] = bytemuck::cast_slice(data);
+        let buffer = self.create_buffer(name, bytes.len() as u64, MemoryKind::Device)?;
+        buffer.write(data)?;
+        Ok(buffer)
+    }
+
+    /// Creates a device buffer of `len` elements of `T`, all zero bytes.
+    pub fn zeroed<T: bytemuck::Pod>(&self, name: &str, len: usize) -> Result<Buffer> {
+        let buffer = self.create_buffer(name, (len * size_of::<T>()) as u64, MemoryKind::Device)?;
+        let mut rec = self.recorder(super::StreamKind::Main)?;
+        rec.fill(&buffer, 0);
+        let point = rec.submit(&[])?;
+        self.wait(&point)?;
+        Ok(buffer)
+    }
+}
+
+impl Buffer {
+    pub fn size(&self) -> u64 {
+        self.size
+    }
+
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// Number of whole `T` elements the buffer holds.
+    pub fn len<T>(&self) -> usize {
+        self.size as usize / size_of::<T>()
+    }
+
+    pub fn slice(&self, offset: u64, size: u64) -> BufferSlice<'_> {
+        BufferSlice {
+            buffer: self,
+            offset,
+            size,
+        }
+    }
+
+    fn mapped(&mut self) -> Option<&mut [u8]> {
+        let size = self.size as usize;
+        self.allocation
+            .as_mut()
+            .and_then(|a| a.mapped_slice_mut())
+            .map(|s| &mut s[..size])
+    }
+
+    /// Writes `data` at the start of the buffer: a copy into mapped memory, or through a
+    /// staging buffer. The GPU must not be using the buffer. Waits for completion.
+    pub fn write<T: bytemuck::Pod>(&self, data: &[T]) -> Result<()> {
+        let bytes: &[u8] = bytemuck::cast_slice(data);
+        if bytes.len() as u64 > self.size {
+            return Err(VkError::Usage(format!(
+                "write of {} bytes into buffer '{}' of {} bytes",
+                bytes.len(),
+                self.name,
+                self.size
+            )));
+        }
+        if bytes.is_empty() {
+            return Ok(());
+        }
+        if let Some(ptr) = self.allocation.as_ref().and_then(|a| a.mapped_ptr()) {
+            // SAFETY: the allocation is mapped, at least `size` bytes long, and not in use
+            // by the GPU (the caller's contract); the ranges cannot overlap.
+            unsafe {
+                std::ptr::copy_nonoverlapping(bytes.as_ptr(), ptr.as_ptr() as *mut u8, bytes.len())
+            };
+            return Ok(());
+        }
+        let mut staging =
+            self.gpu
+                .create_buffer("staging-upload", bytes.len() as u64, MemoryKind::Upload)?;
+        staging
+            .mapped()
+            .expect("upload memory is mapped")
+            .copy_from_slice(bytes);
+        let mut rec = self.gpu.recorder(super::StreamKind::Main)?;
+        rec.copy(&staging, 0, self, 0, bytes.len() as u64);
+        let point = rec.submit(&[])?;
+        self.gpu.wait(&point)
+    }
+
+    /// Reads the whole buffer back as `T`s. Runs after all work already submitted to the
+    /// main stream; work on other streams must be waited for first.
+    pub fn read<T: bytemuck::Pod>(&self) -> Result<Vec<T>> {
+        let n = self.len::<T>();
+        let bytes = n * size_of::<T>();
+        let mut out = vec![T::zeroed(); n];
+        if bytes == 0 {
+            return Ok(out);
+        }
+        if let Some(ptr) = self.allocation.as_ref().and_then(|a| a.mapped_ptr()) {
+            // Order the read after main-stream work that may write this buffer.
+            let rec = self.gpu.recorder(super::StreamKind::Main)?;
+            let point = rec.submit(&[])?;
+            self.gpu.wait(&point)?;
+            // SAFETY: mapped, host-coherent, at least `bytes` long; the GPU is done with it
+            // (the main stream drained and every submission ends with a host barrier).
+            unsafe {
+                std::ptr::copy_nonoverlapping(
+                    ptr.as_ptr() as *const u8,
+                    bytemuck::cast_slice_mut::<T, u8>(&mut out).as_mut_ptr(),
+                    bytes,
+                )
+            };
+            return Ok(out);
+        }
+        let mut staging =
+            self.gpu
+                .create_buffer("staging-readback", bytes as u64, MemoryKind::Readback)?;
+        let mut rec = self.gpu.recorder(super::StreamKind::Main)?;
+        rec.copy(self, 0, &staging, 0, bytes as u64);
+        let point = rec.submit(&[])?;
+        self.gpu.wait(&point)?;
+        bytemuck::cast_slice_mut::<T, u8>(&mut out)
+            .copy_from_slice(&staging.mapped().expect("readback memory is mapped")[..bytes]);
+        Ok(out)
+    }
+}
+
+impl Drop for Buffer {
+    fn drop(&mut self) {
+        if let Some(allocation) = self.allocation.take() {
+            self.gpu.0.memory.sub(allocation.size());
+            let _ = self.gpu.0.allocator.lock().unwrap().free(allocation);
+        }
+        // SAFETY: the caller guarantees the GPU no longer uses this buffer.
+        unsafe { self.gpu.0.raw.destroy_buffer(self.raw, None) };
+    }
+}

@@ -1,0 +1,464 @@
+//! Command recording: dispatches, barriers, copies, timestamp scopes, submission.
+
+use ash::vk;
+
+use super::buffer::{Buffer, BufferSlice};
+use super::device::{Gpu, InFlight, QUERIES_PER_POOL};
+use super::error::{CallContext, Result, VkError};
+use super::pipeline::ComputePipeline;
+use super::profiler::QueryBatch;
+use super::stream::{StreamKind, TimelinePoint};
+
+/// Records one command buffer for one stream. Every dispatch is named (debug label and
+/// timestamp scope under the kernel's name, or the innermost [`Recorder::begin_scope`]
+/// name if one is open). Nothing runs until [`Recorder::submit`].
+pub struct Recorder {
+    gpu: Gpu,
+    stream: StreamKind,
+    pool: vk::CommandPool,
+    cmd: vk::CommandBuffer,
+    queries: QueryBatch,
+    open_scopes: Vec<(String, u32)>,
+    submitted: bool,
+}
+
+/// Workgroup counts for `n` items in groups of `workgroup_size`, folded into y when x
+/// would exceed the device limit. Kernels recover the linear index with
+/// `linear_group_id()` from `glsl/common/grid.glsl`.
+pub fn grid_for(gpu: &Gpu, n: u64, workgroup_size: u32) -> [u32; 3] {
+    let groups = n.div_ceil(workgroup_size as u64);
+    let max_x = gpu.info().limits.max_compute_work_group_count[0] as u64;
+    if groups <= max_x {
+        [groups as u32, 1, 1]
+    } else {
+        let y = groups.div_ceil(max_x);
+        [groups.div_ceil(y) as u32, y as u32, 1]
+    }
+}
+
+impl Gpu {
+    /// Starts recording a command buffer for `stream`.
+    pub fn recorder(&self, stream: StreamKind) -> Result<Recorder> {
+        self.reclaim(stream)?;
+        let state = self.stream(stream);
+        let device = &self.0.raw;
+        let reused = state.state.lock().unwrap().free_pools.pop();
+        let pool = match reused {
+            Some(p) => p,
+            None => {
+                let info = vk::CommandPoolCreateInfo::default()
+                    .queue_family_index(state.family)
+                    .flags(vk::CommandPoolCreateFlags::TRANSIENT);
+                // SAFETY: valid device and family.
+                unsafe { device.create_command_pool(&info, None) }.call("vkCreateCommandPool")?
+            }
+        };
+        let alloc = vk::CommandBufferAllocateInfo::default()
+            .command_pool(pool)
+            .level(vk::CommandBufferLevel::PRIMARY)
+            .command_buffer_count(1);
+        // SAFETY: the pool is owned by this recorder exclusively until completion.
+        let cmd =
+            unsafe { device.allocate_command_buffers(&alloc) }.call("vkAllocateCommandBuffers")?[0];
+        let begin = vk::CommandBufferBeginInfo::default()
+            .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+        // SAFETY: freshly allocated command buffer.
+        unsafe { device.begin_command_buffer(cmd, &begin) }.call("vkBeginCommandBuffer")?;
+        Ok(Recorder {
+            gpu: self.clone(),
+            stream,
+            pool,
+            cmd,
+            queries: QueryBatch::default(),
+            open_scopes: Vec::new(),
+            submitted: false,
+        })
+    }
+}
+
+impl Recorder {
+    pub fn stream(&self) -> StreamKind {
+        self.stream
+    }
+
+    pub fn gpu(&self) -> &Gpu {
+        &self.gpu
+    }
+
+    fn device(&self) -> &ash::Device {
+        &self.gpu.0.raw
+    }
+
+    /// Allocates the next timestamp query and writes it.
+    fn timestamp(&mut self) -> Result<Option<u32>> {
+        if self.gpu.stream(self.stream).timestamp_mask == 0 {
+            return Ok(None);
+        }
+        let index = self.queries.next;
+        let (pool_index, query) = QueryBatch::location(index);
+        if pool_index == self.queries.pools.len() {
+            let reused = self
+                .gpu
+                .stream(self.stream)
+                .state
+                .lock()
+                .unwrap()
+                .free_query_pools
+                .pop();
+            let pool = match reused {
+                Some(p) => p,
+                None => {
+                    let info = vk::QueryPoolCreateInfo::default()
+                        .query_type(vk::QueryType::TIMESTAMP)
+                        .query_count(QUERIES_PER_POOL);
+                    // SAFETY: valid device.
+                    unsafe { self.device().create_query_pool(&info, None) }
+                        .call("vkCreateQueryPool")?
+                }
+            };
+            // SAFETY: recording; the reset precedes every write to the pool below.
+            unsafe {
+                self.device()
+                    .cmd_reset_query_pool(self.cmd, pool, 0, QUERIES_PER_POOL)
+            };
+            self.queries.pools.push(pool);
+        }
+        let pool = self.queries.pools[pool_index];
+        // SAFETY: recording; the query was reset in this command buffer.
+        unsafe {
+            self.device().cmd_write_timestamp2(
+                self.cmd,
+                vk::PipelineStageFlags2::ALL_COMMANDS,
+                pool,
+                query,
+            )
+        };
+        self.queries.next += 1;
+        Ok(Some(index))
+    }
+
+    fn label_begin(&self, name: &str) {
+        if let Some(du) = &self.gpu.0.debug_utils {
+            if let Ok(cname) = std::ffi::CString::new(name) {
+                let label = vk::DebugUtilsLabelEXT::default().label_name(&cname);
+                // SAFETY: recording.
+                unsafe { du.cmd_begin_debug_utils_label(self.cmd, &label) };
+            }
+        }
+    }
+
+    fn label_end(&self) {
+        if let Some(du) = &self.gpu.0.debug_utils {
+            // SAFETY: recording; paired with label_begin.
+            unsafe { du.cmd_end_debug_utils_label(self.cmd) };
+        }
+    }
+
+    /// Opens a named scope: a debug label and a timestamp pair around everything
+    /// recorded until the matching [`Recorder::end_scope`].
+    pub fn begin_scope(&mut self, name: &str) -> Result<()> {
+        self.label_begin(name);
+        let q = self.timestamp()?;
+        // A `u32::MAX` marks "no timestamps on this queue".
+        self.open_scopes
+            .push((name.to_string(), q.unwrap_or(u32::MAX)));
+        Ok(())
+    }
+
+    pub fn end_scope(&mut self) -> Result<()> {
+        let (name, begin) = self
+            .open_scopes
+            .pop()
+            .ok_or_else(|| VkError::Usage("end_scope without begin_scope".into()))?;
+        let end = self.timestamp()?;
+        self.label_end();
+        if let Some(end) = end {
+            self.queries.scopes.push((name, begin, end));
+        }
+        Ok(())
+    }
+
+    fn bind(
+        &mut self,
+        pipeline: &ComputePipeline,
+        bindings: &[BufferSlice<'_>],
+        push: &[u8],
+    ) -> Result<()> {
+        if bindings.len() as u32 != pipeline.bindings {
+            return Err(VkError::Usage(format!(
+                "kernel '{}' takes {} buffers, {} given",
+                pipeline.name(),
+                pipeline.bindings,
+                bindings.len()
+            )));
+        }
+        if push.len() as u32 != pipeline.push_constant_bytes {
+            return Err(VkError::Usage(format!(
+                "kernel '{}' takes {} push-constant bytes, {} given",
+                pipeline.name(),
+                pipeline.push_constant_bytes,
+                push.len()
+            )));
+        }
+        let infos: Vec<[vk::DescriptorBufferInfo; 1]> = bindings
+            .iter()
+            .map(|b| {
+                // An empty range is invalid; bind 4 bytes the kernel will not read.
+                let range = if b.size == 0 {
+                    4
+                } else {
+                    b.size.next_multiple_of(4)
+                };
+                [vk::DescriptorBufferInfo::default()
+                    .buffer(b.buffer.raw)
+                    .offset(b.offset)
+                    .range(range)]
+            })
+            .collect();
+        let writes: Vec<_> = infos
+            .iter()
+            .enumerate()
+            .map(|(i, info)| {
+                vk::WriteDescriptorSet::default()
+                    .dst_binding(i as u32)
+                    .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                    .buffer_info(info)
+            })
+            .collect();
+        // SAFETY: recording; the pipeline and buffers are alive; counts were checked.
+        unsafe {
+            let d = self.device();
+            d.cmd_bind_pipeline(self.cmd, vk::PipelineBindPoint::COMPUTE, pipeline.raw);
+            if !writes.is_empty() {
+                self.gpu.0.push_descriptor.cmd_push_descriptor_set(
+                    self.cmd,
+                    vk::PipelineBindPoint::COMPUTE,
+                    pipeline.layout,
+                    0,
+                    &writes,
+                );
+            }
+            if !push.is_empty() {
+                d.cmd_push_constants(
+                    self.cmd,
+                    pipeline.layout,
+                    vk::ShaderStageFlags::COMPUTE,
+                    0,
+                    push,
+                );
+            }
+        }
+        Ok(())
+    }
+
+    /// Records a dispatch of `groups` workgroups, timed under the kernel's name.
+    pub fn dispatch<P: bytemuck::Pod>(
+        &mut self,
+        pipeline: &ComputePipeline,
+        bindings: &[BufferSlice<'_>],
+        push: &P,
+        groups: [u32; 3],
+    ) -> Result<()> {
+        let max = self.gpu.info().limits.max_compute_work_group_count;
+        if groups.iter().zip(max).any(|(g, m)| *g > m) {
+            return Err(VkError::Usage(format!(
+                "kernel '{}': {groups:?} workgroups exceed the device's {max:?}",
+                pipeline.name()
+            )));
+        }
+        self.bind(pipeline, bindings, bytemuck::bytes_of(push))?;
+        if groups.contains(&0) {
+            return Ok(());
+        }
+        self.begin_scope(pipeline.name())?;
+        // SAFETY: recording with a bound compute pipeline and pushed descriptors.
+        unsafe {
+            self.device()
+                .cmd_dispatch(self.cmd, groups[0], groups[1], groups[2])
+        };
+        self.end_scope()
+    }
+
+    /// Dispatches enough workgroups for `n` items (see [`grid_for`]).
+    pub fn dispatch_items<P: bytemuck::Pod>(
+        &mut self,
+        pipeline: &ComputePipeline,
+        bindings: &[BufferSlice<'_>],
+        push: &P,
+        n: u64,
+    ) -> Result<()> {
+        let groups = grid_for(&self.gpu, n, pipeline.workgroup_size());
+        self.dispatch(pipeline, bindings, push, groups)
+    }
+
+    /// Records a dispatch whose workgroup counts are read from `args` at `offset`
+    /// (three u32s) when it runs, so counts computed on the GPU need no host round trip.
+    pub fn dispatch_indirect<P: bytemuck::Pod>(
+        &mut self,
+        pipeline: &ComputePipeline,
+        bindings: &[BufferSlice<'_>],
+        push: &P,
+        args: &Buffer,
+        offset: u64,
+    ) -> Result<()> {
+        self.bind(pipeline, bindings, bytemuck::bytes_of(push))?;
+        self.begin_scope(pipeline.name())?;
+        // SAFETY: recording; args is an indirect-capable buffer of this device.
+        unsafe {
+            self.device()
+                .cmd_dispatch_indirect(self.cmd, args.raw, offset)
+        };
+        self.end_scope()
+    }
+
+    /// Makes every earlier compute or transfer write visible to every later compute,
+    /// transfer or indirect-argument read or write on this stream.
+    pub fn barrier(&mut self) {
+        let barrier = vk::MemoryBarrier2::default()
+            .src_stage_mask(
+                vk::PipelineStageFlags2::COMPUTE_SHADER | vk::PipelineStageFlags2::ALL_TRANSFER,
+            )
+            .src_access_mask(
+                vk::AccessFlags2::SHADER_STORAGE_WRITE | vk::AccessFlags2::TRANSFER_WRITE,
+            )
+            .dst_stage_mask(
+                vk::PipelineStageFlags2::COMPUTE_SHADER
+                    | vk::PipelineStageFlags2::ALL_TRANSFER
+                    | vk::PipelineStageFlags2::DRAW_INDIRECT,
+            )
+            .dst_access_mask(
+                vk::AccessFlags2::SHADER_STORAGE_READ
+                    | vk::AccessFlags2::SHADER_STORAGE_WRITE
+                    | vk::AccessFlags2::TRANSFER_READ
+                    | vk::AccessFlags2::TRANSFER_WRITE
+                    | vk::AccessFlags2::INDIRECT_COMMAND_READ,
+            );
+        self.memory_barrier(barrier);
+    }
+
+    fn memory_barrier(&mut self, barrier: vk::MemoryBarrier2<'_>) {
+        let barriers = [barrier];
+        let dep = vk::DependencyInfo::default().memory_barriers(&barriers);
+        // SAFETY: recording.
+        unsafe { self.device().cmd_pipeline_barrier2(self.cmd, &dep) };
+    }
+
+    /// Copies `size` bytes between buffers.
+    pub fn copy(
+        &mut self,
+        src: &Buffer,
+        src_offset: u64,
+        dst: &Buffer,
+        dst_offset: u64,
+        size: u64,
+    ) {
+        if size == 0 {
+            return;
+        }
+        let region = [vk::BufferCopy {
+            src_offset,
+            dst_offset,
+            size,
+        }];
+        // SAFETY: recording; both buffers are alive and the region lies within them
+        // (checked by validation in tests).
+        unsafe {
+            self.device()
+                .cmd_copy_buffer(self.cmd, src.raw, dst.raw, &region)
+        };
+    }
+
+    /// Fills the whole buffer with a repeated u32.
+    pub fn fill(&mut self, buffer: &Buffer, value: u32) {
+        // SAFETY: recording; the Vulkan buffer size is a multiple of 4.
+        unsafe {
+            self.device()
+                .cmd_fill_buffer(self.cmd, buffer.raw, 0, vk::WHOLE_SIZE, value)
+        };
+    }
+
+    /// Ends recording and submits: the submission waits for this stream's previous one
+    /// and for every point in `waits`, and signals the returned point when done.
+    pub fn submit(mut self, waits: &[&TimelinePoint]) -> Result<TimelinePoint> {
+        while !self.open_scopes.is_empty() {
+            self.end_scope()?;
+        }
+        // Make results visible to the host (mapped readback) once the timeline is reached.
+        self.memory_barrier(
+            vk::MemoryBarrier2::default()
+                .src_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+                .src_access_mask(vk::AccessFlags2::MEMORY_WRITE)
+                .dst_stage_mask(vk::PipelineStageFlags2::HOST)
+                .dst_access_mask(vk::AccessFlags2::HOST_READ),
+        );
+        let gpu = self.gpu.clone();
+        let device = &gpu.0.raw;
+        // SAFETY: recording started in Gpu::recorder.
+        unsafe { device.end_command_buffer(self.cmd) }.call("vkEndCommandBuffer")?;
+        let stream = gpu.stream(self.stream);
+        let mut state = stream.state.lock().unwrap();
+        let value = state.last_value + 1;
+        let mut wait_infos: Vec<vk::SemaphoreSubmitInfo> = waits
+            .iter()
+            .map(|p| {
+                vk::SemaphoreSubmitInfo::default()
+                    .semaphore(p.semaphore.raw)
+                    .value(p.value)
+                    .stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+            })
+            .collect();
+        if state.last_value > 0 {
+            wait_infos.push(
+                vk::SemaphoreSubmitInfo::default()
+                    .semaphore(stream.timeline.raw)
+                    .value(state.last_value)
+                    .stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS),
+            );
+        }
+        let signal = [vk::SemaphoreSubmitInfo::default()
+            .semaphore(stream.timeline.raw)
+            .value(value)
+            .stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)];
+        let cmds = [vk::CommandBufferSubmitInfo::default().command_buffer(self.cmd)];
+        let submit = vk::SubmitInfo2::default()
+            .wait_semaphore_infos(&wait_infos)
+            .command_buffer_infos(&cmds)
+            .signal_semaphore_infos(&signal);
+        {
+            let queue = gpu.0.queues[stream.queue].lock().unwrap();
+            // SAFETY: the queue is externally synchronised by its mutex; the command
+            // buffer is executable; semaphores belong to this device.
+            unsafe { device.queue_submit2(*queue, &[submit], vk::Fence::null()) }
+                .call("vkQueueSubmit2")?;
+        }
+        state.last_value = value;
+        state.in_flight.push_back(InFlight {
+            value,
+            pool: self.pool,
+            queries: std::mem::take(&mut self.queries),
+        });
+        self.submitted = true;
+        Ok(gpu.timeline_point(self.stream, value))
+    }
+}
+
+impl Drop for Recorder {
+    fn drop(&mut self) {
+        if self.submitted {
+            return;
+        }
+        // Abandoned without submitting (an error path): nothing of it ever ran.
+        // SAFETY: the pool and query pools were never submitted.
+        unsafe {
+            let _ = self.gpu.0.raw.end_command_buffer(self.cmd);
+            let _ = self
+                .gpu
+                .0
+                .raw
+                .reset_command_pool(self.pool, vk::CommandPoolResetFlags::empty());
+        }
+        let mut st = self.gpu.stream(self.stream).state.lock().unwrap();
+        st.free_pools.push(self.pool);
+        st.free_query_pools.append(&mut self.queries.pools);
+    }
+}

@@ -1,0 +1,365 @@
+//! The logical device and everything that lives as long as it: allocator, streams,
+//! profiler log. [`Gpu`] is a cheap, cloneable handle to it.
+
+use std::collections::VecDeque;
+use std::mem::ManuallyDrop;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, Mutex};
+
+use ash::{ext, khr, vk};
+use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
+
+use super::error::{CallContext, Result, VkError};
+use super::instance::{Instance, InstanceDesc};
+use super::physical::{self, PhysicalDeviceInfo};
+use super::profiler::{ProfileLog, QueryBatch};
+use super::stream::{StreamKind, StreamMapping, StreamPlacement, TimelineHandle, TimelinePoint};
+
+/// How to open a device.
+#[derive(Clone, Debug, Default)]
+pub struct GpuDesc {
+    pub instance: InstanceDesc,
+    /// Device index or name substring; `None` picks the best (see [`physical::select`]).
+    pub device: Option<String>,
+    pub placement: StreamPlacement,
+}
+
+/// Bytes allocated through the allocator: now and at the peak.
+#[derive(Debug, Default)]
+pub(crate) struct MemoryCounters {
+    current: AtomicU64,
+    peak: AtomicU64,
+}
+
+impl MemoryCounters {
+    pub(crate) fn add(&self, bytes: u64) {
+        let now = self.current.fetch_add(bytes, Ordering::Relaxed) + bytes;
+        self.peak.fetch_max(now, Ordering::Relaxed);
+    }
+    pub(crate) fn sub(&self, bytes: u64) {
+        self.current.fetch_sub(bytes, Ordering::Relaxed);
+    }
+}
+
+/// A submitted command buffer that may still run.
+pub(crate) struct InFlight {
+    pub(crate) value: u64,
+    pub(crate) pool: vk::CommandPool,
+    pub(crate) queries: QueryBatch,
+}
+
+pub(crate) struct StreamState {
+    pub(crate) kind: StreamKind,
+    pub(crate) family: u32,
+    /// Index into `GpuInner::queues`.
+    pub(crate) queue: usize,
+    pub(crate) timeline: Arc<TimelineHandle>,
+    /// 0 when the queue family cannot write timestamps.
+    pub(crate) timestamp_mask: u64,
+    pub(crate) state: Mutex<StreamInner>,
+}
+
+#[derive(Default)]
+pub(crate) struct StreamInner {
+    pub(crate) last_value: u64,
+    pub(crate) in_flight: VecDeque<InFlight>,
+    pub(crate) free_pools: Vec<vk::CommandPool>,
+    pub(crate) free_query_pools: Vec<vk::QueryPool>,
+}
+
+pub(crate) struct GpuInner {
+    pub(crate) instance: Arc<Instance>,
+    pub(crate) info: PhysicalDeviceInfo,
+    pub(crate) raw: ash::Device,
+    pub(crate) push_descriptor: khr::push_descriptor::Device,
+    pub(crate) debug_utils: Option<ext::debug_utils::Device>,
+    pub(crate) allocator: ManuallyDrop<Mutex<Allocator>>,
+    pub(crate) memory: MemoryCounters,
+    pub(crate) mapping: StreamMapping,
+    /// One entry per distinct queue; submissions to a queue are serialised by its mutex.
+    pub(crate) queues: Vec<Mutex<vk::Queue>>,
+    pub(crate) streams: Vec<StreamState>,
+    pub(crate) profile: Mutex<ProfileLog>,
+}
+
+/// The device handle every other object holds.
+#[derive(Clone)]
+pub struct Gpu(pub(crate) Arc<GpuInner>);
+
+impl std::fmt::Debug for Gpu {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Gpu")
+            .field("device", &self.0.info.name)
+            .finish()
+    }
+}
+
+pub(crate) const QUERIES_PER_POOL: u32 = 512;
+
+impl Gpu {
+    /// Creates the instance, picks a device and opens it with every stream.
+    pub fn new(desc: &GpuDesc) -> Result<Self> {
+        let instance = Instance::new(desc.instance)?;
+        let devices = physical::enumerate(&instance)?;
+        let info = physical::select(&devices, desc.device.as_deref())?;
+        Self::open(instance, info, desc.placement)
+    }
+
+    fn open(
+        instance: Arc<Instance>,
+        info: PhysicalDeviceInfo,
+        placement: StreamPlacement,
+    ) -> Result<Self> {
+        let mapping = StreamMapping::plan(&info, placement);
+        let per_family = mapping.queues_per_family();
+        let priorities = [1.0f32; 16];
+        let queue_infos: Vec<_> = per_family
+            .iter()
+            .map(|&(family, count)| {
+                vk::DeviceQueueCreateInfo::default()
+                    .queue_family_index(family)
+                    .queue_priorities(&priorities[..count as usize])
+            })
+            .collect();
+        let extensions = [khr::push_descriptor::NAME.as_ptr()];
+        let mut f12 = vk::PhysicalDeviceVulkan12Features::default().timeline_semaphore(true);
+        let mut f13 = vk::PhysicalDeviceVulkan13Features::default()
+            .synchronization2(true)
+            .maintenance4(true);
+        let create_info = vk::DeviceCreateInfo::default()
+            .queue_create_infos(&queue_infos)
+            .enabled_extension_names(&extensions)
+            .push_next(&mut f12)
+            .push_next(&mut f13);
+        // SAFETY: the physical device came from this instance; the create info lives here.
+        let raw = unsafe { instance.raw.create_device(info.raw, &create_info, None) }
+            .call("vkCreateDevice")?;
+
+        let allocator = Allocator::new(&AllocatorCreateDesc {
+            instance: instance.raw.clone(),
+            device: raw.clone(),
+            physical_device: info.raw,
+            debug_settings: Default::default(),
+            buffer_device_address: false,
+            allocation_sizes: Default::default(),
+        })
+        .map_err(|source| VkError::Alloc {
+            name: "allocator".into(),
+            source,
+        })?;
+
+        // Distinct queues, in slot order.
+        let mut queue_slots = Vec::new();
+        for s in mapping.slots {
+            if !queue_slots.contains(&s) {
+                queue_slots.push(s);
+            }
+        }
+        let queues = queue_slots
+            .iter()
+            // SAFETY: each (family, index) was requested in queue_infos.
+            .map(|s| Mutex::new(unsafe { raw.get_device_queue(s.family, s.index) }))
+            .collect();
+
+        let mut streams = Vec::new();
+        for kind in StreamKind::ALL {
+            let slot = mapping.slot(kind);
+            let mut type_info = vk::SemaphoreTypeCreateInfo::default()
+                .semaphore_type(vk::SemaphoreType::TIMELINE)
+                .initial_value(0);
+            let sem_info = vk::SemaphoreCreateInfo::default().push_next(&mut type_info);
+            // SAFETY: valid device.
+            let sem = unsafe { raw.create_semaphore(&sem_info, None) }.call("vkCreateSemaphore")?;
+            let bits = info.queue_families[slot.family as usize].timestamp_valid_bits;
+            streams.push(StreamState {
+                kind,
+                family: slot.family,
+                queue: queue_slots.iter().position(|s| *s == slot).unwrap(),
+                timeline: Arc::new(TimelineHandle { raw: sem }),
+                timestamp_mask: match bits {
+                    0 => 0,
+                    64.. => u64::MAX,
+                    b => (1u64 << b) - 1,
+                },
+                state: Mutex::new(StreamInner::default()),
+            });
+        }
+
+        let push_descriptor = khr::push_descriptor::Device::new(&instance.raw, &raw);
+        let debug_utils = instance
+            .has_debug_utils()
+            .then(|| ext::debug_utils::Device::new(&instance.raw, &raw));
+        let gpu = Gpu(Arc::new(GpuInner {
+            instance,
+            info,
+            raw,
+            push_descriptor,
+            debug_utils,
+            allocator: ManuallyDrop::new(Mutex::new(allocator)),
+            memory: MemoryCounters::default(),
+            mapping,
+            queues,
+            streams,
+            profile: Mutex::new(ProfileLog::default()),
+        }));
+        for s in &gpu.0.streams {
+            gpu.set_object_name(s.timeline.raw, &format!("timeline:{}", s.kind.name()));
+        }
+        Ok(gpu)
+    }
+
+    pub fn info(&self) -> &PhysicalDeviceInfo {
+        &self.0.info
+    }
+
+    pub fn stream_mapping(&self) -> &StreamMapping {
+        &self.0.mapping
+    }
+
+    pub fn instance(&self) -> &Instance {
+        &self.0.instance
+    }
+
+    /// Errors and warnings the validation layer has reported so far.
+    pub fn validation_messages(&self) -> Vec<super::ValidationMessage> {
+        self.0.instance.validation_log().messages()
+    }
+
+    /// Bytes currently allocated and the peak since the device opened (or the last reset).
+    pub fn memory_bytes(&self) -> (u64, u64) {
+        let m = &self.0.memory;
+        (
+            m.current.load(Ordering::Relaxed),
+            m.peak.load(Ordering::Relaxed),
+        )
+    }
+
+    /// Restarts peak tracking from the current allocation level.
+    pub fn reset_peak_memory(&self) {
+        let m = &self.0.memory;
+        m.peak
+            .store(m.current.load(Ordering::Relaxed), Ordering::Relaxed);
+    }
+
+    /// Names a Vulkan object for validation messages and debuggers.
+    pub(crate) fn set_object_name<H: vk::Handle>(&self, handle: H, name: &str) {
+        if let Some(du) = &self.0.debug_utils {
+            let Ok(cname) = std::ffi::CString::new(name) else {
+                return;
+            };
+            let info = vk::DebugUtilsObjectNameInfoEXT::default()
+                .object_handle(handle)
+                .object_name(&cname);
+            // SAFETY: the handle belongs to this device. Naming is best effort.
+            let _ = unsafe { du.set_debug_utils_object_name(&info) };
+        }
+    }
+
+    pub(crate) fn stream(&self, kind: StreamKind) -> &StreamState {
+        &self.0.streams[kind.index()]
+    }
+
+    /// Blocks until `point` has been reached.
+    pub fn wait(&self, point: &TimelinePoint) -> Result<()> {
+        let semaphores = [point.semaphore.raw];
+        let values = [point.value];
+        let info = vk::SemaphoreWaitInfo::default()
+            .semaphores(&semaphores)
+            .values(&values);
+        // SAFETY: the semaphore belongs to this device.
+        unsafe { self.0.raw.wait_semaphores(&info, u64::MAX) }.call("vkWaitSemaphores")?;
+        self.reclaim(point.stream)
+    }
+
+    /// The value a stream's timeline has reached.
+    pub fn completed_value(&self, kind: StreamKind) -> Result<u64> {
+        // SAFETY: the semaphore belongs to this device.
+        unsafe {
+            self.0
+                .raw
+                .get_semaphore_counter_value(self.stream(kind).timeline.raw)
+        }
+        .call("vkGetSemaphoreCounterValue")
+    }
+
+    /// Waits for every stream to drain.
+    pub fn wait_idle(&self) -> Result<()> {
+        for kind in StreamKind::ALL {
+            let last = self.stream(kind).state.lock().unwrap().last_value;
+            let point = self.timeline_point(kind, last);
+            self.wait(&point)?;
+        }
+        Ok(())
+    }
+
+    pub(crate) fn timeline_point(&self, kind: StreamKind, value: u64) -> TimelinePoint {
+        TimelinePoint {
+            semaphore: self.stream(kind).timeline.clone(),
+            value,
+            stream: kind,
+        }
+    }
+
+    /// Recycles finished command pools and harvests their timestamps. Never blocks on
+    /// the GPU: only submissions whose timeline value has been reached are touched.
+    pub fn reclaim(&self, kind: StreamKind) -> Result<()> {
+        let done = self.completed_value(kind)?;
+        let stream = self.stream(kind);
+        let mut finished = Vec::new();
+        {
+            let mut st = stream.state.lock().unwrap();
+            while st.in_flight.front().is_some_and(|f| f.value <= done) {
+                finished.push(st.in_flight.pop_front().unwrap());
+            }
+        }
+        for f in finished {
+            let records = super::profiler::read_batch(self, stream, &f.queries)?;
+            // SAFETY: the pool's command buffers have completed (timeline reached).
+            unsafe {
+                self.0
+                    .raw
+                    .reset_command_pool(f.pool, vk::CommandPoolResetFlags::empty())
+            }
+            .call("vkResetCommandPool")?;
+            self.0.profile.lock().unwrap().records.extend(records);
+            let mut st = stream.state.lock().unwrap();
+            st.free_pools.push(f.pool);
+            st.free_query_pools.extend(f.queries.pools);
+        }
+        Ok(())
+    }
+
+    /// Takes the per-dispatch GPU times collected so far (after [`Gpu::wait_idle`] or
+    /// waits, so that finished work has been harvested).
+    pub fn take_profile(&self) -> ProfileLog {
+        std::mem::take(&mut *self.0.profile.lock().unwrap())
+    }
+}
+
+impl Drop for GpuInner {
+    fn drop(&mut self) {
+        // SAFETY: last handle gone: nothing else uses the device. Wait, then destroy
+        // children before the device, and the allocator before the device.
+        unsafe {
+            let _ = self.raw.device_wait_idle();
+            for s in &mut self.streams {
+                let st = s.state.get_mut().unwrap();
+                for f in st.in_flight.drain(..) {
+                    self.raw.destroy_command_pool(f.pool, None);
+                    for q in f.queries.pools {
+                        self.raw.destroy_query_pool(q, None);
+                    }
+                }
+                for p in st.free_pools.drain(..) {
+                    self.raw.destroy_command_pool(p, None);
+                }
+                for q in st.free_query_pools.drain(..) {
+                    self.raw.destroy_query_pool(q, None);
+                }
+                self.raw.destroy_semaphore(s.timeline.raw, None);
+            }
+            ManuallyDrop::drop(&mut self.allocator);
+            self.raw.destroy_device(None);
+        }
+    }
+}

@@ -1,0 +1,46 @@
+//! The Vulkan layer: the only module with `unsafe` and raw `ash`.
+//!
+//! Above it, the engine speaks in safe types: [`Gpu`] (device, allocator, streams),
+//! [`Buffer`], [`ComputePipeline`], [`Recorder`] (command recording) and
+//! [`TimelinePoint`] (cross-stream order), plus the [`ProfileLog`] of GPU times.
+
+mod buffer;
+mod command;
+mod device;
+mod error;
+mod instance;
+mod physical;
+mod pipeline;
+mod profiler;
+mod stream;
+mod validation;
+
+pub use buffer::{Buffer, BufferSlice, MemoryKind};
+pub use command::{grid_for, Recorder};
+pub use device::{Gpu, GpuDesc};
+pub use error::{Result, VkError};
+pub use instance::{validation_layer_available, Instance, InstanceDesc};
+pub use physical::{
+    enumerate, select, CapabilityInfo, LimitsInfo, PhysicalDeviceInfo, QueueFamilyInfo,
+};
+pub use pipeline::{ComputePipeline, PipelineDesc};
+pub use profiler::{KernelTime, ProfileLog, ProfileRecord};
+pub use stream::{QueueSlot, StreamKind, StreamMapping, StreamPlacement, TimelinePoint};
+pub use validation::{ValidationMessage, SUPPRESSED};
+
+/// Deliberately breaks a valid-usage rule so tests can prove the validation layer and
+/// the message collection are live: creates a buffer with no usage flags
+/// (VUID-VkBufferCreateInfo-usage-requiredbitmask), which drivers tolerate.
+#[doc(hidden)]
+pub fn provoke_validation_error(gpu: &Gpu) {
+    let info = ash::vk::BufferCreateInfo::default()
+        .size(16)
+        .usage(ash::vk::BufferUsageFlags::empty());
+    // SAFETY: intentionally invalid usage flags, but well-formed structures; the buffer,
+    // if created, is destroyed at once and never bound or used.
+    unsafe {
+        if let Ok(b) = gpu.0.raw.create_buffer(&info, None) {
+            gpu.0.raw.destroy_buffer(b, None);
+        }
+    }
+}

@@ -1,0 +1,254 @@
+//! Physical devices: what they are, what they offer, and which one to use.
+
+use std::ffi::CStr;
+
+use ash::{khr, vk};
+use serde::Serialize;
+
+use super::error::{CallContext, Result, VkError};
+use super::instance::Instance;
+
+/// One queue family, as `splitray info` reports it.
+#[derive(Clone, Debug, Serialize)]
+pub struct QueueFamilyInfo {
+    pub index: u32,
+    pub count: u32,
+    pub graphics: bool,
+    pub compute: bool,
+    pub transfer: bool,
+    pub timestamp_valid_bits: u32,
+}
+
+/// Limits that shape splitray's kernels.
+#[derive(Clone, Debug, Serialize)]
+pub struct LimitsInfo {
+    pub max_storage_buffer_range: u64,
+    pub max_compute_shared_memory_size: u32,
+    pub max_compute_work_group_invocations: u32,
+    pub max_compute_work_group_count: [u32; 3],
+    pub max_push_constants_size: u32,
+    pub min_storage_buffer_offset_alignment: u64,
+    pub timestamp_period_ns: f32,
+    pub subgroup_size: u32,
+    pub max_memory_allocation_size: u64,
+}
+
+/// Optional capabilities that later methods use when present.
+#[derive(Clone, Debug, Serialize)]
+pub struct CapabilityInfo {
+    pub timeline_semaphore: bool,
+    pub synchronization2: bool,
+    pub maintenance4: bool,
+    pub buffer_device_address: bool,
+    pub push_descriptor: bool,
+    pub ray_query: bool,
+    pub subgroup_arithmetic: bool,
+    pub shader_int64: bool,
+}
+
+/// Everything `splitray info` says about a device.
+#[derive(Clone, Debug, Serialize)]
+pub struct PhysicalDeviceInfo {
+    pub index: usize,
+    pub name: String,
+    pub device_type: String,
+    pub api_version: String,
+    pub driver_name: String,
+    pub driver_info: String,
+    pub queue_families: Vec<QueueFamilyInfo>,
+    pub limits: LimitsInfo,
+    pub capabilities: CapabilityInfo,
+    #[serde(skip)]
+    pub(crate) raw: vk::PhysicalDevice,
+    #[serde(skip)]
+    pub(crate) api_version_raw: u32,
+    #[serde(skip)]
+    type_rank: u32,
+}
+
+impl PhysicalDeviceInfo {
+    /// True for a CPU implementation such as lavapipe.
+    pub fn is_cpu(&self) -> bool {
+        self.device_type == "cpu"
+    }
+
+    /// The missing requirements, named; empty when the device can run splitray.
+    pub fn missing_requirements(&self) -> Vec<String> {
+        let mut missing = Vec::new();
+        if self.api_version_raw < vk::API_VERSION_1_3 {
+            missing.push(format!("Vulkan 1.3 (it offers {})", self.api_version));
+        }
+        let c = &self.capabilities;
+        for (ok, what) in [
+            (c.timeline_semaphore, "the timelineSemaphore feature"),
+            (c.synchronization2, "the synchronization2 feature"),
+            (c.maintenance4, "the maintenance4 feature"),
+            (c.push_descriptor, "the VK_KHR_push_descriptor extension"),
+        ] {
+            if !ok {
+                missing.push(what.to_string());
+            }
+        }
+        if !self.queue_families.iter().any(|q| q.compute) {
+            missing.push("a compute queue".into());
+        }
+        missing
+    }
+}
+
+fn name_of(chars: &[std::ffi::c_char]) -> String {
+    // SAFETY: Vulkan guarantees NUL termination within the fixed-size array.
+    unsafe { CStr::from_ptr(chars.as_ptr()) }
+        .to_string_lossy()
+        .into_owned()
+}
+
+fn has_extension(exts: &[vk::ExtensionProperties], name: &CStr) -> bool {
+    exts.iter()
+        .any(|e| e.extension_name_as_c_str().is_ok_and(|n| n == name))
+}
+
+/// Lists every physical device with its properties.
+pub fn enumerate(instance: &Instance) -> Result<Vec<PhysicalDeviceInfo>> {
+    let raw_instance = &instance.raw;
+    // SAFETY: valid instance.
+    let devices =
+        unsafe { raw_instance.enumerate_physical_devices() }.call("vkEnumeratePhysicalDevices")?;
+    let mut out = Vec::new();
+    for (index, &pd) in devices.iter().enumerate() {
+        let mut props11 = vk::PhysicalDeviceVulkan11Properties::default();
+        let mut props12 = vk::PhysicalDeviceVulkan12Properties::default();
+        let mut props2 = vk::PhysicalDeviceProperties2::default()
+            .push_next(&mut props11)
+            .push_next(&mut props12);
+        let mut f12 = vk::PhysicalDeviceVulkan12Features::default();
+        let mut f13 = vk::PhysicalDeviceVulkan13Features::default();
+        let mut features2 = vk::PhysicalDeviceFeatures2::default()
+            .push_next(&mut f12)
+            .push_next(&mut f13);
+        // SAFETY: valid physical device; the chains live on this stack frame.
+        let (families, exts) = unsafe {
+            raw_instance.get_physical_device_properties2(pd, &mut props2);
+            raw_instance.get_physical_device_features2(pd, &mut features2);
+            (
+                raw_instance.get_physical_device_queue_family_properties(pd),
+                raw_instance
+                    .enumerate_device_extension_properties(pd)
+                    .call("vkEnumerateDeviceExtensionProperties")?,
+            )
+        };
+        let p = props2.properties;
+        let f10 = features2.features;
+        let (device_type, type_rank) = match p.device_type {
+            vk::PhysicalDeviceType::DISCRETE_GPU => ("discrete", 0),
+            vk::PhysicalDeviceType::INTEGRATED_GPU => ("integrated", 1),
+            vk::PhysicalDeviceType::VIRTUAL_GPU => ("virtual", 2),
+            vk::PhysicalDeviceType::CPU => ("cpu", 3),
+            _ => ("other", 4),
+        };
+        let v = p.api_version;
+        out.push(PhysicalDeviceInfo {
+            index,
+            name: name_of(&p.device_name),
+            device_type: device_type.into(),
+            api_version: format!(
+                "{}.{}.{}",
+                vk::api_version_major(v),
+                vk::api_version_minor(v),
+                vk::api_version_patch(v)
+            ),
+            driver_name: name_of(&props12.driver_name),
+            driver_info: name_of(&props12.driver_info),
+            queue_families: families
+                .iter()
+                .enumerate()
+                .map(|(i, q)| QueueFamilyInfo {
+                    index: i as u32,
+                    count: q.queue_count,
+                    graphics: q.queue_flags.contains(vk::QueueFlags::GRAPHICS),
+                    compute: q.queue_flags.contains(vk::QueueFlags::COMPUTE),
+                    transfer: q.queue_flags.intersects(
+                        vk::QueueFlags::TRANSFER
+                            | vk::QueueFlags::COMPUTE
+                            | vk::QueueFlags::GRAPHICS,
+                    ),
+                    timestamp_valid_bits: q.timestamp_valid_bits,
+                })
+                .collect(),
+            limits: LimitsInfo {
+                max_storage_buffer_range: p.limits.max_storage_buffer_range as u64,
+                max_compute_shared_memory_size: p.limits.max_compute_shared_memory_size,
+                max_compute_work_group_invocations: p.limits.max_compute_work_group_invocations,
+                max_compute_work_group_count: p.limits.max_compute_work_group_count,
+                max_push_constants_size: p.limits.max_push_constants_size,
+                min_storage_buffer_offset_alignment: p.limits.min_storage_buffer_offset_alignment,
+                timestamp_period_ns: p.limits.timestamp_period,
+                subgroup_size: props11.subgroup_size,
+                max_memory_allocation_size: props11.max_memory_allocation_size,
+            },
+            capabilities: CapabilityInfo {
+                timeline_semaphore: f12.timeline_semaphore == vk::TRUE,
+                synchronization2: f13.synchronization2 == vk::TRUE,
+                maintenance4: f13.maintenance4 == vk::TRUE,
+                buffer_device_address: f12.buffer_device_address == vk::TRUE,
+                push_descriptor: has_extension(&exts, khr::push_descriptor::NAME),
+                ray_query: has_extension(&exts, khr::ray_query::NAME)
+                    && has_extension(&exts, khr::acceleration_structure::NAME),
+                subgroup_arithmetic: props11
+                    .subgroup_supported_operations
+                    .contains(vk::SubgroupFeatureFlags::ARITHMETIC),
+                shader_int64: f10.shader_int64 == vk::TRUE,
+            },
+            raw: pd,
+            api_version_raw: v,
+            type_rank,
+        });
+    }
+    Ok(out)
+}
+
+/// Picks a device: `selector` (index or case-insensitive name substring), else the
+/// `SPLITRAY_DEVICE` environment variable, else discrete > integrated > virtual > CPU
+/// among the devices that meet splitray's requirements.
+pub fn select(
+    devices: &[PhysicalDeviceInfo],
+    selector: Option<&str>,
+) -> Result<PhysicalDeviceInfo> {
+    if devices.is_empty() {
+        return Err(VkError::NoDevice(
+            " (install mesa-vulkan-drivers for the lavapipe CPU device)".into(),
+        ));
+    }
+    let env = std::env::var("SPLITRAY_DEVICE").ok();
+    let selector = selector.or(env.as_deref()).filter(|s| !s.is_empty());
+    let chosen = match selector {
+        Some(sel) => {
+            let by_index = sel.parse::<usize>().ok().and_then(|i| devices.get(i));
+            let lower = sel.to_lowercase();
+            by_index
+                .or_else(|| {
+                    devices
+                        .iter()
+                        .find(|d| d.name.to_lowercase().contains(&lower))
+                })
+                .ok_or_else(|| VkError::UnknownDevice(sel.to_string()))?
+        }
+        None => devices
+            .iter()
+            .filter(|d| d.missing_requirements().is_empty())
+            .min_by_key(|d| (d.type_rank, d.index))
+            .unwrap_or(&devices[0]),
+    };
+    let missing = chosen.missing_requirements();
+    if let Some(first) = missing.first() {
+        return Err(VkError::MissingFeature {
+            device: chosen.name.clone(),
+            what: if missing.len() == 1 {
+                first.clone()
+            } else {
+                missing.join(", ")
+            },
+        });
+    }
+    Ok(chosen.clone())
+}

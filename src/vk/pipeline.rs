@@ -1,0 +1,177 @@
+//! Compute pipelines from embedded SPIR-V, with push descriptors and push constants.
+//!
+//! Every kernel binds its storage buffers at set 0, bindings 0..n, pushed at dispatch
+//! time (VK_KHR_push_descriptor), so no descriptor pools or sets need managing. Scalars
+//! travel as push constants. Specialization constant `i` takes `spec[i]`; by convention
+//! constant 0 is the workgroup size (`layout(local_size_x_id = 0) in;`), so Rust holds
+//! the one true value.
+
+use ash::vk;
+
+use super::device::Gpu;
+use super::error::{CallContext, Result, VkError};
+use crate::shaders::Kernel;
+
+/// What a kernel needs from its pipeline.
+#[derive(Clone, Debug)]
+pub struct PipelineDesc<'a> {
+    pub kernel: Kernel,
+    /// Number of storage-buffer bindings (set 0, bindings 0..n).
+    pub bindings: u32,
+    /// Size of the push-constant block in bytes (0 for none).
+    pub push_constant_bytes: u32,
+    /// Values of specialization constants 0, 1, 2, ...
+    pub spec: &'a [u32],
+}
+
+pub struct ComputePipeline {
+    gpu: Gpu,
+    pub(crate) raw: vk::Pipeline,
+    pub(crate) layout: vk::PipelineLayout,
+    set_layout: vk::DescriptorSetLayout,
+    pub(crate) bindings: u32,
+    pub(crate) push_constant_bytes: u32,
+    name: &'static str,
+    /// Workgroup size along x (specialization constant 0).
+    workgroup_size: u32,
+}
+
+impl std::fmt::Debug for ComputePipeline {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ComputePipeline")
+            .field("name", &self.name)
+            .finish()
+    }
+}
+
+impl ComputePipeline {
+    pub fn new(gpu: &Gpu, desc: &PipelineDesc<'_>) -> Result<Self> {
+        let device = &gpu.0.raw;
+        let words = ash::util::read_spv(&mut std::io::Cursor::new(desc.kernel.spirv))
+            .map_err(|_| VkError::BadSpirv(desc.kernel.name))?;
+        let max_push = gpu.info().limits.max_push_constants_size;
+        if desc.push_constant_bytes > max_push {
+            return Err(VkError::Usage(format!(
+                "kernel '{}' asks for {} push-constant bytes; the device allows {max_push}",
+                desc.kernel.name, desc.push_constant_bytes
+            )));
+        }
+        let bindings: Vec<_> = (0..desc.bindings)
+            .map(|b| {
+                vk::DescriptorSetLayoutBinding::default()
+                    .binding(b)
+                    .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                    .descriptor_count(1)
+                    .stage_flags(vk::ShaderStageFlags::COMPUTE)
+            })
+            .collect();
+        let set_info = vk::DescriptorSetLayoutCreateInfo::default()
+            .flags(vk::DescriptorSetLayoutCreateFlags::PUSH_DESCRIPTOR_KHR)
+            .bindings(&bindings);
+        let ranges = [vk::PushConstantRange::default()
+            .stage_flags(vk::ShaderStageFlags::COMPUTE)
+            .offset(0)
+            .size(desc.push_constant_bytes)];
+        let spec_entries: Vec<_> = (0..desc.spec.len() as u32)
+            .map(|i| {
+                vk::SpecializationMapEntry::default()
+                    .constant_id(i)
+                    .offset(i * 4)
+                    .size(4)
+            })
+            .collect();
+        let spec_data: &[u8] = bytemuck::cast_slice(desc.spec);
+        let spec_info = vk::SpecializationInfo::default()
+            .map_entries(&spec_entries)
+            .data(spec_data);
+
+        // SAFETY: valid device; every create info and the SPIR-V live across the calls;
+        // objects are destroyed on the error paths and in Drop.
+        unsafe {
+            let set_layout = device
+                .create_descriptor_set_layout(&set_info, None)
+                .call("vkCreateDescriptorSetLayout")?;
+            let set_layouts = [set_layout];
+            let mut layout_info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
+            if desc.push_constant_bytes > 0 {
+                layout_info = layout_info.push_constant_ranges(&ranges);
+            }
+            let layout = match device.create_pipeline_layout(&layout_info, None) {
+                Ok(l) => l,
+                Err(e) => {
+                    device.destroy_descriptor_set_layout(set_layout, None);
+                    return Err(VkError::Call {
+                        call: "vkCreatePipelineLayout",
+                        result: e,
+                    });
+                }
+            };
+            let module_info = vk::ShaderModuleCreateInfo::default().code(&words);
+            let module = match device.create_shader_module(&module_info, None) {
+                Ok(m) => m,
+                Err(e) => {
+                    device.destroy_pipeline_layout(layout, None);
+                    device.destroy_descriptor_set_layout(set_layout, None);
+                    return Err(VkError::Call {
+                        call: "vkCreateShaderModule",
+                        result: e,
+                    });
+                }
+            };
+            let mut stage = vk::PipelineShaderStageCreateInfo::default()
+                .stage(vk::ShaderStageFlags::COMPUTE)
+                .module(module)
+                .name(c"main");
+            if !desc.spec.is_empty() {
+                stage = stage.specialization_info(&spec_info);
+            }
+            let info = vk::ComputePipelineCreateInfo::default()
+                .stage(stage)
+                .layout(layout);
+            let result = device.create_compute_pipelines(vk::PipelineCache::null(), &[info], None);
+            device.destroy_shader_module(module, None);
+            let raw = match result {
+                Ok(p) => p[0],
+                Err((_, e)) => {
+                    device.destroy_pipeline_layout(layout, None);
+                    device.destroy_descriptor_set_layout(set_layout, None);
+                    return Err(VkError::Call {
+                        call: "vkCreateComputePipelines",
+                        result: e,
+                    });
+                }
+            };
+            gpu.set_object_name(raw, desc.kernel.name);
+            Ok(Self {
+                gpu: gpu.clone(),
+                raw,
+                layout,
+                set_layout,
+                bindings: desc.bindings,
+                push_constant_bytes: desc.push_constant_bytes,
+                name: desc.kernel.name,
+                workgroup_size: desc.spec.first().copied().unwrap_or(1),
+            })
+        }
+    }
+
+    pub fn name(&self) -> &'static str {
+        self.name
+    }
+
+    pub fn workgroup_size(&self) -> u32 {
+        self.workgroup_size
+    }
+}
+
+impl Drop for ComputePipeline {
+    fn drop(&mut self) {
+        let device = &self.gpu.0.raw;
+        // SAFETY: pipelines are dropped only after the work using them completed.
+        unsafe {
+            device.destroy_pipeline(self.raw, None);
+            device.destroy_pipeline_layout(self.layout, None);
+            device.destroy_descriptor_set_layout(self.set_layout, None);
+        }
+    }
+}
