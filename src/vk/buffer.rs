@@ -171,7 +171,7 @@ impl Buffer {
     }
 
     /// Number of whole `T` elements the buffer holds.
-    pub fn len<T>(&self) -> usize {
+    pub fn element_count<T>(&self) -> usize {
         self.size as usize / size_of::<T>()
     }
 
@@ -230,7 +230,7 @@ impl Buffer {
     /// Reads the whole buffer back as `T`s. Runs after all work already submitted to the
     /// main stream; work on other streams must be waited for first.
     pub fn read<T: bytemuck::Pod>(&self) -> Result<Vec<T>> {
-        let n = self.len::<T>();
+        let n = self.element_count::<T>();
         let bytes = n * size_of::<T>();
         let mut out = vec![T::zeroed(); n];
         if bytes == 0 {
