@@ -12,4 +12,5 @@
 pub mod film;
 pub mod scene;
 pub mod shaders;
+pub mod trace;
 pub mod vk;

@@ -1,0 +1,91 @@
+//! Tracers: closest-hit and occlusion queries for batches of rays.
+//!
+//! Every integrator goes through the [`Tracer`] interface, so tracers are interchangeable
+//! (`--tracer NAME`). Rays and hits live in GPU buffers; a tracer may submit as much work
+//! as it needs (PDACRT runs host-driven level loops) and returns the timeline point that
+//! marks its hits as written.
+
+pub mod brute_force;
+pub mod cpu;
+pub mod types;
+
+use std::fmt;
+use std::str::FromStr;
+
+pub use brute_force::BruteForceTracer;
+pub use types::{GpuTriangle, Hit, Ray, MISS};
+
+use crate::vk::{self, Buffer, Gpu, TimelinePoint};
+
+/// What a query asks for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Query {
+    /// The nearest hit within (tmin, tmax).
+    ClosestHit,
+    /// Any hit within (tmin, tmax): shadow and ambient-occlusion rays.
+    Occlusion,
+}
+
+/// Casts batches of rays against one scene's triangles.
+pub trait Tracer {
+    fn name(&self) -> &'static str;
+
+    /// Traces `ray_count` rays from `rays` into `hits` (one [`Hit`] per ray). The work
+    /// starts after every point in `after` and the returned point marks it done.
+    fn trace(
+        &mut self,
+        rays: &Buffer,
+        hits: &Buffer,
+        ray_count: u32,
+        query: Query,
+        after: &[&TimelinePoint],
+    ) -> vk::Result<TimelinePoint>;
+}
+
+/// The tracers a user can pick.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum TracerKind {
+    #[default]
+    BruteForce,
+}
+
+impl TracerKind {
+    pub const ALL: &'static [(TracerKind, &'static str)] = &[(
+        TracerKind::BruteForce,
+        "every ray against every triangle on the GPU: the correctness oracle",
+    )];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::BruteForce => "brute-force",
+        }
+    }
+
+    /// Builds the tracer over `triangles`.
+    pub fn create(self, gpu: &Gpu, triangles: &[GpuTriangle]) -> vk::Result<Box<dyn Tracer>> {
+        match self {
+            Self::BruteForce => Ok(Box::new(BruteForceTracer::new(gpu, triangles)?)),
+        }
+    }
+}
+
+impl fmt::Display for TracerKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for TracerKind {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        Self::ALL
+            .iter()
+            .find(|(k, _)| k.name() == s)
+            .map(|(k, _)| *k)
+            .ok_or_else(|| {
+                let names: Vec<_> = Self::ALL.iter().map(|(k, _)| k.name()).collect();
+                format!("unknown tracer '{s}' (choose one of: {})", names.join(", "))
+            })
+    }
+}

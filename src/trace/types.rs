@@ -1,0 +1,93 @@
+//! Ray, hit and triangle records as the GPU sees them (std430). The GLSL side is
+//! `glsl/common/geometry.glsl`; `tests/trace_layout.rs` proves the two agree.
+
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+
+/// Marks a miss in [`Hit::triangle`].
+pub const MISS: u32 = u32::MAX;
+
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+#[repr(C)]
+pub struct Ray {
+    pub origin: [f32; 3],
+    pub tmin: f32,
+    /// Unit length for every ray the engine makes, so t is a distance.
+    pub dir: [f32; 3],
+    pub tmax: f32,
+}
+
+impl Ray {
+    pub fn new(origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Self {
+        Self {
+            origin: origin.into(),
+            tmin,
+            dir: dir.into(),
+            tmax,
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+#[repr(C)]
+pub struct Hit {
+    /// Distance along the ray; +inf for a miss.
+    pub t: f32,
+    /// Index of the triangle in scene order, or [`MISS`].
+    pub triangle: u32,
+    pub u: f32,
+    pub v: f32,
+}
+
+impl Hit {
+    pub const NONE: Hit = Hit {
+        t: f32::INFINITY,
+        triangle: MISS,
+        u: 0.0,
+        v: 0.0,
+    };
+
+    pub fn is_hit(&self) -> bool {
+        self.triangle != MISS
+    }
+}
+
+/// A triangle prepared for intersection: vertex 0 and the edges to vertices 1 and 2.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+#[repr(C)]
+pub struct GpuTriangle {
+    pub v0: [f32; 4],
+    pub e1: [f32; 4],
+    pub e2: [f32; 4],
+}
+
+impl GpuTriangle {
+    pub fn new(p: [Vec3; 3]) -> Self {
+        let e1 = p[1] - p[0];
+        let e2 = p[2] - p[0];
+        Self {
+            v0: p[0].extend(0.0).into(),
+            e1: e1.extend(0.0).into(),
+            e2: e2.extend(0.0).into(),
+        }
+    }
+
+    pub fn v0(&self) -> Vec3 {
+        Vec3::from_slice(&self.v0[..3])
+    }
+    pub fn e1(&self) -> Vec3 {
+        Vec3::from_slice(&self.e1[..3])
+    }
+    pub fn e2(&self) -> Vec3 {
+        Vec3::from_slice(&self.e2[..3])
+    }
+
+    /// Unnormalised geometric normal e1 × e2 (its side follows the vertex winding).
+    pub fn normal(&self) -> Vec3 {
+        self.e1().cross(self.e2())
+    }
+}
+
+const _: () = assert!(size_of::<Ray>() == 32);
+const _: () = assert!(size_of::<Hit>() == 16);
+const _: () = assert!(size_of::<GpuTriangle>() == 48);

@@ -1,0 +1,208 @@
+//! The GPU brute-force tracer against its CPU twin, and the shared struct layouts.
+
+mod common;
+
+use glam::Vec3;
+use splitray::shaders;
+use splitray::trace::{cpu, BruteForceTracer, GpuTriangle, Hit, Query, Ray, Tracer};
+use splitray::vk::{ComputePipeline, Gpu, PipelineDesc, StreamKind};
+
+/// Uniform floats in [0, 1) from the shared deterministic generator.
+fn uniforms(n: usize, seed: u64) -> Vec<f32> {
+    common::random_u32s(n, seed)
+        .into_iter()
+        .map(|x| (x >> 8) as f32 / (1u32 << 24) as f32)
+        .collect()
+}
+
+/// A soup of `n` triangles in the unit cube, of mixed sizes, a few of them degenerate.
+fn triangle_soup(n: usize, seed: u64) -> Vec<GpuTriangle> {
+    let r = uniforms(n * 10, seed);
+    (0..n)
+        .map(|i| {
+            let c = &r[i * 10..];
+            let centre = Vec3::new(c[0], c[1], c[2]);
+            let size = 0.02 + 0.3 * c[9];
+            let a = centre + size * (Vec3::new(c[3], c[4], c[5]) - 0.5);
+            let b = centre + size * (Vec3::new(c[6], c[7], c[8]) - 0.5);
+            let tri = match i % 97 {
+                0 => [centre, centre, centre],                 // a point
+                1 => [centre, a, centre + 2.0 * (a - centre)], // collinear
+                _ => [centre, a, b],
+            };
+            GpuTriangle::new(tri)
+        })
+        .collect()
+}
+
+fn random_rays(n: usize, seed: u64) -> Vec<Ray> {
+    let r = uniforms(n * 6, seed);
+    (0..n)
+        .map(|i| {
+            let c = &r[i * 6..];
+            let origin = Vec3::new(c[0], c[1], c[2]) * 1.4 - 0.2;
+            let target = Vec3::new(c[3], c[4], c[5]);
+            let dir = (target - origin).try_normalize().unwrap_or(Vec3::X);
+            Ray::new(
+                origin,
+                dir,
+                0.0,
+                if i % 5 == 0 { 0.3 } else { f32::INFINITY },
+            )
+        })
+        .collect()
+}
+
+fn gpu_hits(gpu: &Gpu, tracer: &mut dyn Tracer, rays: &[Ray], query: Query) -> Vec<Hit> {
+    let ray_buf = gpu.upload("rays", rays).unwrap();
+    let hit_buf = gpu.zeroed::<Hit>("hits", rays.len()).unwrap();
+    let done = tracer
+        .trace(&ray_buf, &hit_buf, rays.len() as u32, query, &[])
+        .unwrap();
+    gpu.wait(&done).unwrap();
+    hit_buf.read::<Hit>().unwrap()
+}
+
+fn assert_hits_match(gpu_hits: &[Hit], cpu_hits: &[Hit], what: &str) {
+    assert_eq!(gpu_hits.len(), cpu_hits.len());
+    let mismatches: Vec<_> = gpu_hits
+        .iter()
+        .zip(cpu_hits)
+        .enumerate()
+        .filter(|(_, (g, c))| !cpu::same_hit(g, c, 1e-5, false))
+        .take(5)
+        .collect();
+    assert!(
+        mismatches.is_empty(),
+        "{what}: GPU/CPU hits differ: {mismatches:?}"
+    );
+}
+
+#[test]
+fn brute_force_matches_cpu_on_random_triangle_soups() {
+    let gpu = common::gpu();
+    for (triangles, rays, seed) in [
+        (1usize, 100usize, 1u64),
+        (513, 4099, 2),
+        (1000, 20_000, 3),
+        (3, 0, 4),
+        (2000, 1, 5),
+    ] {
+        let soup = triangle_soup(triangles, seed);
+        let rays = random_rays(rays, seed + 100);
+        let mut tracer = BruteForceTracer::new(&gpu, &soup).unwrap();
+        let hits = gpu_hits(&gpu, &mut tracer, &rays, Query::ClosestHit);
+        let expected = cpu::closest_hits(&rays, &soup);
+        assert_hits_match(&hits, &expected, &format!("{triangles} triangles"));
+        if !rays.is_empty() && triangles > 100 {
+            assert!(
+                hits.iter().filter(|h| h.is_hit()).count() > rays.len() / 10,
+                "too few hits to be a test"
+            );
+        }
+        let occ = gpu_hits(&gpu, &mut tracer, &rays, Query::Occlusion);
+        for (i, (h, r)) in occ.iter().zip(&rays).enumerate() {
+            assert_eq!(h.is_hit(), cpu::occluded(r, &soup), "occlusion of ray {i}");
+        }
+    }
+    common::assert_clean(&gpu);
+}
+
+#[test]
+fn results_do_not_depend_on_batching() {
+    use splitray::trace::brute_force::BruteForceTuning;
+    let gpu = common::gpu();
+    let soup = triangle_soup(777, 9);
+    let rays = random_rays(3001, 10);
+    let expected = cpu::closest_hits(&rays, &soup);
+    for (workgroup_size, batch) in [(1, 1), (8, 7), (64, 512), (256, 64)] {
+        let mut tracer = BruteForceTracer::with_tuning(
+            &gpu,
+            &soup,
+            BruteForceTuning {
+                workgroup_size,
+                batch,
+            },
+        )
+        .unwrap();
+        let hits = gpu_hits(&gpu, &mut tracer, &rays, Query::ClosestHit);
+        assert_hits_match(
+            &hits,
+            &expected,
+            &format!("wg {workgroup_size}, batch {batch}"),
+        );
+    }
+    common::assert_clean(&gpu);
+}
+
+#[test]
+fn rust_and_glsl_struct_layouts_agree() {
+    let gpu = common::gpu();
+    let n = 5usize;
+    let f = uniforms(n * 24, 77);
+    let rays: Vec<Ray> = (0..n)
+        .map(|i| {
+            Ray::new(
+                Vec3::new(f[i], f[i + 1], f[i + 2]),
+                Vec3::new(f[i + 3], f[i + 4], f[i + 5]),
+                f[i + 6],
+                f[i + 7],
+            )
+        })
+        .collect();
+    let hits: Vec<Hit> = (0..n)
+        .map(|i| Hit {
+            t: f[i + 8],
+            triangle: i as u32 * 3 + 1,
+            u: f[i + 9],
+            v: f[i + 10],
+        })
+        .collect();
+    let tris: Vec<GpuTriangle> = (0..n)
+        .map(|i| GpuTriangle {
+            v0: [f[i], f[i + 1], f[i + 2], f[i + 3]],
+            e1: [f[i + 4], f[i + 5], f[i + 6], f[i + 7]],
+            e2: [f[i + 8], f[i + 9], f[i + 10], f[i + 11]],
+        })
+        .collect();
+    let pipeline = ComputePipeline::new(
+        &gpu,
+        &PipelineDesc {
+            kernel: shaders::TEST_LAYOUT_ECHO,
+            bindings: 4,
+            push_constant_bytes: 4,
+            spec: &[64],
+        },
+    )
+    .unwrap();
+    let (rb, hb, tb) = (
+        gpu.upload("r", &rays).unwrap(),
+        gpu.upload("h", &hits).unwrap(),
+        gpu.upload("t", &tris).unwrap(),
+    );
+    let out = gpu.zeroed::<f32>("out", n * 24).unwrap();
+    let mut rec = gpu.recorder(StreamKind::Main).unwrap();
+    rec.dispatch_items(
+        &pipeline,
+        &[(&rb).into(), (&hb).into(), (&tb).into(), (&out).into()],
+        &(n as u32),
+        n as u64,
+    )
+    .unwrap();
+    gpu.wait(&rec.submit(&[]).unwrap()).unwrap();
+    let fields = out.read::<f32>().unwrap();
+    for i in 0..n {
+        let (r, h, t) = (&rays[i], &hits[i], &tris[i]);
+        let mut expected = vec![];
+        expected.extend(r.origin);
+        expected.push(r.tmin);
+        expected.extend(r.dir);
+        expected.push(r.tmax);
+        expected.extend([h.t, h.triangle as f32, h.u, h.v]);
+        expected.extend(t.v0);
+        expected.extend(t.e1);
+        expected.extend(t.e2);
+        assert_eq!(&fields[i * 24..(i + 1) * 24], &expected[..], "record {i}");
+    }
+    common::assert_clean(&gpu);
+}
