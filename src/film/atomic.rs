@@ -1,0 +1,218 @@
+//! Atomic file output: write to a temporary file beside the target, rename on success.
+//!
+//! A reader of the target path sees either the previous file (or nothing) or the complete
+//! new file, never a partially written one. On any error — and on a panic during the
+//! write — the temporary file is removed.
+
+use std::fs::{File, OpenOptions};
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use super::FilmError;
+
+/// Distinguishes temporary files of concurrent writes within one process.
+static TEMP_COUNTER: AtomicU64 = AtomicU64::new(0);
+
+/// A temporary file that becomes `target` on [`AtomicFile::commit`] and is deleted if
+/// dropped uncommitted.
+///
+/// The temporary file lives in the target's directory (so the rename cannot cross file
+/// systems) and is named `.<file name>.tmp-<pid>-<n>`.
+#[derive(Debug)]
+pub struct AtomicFile {
+    target: PathBuf,
+    temp: PathBuf,
+    writer: Option<BufWriter<File>>,
+}
+
+impl AtomicFile {
+    /// Creates the temporary file for `target`.
+    ///
+    /// Fails with [`FilmError::MissingDirectory`] when the target's folder does not exist,
+    /// and with [`FilmError::Io`] when the temporary file cannot be created (e.g. the
+    /// folder is not writable).
+    pub fn create(target: impl AsRef<Path>) -> Result<Self, FilmError> {
+        let target = target.as_ref().to_path_buf();
+        let file_name = target
+            .file_name()
+            .ok_or_else(|| FilmError::invalid(&target, "output path has no file name"))?;
+        let dir = match target.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        if !dir.is_dir() {
+            return Err(FilmError::MissingDirectory { path: dir });
+        }
+        let mut temp_name = std::ffi::OsString::from(".");
+        temp_name.push(file_name);
+        temp_name.push(format!(
+            ".tmp-{}-{}",
+            std::process::id(),
+            TEMP_COUNTER.fetch_add(1, Ordering::Relaxed)
+        ));
+        let temp = dir.join(temp_name);
+        let file = OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&temp)
+            .map_err(|e| FilmError::io(&temp, "create temporary file", e))?;
+        Ok(Self {
+            target,
+            temp,
+            writer: Some(BufWriter::new(file)),
+        })
+    }
+
+    /// The final path.
+    pub fn target(&self) -> &Path {
+        &self.target
+    }
+
+    /// The temporary path being written.
+    pub fn temp_path(&self) -> &Path {
+        &self.temp
+    }
+
+    /// The buffered writer of the temporary file (seekable, as the EXR encoder needs).
+    pub fn writer(&mut self) -> &mut BufWriter<File> {
+        self.writer
+            .as_mut()
+            .expect("AtomicFile writer is present until commit")
+    }
+
+    /// Flushes and syncs the temporary file, then renames it over the target.
+    /// On error the temporary file is removed and the target is untouched.
+    pub fn commit(mut self) -> Result<PathBuf, FilmError> {
+        let writer = self.writer.take().expect("AtomicFile committed twice");
+        let file = writer
+            .into_inner()
+            .map_err(|e| FilmError::io(&self.temp, "flush temporary file", e.into_error()))?;
+        file.sync_all()
+            .map_err(|e| FilmError::io(&self.temp, "sync temporary file", e))?;
+        drop(file);
+        std::fs::rename(&self.temp, &self.target)
+            .map_err(|e| FilmError::io(&self.target, "rename temporary file over", e))?;
+        // Renamed: nothing left to clean up.
+        self.temp = PathBuf::new();
+        #[cfg(unix)]
+        if let Some(dir) = self.target.parent().filter(|p| !p.as_os_str().is_empty()) {
+            // Best effort: make the rename itself durable.
+            let _ = File::open(dir).and_then(|d| d.sync_all());
+        }
+        Ok(self.target.clone())
+    }
+}
+
+impl Drop for AtomicFile {
+    fn drop(&mut self) {
+        if !self.temp.as_os_str().is_empty() {
+            drop(self.writer.take());
+            if let Err(e) = std::fs::remove_file(&self.temp) {
+                log::warn!(
+                    "could not remove temporary file {}: {e}",
+                    self.temp.display()
+                );
+            }
+        }
+    }
+}
+
+/// Writes `target` atomically: `write` fills a temporary file which is renamed over
+/// `target` only if `write` succeeds; otherwise the temporary file is removed.
+pub fn write_atomically<F>(target: impl AsRef<Path>, write: F) -> Result<PathBuf, FilmError>
+where
+    F: FnOnce(&mut BufWriter<File>) -> Result<(), FilmError>,
+{
+    let mut file = AtomicFile::create(target)?;
+    write(file.writer())?;
+    file.commit()
+}
+
+/// Convenience: [`write_atomically`] of a byte slice.
+pub fn write_bytes_atomically(
+    target: impl AsRef<Path>,
+    bytes: &[u8],
+) -> Result<PathBuf, FilmError> {
+    let target = target.as_ref();
+    write_atomically(target, |w| {
+        w.write_all(bytes)
+            .map_err(|e| FilmError::io(target, "write", e))
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn entries(dir: &Path) -> Vec<String> {
+        let mut v: Vec<String> = std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        v.sort();
+        v
+    }
+
+    #[test]
+    fn success_replaces_target_and_leaves_no_temp() {
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join("out.bin");
+        std::fs::write(&target, b"old").unwrap();
+        write_bytes_atomically(&target, b"new").unwrap();
+        assert_eq!(std::fs::read(&target).unwrap(), b"new");
+        assert_eq!(entries(dir.path()), ["out.bin"]);
+    }
+
+    #[test]
+    fn failing_writer_keeps_old_target_and_removes_temp() {
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join("out.bin");
+        std::fs::write(&target, b"old").unwrap();
+        let err = write_atomically(&target, |w| {
+            w.write_all(b"partial").unwrap();
+            Err(FilmError::invalid(&target, "boom"))
+        })
+        .unwrap_err();
+        assert!(err.to_string().contains("boom"));
+        assert_eq!(std::fs::read(&target).unwrap(), b"old");
+        assert_eq!(entries(dir.path()), ["out.bin"]);
+    }
+
+    #[test]
+    fn panicking_writer_removes_temp() {
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join("out.bin");
+        let r = std::panic::catch_unwind(|| {
+            let _ = write_atomically(&target, |_| panic!("writer panicked"));
+        });
+        assert!(r.is_err());
+        assert!(entries(dir.path()).is_empty());
+    }
+
+    #[test]
+    fn missing_directory_names_the_path() {
+        let dir = tempfile::tempdir().unwrap();
+        let missing = dir.path().join("no-such-dir");
+        let err = write_bytes_atomically(missing.join("x.bin"), b"x").unwrap_err();
+        assert!(matches!(&err, FilmError::MissingDirectory { path } if *path == missing));
+        assert!(err.to_string().contains("no-such-dir"), "{err}");
+    }
+
+    #[test]
+    fn uncommitted_file_is_removed_on_drop() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut f = AtomicFile::create(dir.path().join("a.exr")).unwrap();
+        f.writer().write_all(b"abc").unwrap();
+        let temp = f.temp_path().to_path_buf();
+        assert!(temp
+            .file_name()
+            .unwrap()
+            .to_str()
+            .unwrap()
+            .starts_with(".a.exr.tmp-"));
+        assert!(temp.exists());
+        drop(f);
+        assert!(entries(dir.path()).is_empty());
+    }
+}

@@ -1,0 +1,91 @@
+//! The film module's error type.
+
+use std::path::PathBuf;
+
+/// Everything that can go wrong while building, writing or reading a film.
+///
+/// Every variant that concerns a file names that file's path.
+#[derive(Debug, thiserror::Error)]
+pub enum FilmError {
+    /// The folder an output should be written into does not exist (or is not a folder).
+    #[error("output directory {} does not exist or is not a directory", .path.display())]
+    MissingDirectory {
+        /// The folder that was expected to exist.
+        path: PathBuf,
+    },
+
+    /// An I/O operation on `path` failed.
+    #[error("{}: {op} failed: {source}", .path.display())]
+    Io {
+        /// The file or folder the operation was about.
+        path: PathBuf,
+        /// What was attempted ("create temporary file", "rename", ...).
+        op: &'static str,
+        /// The underlying error.
+        #[source]
+        source: std::io::Error,
+    },
+
+    /// The EXR encoder or decoder failed.
+    #[error("{}: EXR error: {source}", .path.display())]
+    Exr {
+        /// The EXR file.
+        path: PathBuf,
+        /// The underlying error.
+        #[source]
+        source: exr::error::Error,
+    },
+
+    /// The PNG encoder failed.
+    #[error("{}: PNG error: {source}", .path.display())]
+    Png {
+        /// The PNG file.
+        path: PathBuf,
+        /// The underlying error.
+        #[source]
+        source: png::EncodingError,
+    },
+
+    /// A file was read successfully but its content is not what we expect
+    /// (missing RGB channels, an AOV of the wrong sample type, bad metadata, ...),
+    /// or the film or metadata about to be written cannot be represented.
+    #[error("{}: {message}", .path.display())]
+    Invalid {
+        /// The file being read or written.
+        path: PathBuf,
+        /// What is wrong.
+        message: String,
+    },
+
+    /// A buffer handed to the film has the wrong number of elements.
+    #[error("{what}: got {got} elements, expected {expected} ({width}x{height} film)")]
+    SizeMismatch {
+        /// Which buffer ("pass buffer", "depth AOV", ...).
+        what: &'static str,
+        /// Its length.
+        got: usize,
+        /// The film's pixel count.
+        expected: usize,
+        /// Film width.
+        width: u32,
+        /// Film height.
+        height: u32,
+    },
+}
+
+impl FilmError {
+    pub(crate) fn io(path: impl Into<PathBuf>, op: &'static str, source: std::io::Error) -> Self {
+        Self::Io {
+            path: path.into(),
+            op,
+            source,
+        }
+    }
+
+    pub(crate) fn invalid(path: impl Into<PathBuf>, message: impl Into<String>) -> Self {
+        Self::Invalid {
+            path: path.into(),
+            message: message.into(),
+        }
+    }
+}
