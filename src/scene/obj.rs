@@ -1,0 +1,567 @@
+//! Wavefront OBJ + MTL loading (through `tobj`) and export.
+//!
+//! Before `tobj` sees a file it is pre-scanned here, so that malformed numbers, NaN / inf
+//! coordinates and out-of-range face indices are reported with their line number (and so
+//! that inputs on which `tobj` would panic never reach it). Faces are triangulated;
+//! vertex normals are kept when every vertex of a `tobj` mesh has one. Faces without a
+//! material (no `usemtl`, or a `usemtl` naming a material no MTL defines — the latter
+//! logs a warning) get a default material ([`DEFAULT_MATERIAL_NAME`]) appended after the
+//! MTL materials.
+//!
+//! MTL mapping: Kd → diffuse, Ks → specular, Ns → shininess, Ni → ior, d (or 1 − Tr) →
+//! dissolve, illum → illum, Ke → emission. Missing parameters take [`Material::default`].
+
+use std::cell::RefCell;
+use std::collections::HashMap;
+use std::fmt::Write as _;
+use std::path::Path;
+
+use glam::Vec3;
+
+use super::{
+    framing_camera, validate, FilmSize, Location, Material, RenderSettings, Scene, SceneError,
+    Triangle,
+};
+
+/// Name of the material given to faces that have none.
+pub const DEFAULT_MATERIAL_NAME: &str = "obj-default";
+
+/// Triangles of one OBJ file and the materials they index (local indices).
+#[derive(Clone, Debug, Default)]
+pub struct ObjMesh {
+    pub triangles: Vec<Triangle>,
+    pub materials: Vec<Material>,
+}
+
+pub(crate) fn read_text(path: &Path) -> Result<String, SceneError> {
+    std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
+fn label(path: &Path) -> String {
+    path.display().to_string()
+}
+
+/// Loads an `.obj` file as a whole scene: its triangles and materials, a camera framing
+/// its bounding box ([`framing_camera`]) and a 512×512 film.
+pub fn load_obj_scene(path: &Path) -> Result<Scene, SceneError> {
+    let mesh = load_obj_mesh(path)?;
+    let at = Location::file(label(path));
+    if mesh.triangles.is_empty() {
+        return Err(SceneError::Empty {
+            at,
+            message: "the file has no faces".to_string(),
+        });
+    }
+    let mut scene = Scene {
+        name: path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "obj".to_string()),
+        camera: framing_camera(&super::Aabb::EMPTY),
+        film: FilmSize::default(),
+        triangles: mesh.triangles,
+        materials: mesh.materials,
+        point_lights: Vec::new(),
+        settings: RenderSettings::default(),
+    };
+    // The pre-scan has rejected non-finite vertices, so the bounds are finite.
+    scene.camera = framing_camera(&scene.bounds());
+    validate::validate_scene(&scene, &at)?;
+    Ok(scene)
+}
+
+/// Loads the triangles and materials of an `.obj` file (and the MTL files it names,
+/// relative to its folder).
+pub fn load_obj_mesh(path: &Path) -> Result<ObjMesh, SceneError> {
+    let text = read_text(path)?;
+    let file = label(path);
+    let scan = prescan_obj(&text, &file)?;
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+
+    let mtl_error: RefCell<Option<SceneError>> = RefCell::new(None);
+    let loader = |mtl: &Path| -> tobj::MTLLoadResult {
+        let name = mtl.to_string_lossy().into_owned();
+        let full = dir.join(mtl);
+        let line = scan
+            .mtllibs
+            .iter()
+            .find(|(n, _)| *n == name)
+            .map(|(_, l)| *l);
+        let at = match line {
+            Some(l) => Location::line(file.clone(), l),
+            None => Location::file(file.clone()),
+        };
+        let result = match std::fs::read_to_string(&full) {
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+                Err(SceneError::MissingReference {
+                    at,
+                    what: "material library",
+                    name,
+                    path: full.clone(),
+                })
+            }
+            Err(source) => Err(SceneError::Io {
+                path: full.clone(),
+                source,
+            }),
+            Ok(mtl_text) => {
+                let mtl_label = label(&full);
+                prescan_mtl(&mtl_text, &mtl_label).and_then(|()| {
+                    tobj::load_mtl_buf(&mut mtl_text.as_bytes()).map_err(|e| SceneError::Syntax {
+                        at: Location::file(mtl_label),
+                        message: format!("malformed MTL: {e}"),
+                    })
+                })
+            }
+        };
+        result.map_err(|e| {
+            let mut slot = mtl_error.borrow_mut();
+            if slot.is_none() {
+                *slot = Some(e);
+            }
+            tobj::LoadError::OpenFileFailed
+        })
+    };
+
+    // Some LoadOptions fields exist only with tobj features; keep `..Default` for those.
+    #[allow(clippy::needless_update)]
+    let options = tobj::LoadOptions {
+        single_index: true,
+        triangulate: true,
+        ignore_points: true,
+        ignore_lines: true,
+        ..Default::default()
+    };
+    // The pre-scan rejects every input known to make tobj panic; catching an unwind here
+    // is a last line of defence so that a loader bug becomes an error, not a crash.
+    let loaded = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        tobj::load_obj_buf(&mut text.as_bytes(), &options, loader)
+    }));
+    if let Some(e) = mtl_error.into_inner() {
+        return Err(e);
+    }
+    let (models, materials) = match loaded {
+        Err(_) => {
+            return Err(SceneError::Syntax {
+                at: Location::file(file),
+                message: "malformed OBJ (the OBJ parser panicked)".to_string(),
+            })
+        }
+        Ok(Err(e)) => {
+            return Err(SceneError::Syntax {
+                at: Location::file(file),
+                message: format!("malformed OBJ: {e}"),
+            })
+        }
+        Ok(Ok(v)) => v,
+    };
+    // An Err here can only be "no mtllib at all" style failures already reported above.
+    let tobj_materials = materials.unwrap_or_default();
+
+    let mut out = ObjMesh {
+        triangles: Vec::new(),
+        materials: tobj_materials.iter().map(convert_material).collect(),
+    };
+    for (name, line) in &scan.usemtl {
+        if !out.materials.iter().any(|m| &m.name == name) {
+            log::warn!(
+                "{file}:{line}: usemtl '{name}' names no material of the MTL files; using the default material"
+            );
+        }
+    }
+    let mut default_index: Option<u32> = None;
+    for model in &models {
+        let m = &model.mesh;
+        let material = match m.material_id {
+            Some(id) if id < out.materials.len() => id as u32,
+            _ => *default_index.get_or_insert_with(|| {
+                out.materials.push(Material::named(DEFAULT_MATERIAL_NAME));
+                (out.materials.len() - 1) as u32
+            }),
+        };
+        let has_normals = !m.normals.is_empty() && m.normals.len() == m.positions.len();
+        let vertex = |data: &[f32], i: u32| -> Option<Vec3> {
+            let i = i as usize * 3;
+            data.get(i..i + 3).map(Vec3::from_slice)
+        };
+        for (k, tri) in m.indices.chunks_exact(3).enumerate() {
+            let p = [
+                vertex(&m.positions, tri[0]),
+                vertex(&m.positions, tri[1]),
+                vertex(&m.positions, tri[2]),
+            ];
+            let [Some(p0), Some(p1), Some(p2)] = p else {
+                return Err(SceneError::Syntax {
+                    at: Location::file(file),
+                    message: format!(
+                        "object '{}' triangle {k} has an index out of range",
+                        model.name
+                    ),
+                });
+            };
+            let n = if has_normals {
+                match (
+                    vertex(&m.normals, tri[0]),
+                    vertex(&m.normals, tri[1]),
+                    vertex(&m.normals, tri[2]),
+                ) {
+                    (Some(a), Some(b), Some(c)) => Some([a, b, c]),
+                    _ => None,
+                }
+            } else {
+                None
+            };
+            out.triangles.push(Triangle {
+                p: [p0, p1, p2],
+                n,
+                material,
+            });
+        }
+    }
+    Ok(out)
+}
+
+fn convert_material(m: &tobj::Material) -> Material {
+    let d = Material::default();
+    let v3 = |a: Option<[f32; 3]>, default: Vec3| a.map(Vec3::from).unwrap_or(default);
+    let param3 = |key: &str| -> Option<[f32; 3]> {
+        let vals: Vec<f32> = m
+            .unknown_param
+            .get(key)?
+            .split_whitespace()
+            .map(str::parse)
+            .collect::<Result<_, _>>()
+            .ok()?;
+        vals.get(..3).map(|s| [s[0], s[1], s[2]])
+    };
+    let dissolve = m.dissolve.or_else(|| {
+        m.unknown_param
+            .get("Tr")
+            .and_then(|t| t.trim().parse::<f32>().ok())
+            .map(|tr| 1.0 - tr)
+    });
+    Material {
+        name: m.name.clone(),
+        diffuse: v3(m.diffuse, d.diffuse),
+        specular: v3(m.specular, d.specular),
+        shininess: m.shininess.unwrap_or(d.shininess),
+        ior: m.optical_density.unwrap_or(d.ior),
+        dissolve: dissolve.unwrap_or(d.dissolve),
+        illum: m.illumination_model.map_or(d.illum, u32::from),
+        emission: v3(m.emissive.or_else(|| param3("Ke")), d.emission),
+    }
+}
+
+/// What the OBJ pre-scan learnt besides "no errors".
+#[derive(Debug, Default)]
+struct ObjScan {
+    mtllibs: Vec<(String, usize)>,
+    usemtl: Vec<(String, usize)>,
+}
+
+fn rest_of_line<'a>(line: &'a str, keyword: &str) -> &'a str {
+    line.trim_start()[keyword.len()..].trim()
+}
+
+fn parse_floats(
+    words: &[&str],
+    n: usize,
+    at: &Location,
+    what: &str,
+) -> Result<Vec<f32>, SceneError> {
+    if words.len() < n {
+        return Err(SceneError::Syntax {
+            at: at.clone(),
+            message: format!("{what} needs {n} numbers, found {}", words.len()),
+        });
+    }
+    words[..n]
+        .iter()
+        .map(|w| {
+            w.parse::<f32>().map_err(|_| SceneError::Syntax {
+                at: at.clone(),
+                message: format!("{what}: '{w}' is not a number"),
+            })
+        })
+        .collect()
+}
+
+fn require_finite(vals: &[f32], at: &Location, what: String) -> Result<(), SceneError> {
+    if vals.iter().all(|v| v.is_finite()) {
+        Ok(())
+    } else {
+        let value = vals
+            .iter()
+            .map(|v| v.to_string())
+            .collect::<Vec<_>>()
+            .join(" ");
+        Err(SceneError::NonFinite {
+            at: at.clone(),
+            what,
+            value,
+        })
+    }
+}
+
+/// Line-by-line check of OBJ text: vertex / normal numbers parse and are finite, face
+/// indices are non-zero integers inside the file's vertex / texcoord / normal counts.
+fn prescan_obj(text: &str, file: &str) -> Result<ObjScan, SceneError> {
+    let (mut nv, mut nvt, mut nvn) = (0usize, 0usize, 0usize);
+    for line in text.lines() {
+        match line.split_whitespace().next() {
+            Some("v") => nv += 1,
+            Some("vt") => nvt += 1,
+            Some("vn") => nvn += 1,
+            _ => {}
+        }
+    }
+    let totals = [nv, nvt, nvn];
+    const KINDS: [&str; 3] = ["vertex", "texcoord", "normal"];
+    let mut seen = [0usize; 3];
+    let mut face = 0usize;
+    let mut scan = ObjScan::default();
+    for (i, line) in text.lines().enumerate() {
+        let words: Vec<&str> = line.split_whitespace().collect();
+        let Some(&keyword) = words.first() else {
+            continue;
+        };
+        let at = || Location::line(file, i + 1);
+        match keyword {
+            "v" => {
+                seen[0] += 1;
+                let xyz = parse_floats(&words[1..], 3, &at(), "vertex position")?;
+                require_finite(&xyz, &at(), format!("vertex {}", seen[0]))?;
+                if words.len() == 5 {
+                    let w = parse_floats(&words[4..], 1, &at(), "vertex w")?[0];
+                    if w == 0.0 || !w.is_finite() {
+                        return Err(SceneError::Syntax {
+                            at: at(),
+                            message: format!("vertex {} has weight w = {w}", seen[0]),
+                        });
+                    }
+                }
+            }
+            "vt" => {
+                seen[1] += 1;
+                parse_floats(&words[1..], 2, &at(), "texture coordinate")?;
+            }
+            "vn" => {
+                seen[2] += 1;
+                let n = parse_floats(&words[1..], 3, &at(), "vertex normal")?;
+                require_finite(&n, &at(), format!("normal {}", seen[2]))?;
+            }
+            "f" => {
+                face += 1;
+                if words.len() < 4 {
+                    return Err(SceneError::Syntax {
+                        at: at(),
+                        message: format!(
+                            "face {face} has {} vertices; a face needs at least 3",
+                            words.len() - 1
+                        ),
+                    });
+                }
+                for w in &words[1..] {
+                    let parts: Vec<&str> = w.split('/').collect();
+                    if parts.len() > 3 || parts[0].is_empty() {
+                        return Err(SceneError::Syntax {
+                            at: at(),
+                            message: format!("face {face}: malformed vertex reference '{w}'"),
+                        });
+                    }
+                    for (k, part) in parts.iter().enumerate() {
+                        if part.is_empty() {
+                            continue;
+                        }
+                        let idx: i64 = part.parse().map_err(|_| SceneError::Syntax {
+                            at: at(),
+                            message: format!("face {face}: '{part}' in '{w}' is not an index"),
+                        })?;
+                        // Relative (negative) indices count back from the elements seen
+                        // so far; absolute ones may point anywhere in the file.
+                        let ok = match idx {
+                            0 => {
+                                return Err(SceneError::Syntax {
+                                    at: at(),
+                                    message: format!(
+                                    "face {face}: {} index 0 is invalid (OBJ indices start at 1)",
+                                    KINDS[k]
+                                ),
+                                })
+                            }
+                            i if i < 0 => i.unsigned_abs() <= seen[k] as u64,
+                            i => i as u64 <= totals[k] as u64,
+                        };
+                        if !ok {
+                            return Err(SceneError::IndexOutOfRange {
+                                at: at(),
+                                face,
+                                kind: KINDS[k],
+                                index: idx,
+                                count: if idx < 0 { seen[k] } else { totals[k] },
+                            });
+                        }
+                    }
+                }
+            }
+            "mtllib" => scan
+                .mtllibs
+                .push((rest_of_line(line, "mtllib").to_string(), i + 1)),
+            "usemtl" => {
+                let name = rest_of_line(line, "usemtl");
+                if name.is_empty() {
+                    return Err(SceneError::Syntax {
+                        at: at(),
+                        message: "usemtl without a material name".to_string(),
+                    });
+                }
+                scan.usemtl.push((name.to_string(), i + 1));
+            }
+            _ => {}
+        }
+    }
+    Ok(scan)
+}
+
+/// Line-by-line check of MTL text: colour and scalar parameters parse and are finite.
+fn prescan_mtl(text: &str, file: &str) -> Result<(), SceneError> {
+    for (i, line) in text.lines().enumerate() {
+        let words: Vec<&str> = line.split_whitespace().collect();
+        let Some(&keyword) = words.first() else {
+            continue;
+        };
+        let at = Location::line(file, i + 1);
+        match keyword {
+            "Ka" | "Kd" | "Ks" | "Ke" => {
+                let v = parse_floats(&words[1..], 3, &at, keyword)?;
+                require_finite(&v, &at, keyword.to_string())?;
+            }
+            "Ns" | "Ni" | "d" | "Tr" => {
+                let v = parse_floats(&words[1..], 1, &at, keyword)?;
+                require_finite(&v, &at, keyword.to_string())?;
+            }
+            "illum" => {
+                let ok = words.get(1).is_some_and(|w| w.parse::<u8>().is_ok());
+                if !ok {
+                    return Err(SceneError::Syntax {
+                        at,
+                        message: "illum needs an integer 0..=255".to_string(),
+                    });
+                }
+            }
+            "newmtl" if words.len() < 2 => {
+                return Err(SceneError::Syntax {
+                    at,
+                    message: "newmtl without a material name".to_string(),
+                })
+            }
+            _ => {}
+        }
+    }
+    Ok(())
+}
+
+/// Writes `scene`'s triangles as OBJ text (one `o`/`usemtl` group per run of triangles
+/// with the same material, explicit triangles, file order kept) and its materials as MTL
+/// text. The OBJ refers to the MTL as `mtl_file_name`. Positions are written with
+/// round-trip precision, so loading the pair gives back the same triangles.
+pub fn to_obj_mtl(scene: &Scene, mtl_file_name: &str) -> (String, String) {
+    let mut obj = String::new();
+    let mut mtl = String::new();
+    let _ = writeln!(obj, "# {} — written by splitray", scene.name);
+    let _ = writeln!(obj, "mtllib {mtl_file_name}");
+    let mut vertex_index: HashMap<[u32; 3], usize> = HashMap::new();
+    let mut verts = String::new();
+    let mut faces = String::new();
+    let mut current: Option<u32> = None;
+    for t in &scene.triangles {
+        if current != Some(t.material) {
+            current = Some(t.material);
+            let name = &scene.materials[t.material as usize].name;
+            let _ = writeln!(faces, "usemtl {name}");
+        }
+        let mut idx = [0usize; 3];
+        for (k, p) in t.p.iter().enumerate() {
+            let key = [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()];
+            let next = vertex_index.len() + 1;
+            idx[k] = *vertex_index.entry(key).or_insert_with(|| {
+                let _ = writeln!(verts, "v {} {} {}", p.x, p.y, p.z);
+                next
+            });
+        }
+        let _ = writeln!(faces, "f {} {} {}", idx[0], idx[1], idx[2]);
+    }
+    obj.push_str(&verts);
+    obj.push_str(&faces);
+    for m in &scene.materials {
+        let _ = writeln!(mtl, "newmtl {}", m.name);
+        let _ = writeln!(mtl, "Kd {} {} {}", m.diffuse.x, m.diffuse.y, m.diffuse.z);
+        let _ = writeln!(mtl, "Ks {} {} {}", m.specular.x, m.specular.y, m.specular.z);
+        let _ = writeln!(mtl, "Ke {} {} {}", m.emission.x, m.emission.y, m.emission.z);
+        let _ = writeln!(mtl, "Ns {}", m.shininess);
+        let _ = writeln!(mtl, "Ni {}", m.ior);
+        let _ = writeln!(mtl, "d {}", m.dissolve);
+        let _ = writeln!(mtl, "illum {}\n", m.illum);
+    }
+    (obj, mtl)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn prescan_catches_bad_indices_with_line() {
+        let text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 99\n";
+        let e = prescan_obj(text, "m.obj").unwrap_err().to_string();
+        assert_eq!(
+            e,
+            "m.obj:5: face 2 references vertex 99 but the file has 3 vertices"
+        );
+        let e = prescan_obj("v 0 0 0\nf -1 -2 -3\n", "m.obj")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("m.obj:2: face 1 references vertex -2"), "{e}");
+        let e = prescan_obj("v 0 0 0\nf 1/1 1/1 1/1\n", "m.obj")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("references texcoord 1 but the file has 0"),
+            "{e}"
+        );
+        let e = prescan_obj("v 0 0 0\nf 0 1 1\n", "m.obj")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("index 0 is invalid"), "{e}");
+    }
+
+    #[test]
+    fn prescan_catches_non_finite() {
+        let e = prescan_obj("v 0 0 0\nv 1 nan 0\n", "m.obj")
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("m.obj:2: vertex 2 is not finite"), "{e}");
+        let e = prescan_mtl("newmtl a\nKd 0.5\n", "m.mtl")
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("m.mtl:2: Kd needs 3 numbers"), "{e}");
+    }
+
+    #[test]
+    fn material_mapping() {
+        let text = "newmtl lamp\nKd 0.1 0.2 0.3\nKs 0.4 0.5 0.6\nNs 10\nNi 1.5\nd 0.5\nillum 7\nKe 17 12 4\n";
+        let (mats, _) = tobj::load_mtl_buf(&mut text.as_bytes()).unwrap();
+        let m = convert_material(&mats[0]);
+        assert_eq!(m.name, "lamp");
+        assert_eq!(m.diffuse, Vec3::new(0.1, 0.2, 0.3));
+        assert_eq!(m.specular, Vec3::new(0.4, 0.5, 0.6));
+        assert_eq!(m.shininess, 10.0);
+        assert_eq!(m.ior, 1.5);
+        assert_eq!(m.dissolve, 0.5);
+        assert_eq!(m.illum, 7);
+        assert_eq!(m.emission, Vec3::new(17.0, 12.0, 4.0));
+    }
+}

@@ -1,0 +1,259 @@
+//! Checks that a scene can be rendered; every error names the scene's source file.
+
+use glam::Vec3;
+
+use super::{Camera, FilmSize, Location, Scene, SceneError, SceneStats};
+
+/// Largest accepted film width or height, in pixels.
+pub const MAX_FILM_DIM: u32 = 16384;
+
+/// Position, look-at and up finite; look_at ≠ position; up non-zero and not parallel to
+/// the view direction; 0 < fov_y < 180.
+pub fn validate_camera(camera: &Camera, at: &Location) -> Result<(), SceneError> {
+    let err = |message: String| SceneError::Camera {
+        at: at.clone(),
+        message,
+    };
+    for (what, v) in [
+        ("position", camera.position),
+        ("look_at", camera.look_at),
+        ("up", camera.up),
+    ] {
+        if !v.is_finite() {
+            return Err(err(format!("{what} {v} is not finite")));
+        }
+    }
+    if !camera.fov_y.is_finite() || camera.fov_y <= 0.0 || camera.fov_y >= 180.0 {
+        return Err(err(format!(
+            "fov_y {} is outside (0, 180) degrees",
+            camera.fov_y
+        )));
+    }
+    let forward = camera.look_at - camera.position;
+    if forward.length_squared() <= f32::MIN_POSITIVE
+        || forward.length() <= 1e-6 * camera.position.abs().max_element()
+    {
+        return Err(err(format!(
+            "look_at {} is the same point as position",
+            camera.look_at
+        )));
+    }
+    if camera.up.length_squared() <= f32::MIN_POSITIVE {
+        return Err(err("up is the zero vector".to_string()));
+    }
+    let f = forward.normalize();
+    let u = camera.up.normalize();
+    if f.cross(u).length() < 1e-4 {
+        return Err(err(format!(
+            "up {} is parallel to the view direction {}",
+            camera.up, f
+        )));
+    }
+    Ok(())
+}
+
+/// 1 ≤ width, height ≤ [`MAX_FILM_DIM`].
+pub fn validate_film(film: &FilmSize, at: &Location) -> Result<(), SceneError> {
+    for (what, v) in [("width", film.width), ("height", film.height)] {
+        if v == 0 || v > MAX_FILM_DIM {
+            return Err(SceneError::Film {
+                at: at.clone(),
+                message: format!("{what} {v} is outside 1..={MAX_FILM_DIM}"),
+            });
+        }
+    }
+    Ok(())
+}
+
+fn check_finite(v: Vec3, at: &Location, what: impl FnOnce() -> String) -> Result<(), SceneError> {
+    if v.is_finite() {
+        Ok(())
+    } else {
+        Err(SceneError::NonFinite {
+            at: at.clone(),
+            what: what(),
+            value: v.to_string(),
+        })
+    }
+}
+
+/// Full check of a scene loaded from `at`: camera, film, non-empty geometry, finite
+/// vertices / normals / material and light parameters, material indices in range.
+/// Degenerate triangles are allowed (counted and logged as a warning) unless every
+/// triangle is degenerate.
+pub fn validate_scene(scene: &Scene, at: &Location) -> Result<SceneStats, SceneError> {
+    validate_camera(&scene.camera, at)?;
+    validate_film(&scene.film, at)?;
+    if scene.triangles.is_empty() {
+        return Err(SceneError::Empty {
+            at: at.clone(),
+            message: format!("scene '{}' has no triangles", scene.name),
+        });
+    }
+    for (i, t) in scene.triangles.iter().enumerate() {
+        for (k, p) in t.p.iter().enumerate() {
+            check_finite(*p, at, || format!("triangle {i} vertex {k}"))?;
+        }
+        if let Some(n) = &t.n {
+            for (k, v) in n.iter().enumerate() {
+                check_finite(*v, at, || format!("triangle {i} normal {k}"))?;
+            }
+        }
+        if t.material as usize >= scene.materials.len() {
+            return Err(SceneError::Invalid {
+                at: at.clone(),
+                message: format!(
+                    "triangle {i} uses material {} but the scene has {} materials",
+                    t.material,
+                    scene.materials.len()
+                ),
+            });
+        }
+    }
+    for m in &scene.materials {
+        for (what, v) in [
+            ("diffuse", m.diffuse),
+            ("specular", m.specular),
+            ("emission", m.emission),
+        ] {
+            check_finite(v, at, || format!("material '{}' {what}", m.name))?;
+            if v.min_element() < 0.0 {
+                return Err(SceneError::Invalid {
+                    at: at.clone(),
+                    message: format!("material '{}' {what} {v} is negative", m.name),
+                });
+            }
+        }
+        for (what, v) in [
+            ("shininess", m.shininess),
+            ("ior", m.ior),
+            ("dissolve", m.dissolve),
+        ] {
+            if !v.is_finite() {
+                return Err(SceneError::NonFinite {
+                    at: at.clone(),
+                    what: format!("material '{}' {what}", m.name),
+                    value: v.to_string(),
+                });
+            }
+        }
+    }
+    for (i, l) in scene.point_lights.iter().enumerate() {
+        check_finite(l.position, at, || format!("point light {i} position"))?;
+        check_finite(l.intensity, at, || format!("point light {i} intensity"))?;
+    }
+    let stats = scene.stats();
+    if stats.degenerate_triangles == stats.triangles {
+        return Err(SceneError::Empty {
+            at: at.clone(),
+            message: format!(
+                "all {} triangles of scene '{}' are degenerate (zero area)",
+                stats.triangles, scene.name
+            ),
+        });
+    }
+    if stats.degenerate_triangles > 0 {
+        log::warn!(
+            "{at}: {} of {} triangles are degenerate (zero area); kept",
+            stats.degenerate_triangles,
+            stats.triangles
+        );
+    }
+    if stats.emissive_triangles == 0 && stats.point_lights == 0 {
+        log::warn!("{at}: scene '{}' has no lights", scene.name);
+    }
+    Ok(stats)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn at() -> Location {
+        Location::file("x.toml")
+    }
+
+    fn cam() -> Camera {
+        Camera {
+            position: Vec3::new(0.0, 0.0, -5.0),
+            look_at: Vec3::ZERO,
+            up: Vec3::Y,
+            fov_y: 45.0,
+        }
+    }
+
+    #[test]
+    fn camera_errors() {
+        assert!(validate_camera(&cam(), &at()).is_ok());
+        let bad = [
+            (
+                Camera {
+                    look_at: Vec3::new(0.0, 0.0, -5.0),
+                    ..cam()
+                },
+                "same point",
+            ),
+            (
+                Camera {
+                    up: Vec3::ZERO,
+                    ..cam()
+                },
+                "zero vector",
+            ),
+            (
+                Camera {
+                    up: Vec3::Z,
+                    ..cam()
+                },
+                "parallel",
+            ),
+            (
+                Camera {
+                    fov_y: 180.0,
+                    ..cam()
+                },
+                "outside (0, 180)",
+            ),
+            (
+                Camera {
+                    fov_y: 0.0,
+                    ..cam()
+                },
+                "outside (0, 180)",
+            ),
+            (
+                Camera {
+                    position: Vec3::new(f32::NAN, 0.0, 0.0),
+                    ..cam()
+                },
+                "not finite",
+            ),
+        ];
+        for (c, want) in bad {
+            let e = validate_camera(&c, &at()).unwrap_err().to_string();
+            assert!(e.starts_with("x.toml: invalid camera"), "{e}");
+            assert!(e.contains(want), "{e} should contain {want}");
+        }
+    }
+
+    #[test]
+    fn film_errors() {
+        let ok = FilmSize {
+            width: 16384,
+            height: 1,
+        };
+        assert!(validate_film(&ok, &at()).is_ok());
+        for (w, h) in [(0, 10), (10, 0), (16385, 10)] {
+            let e = validate_film(
+                &FilmSize {
+                    width: w,
+                    height: h,
+                },
+                &at(),
+            )
+            .unwrap_err()
+            .to_string();
+            assert!(e.contains("x.toml: invalid film size"), "{e}");
+        }
+    }
+}
