@@ -10,6 +10,8 @@
 //! - [`render`]: ties a scene, a tracer and an integrator into a film.
 
 pub mod film;
+pub mod integrator;
+pub mod render;
 pub mod scene;
 pub mod shaders;
 pub mod trace;

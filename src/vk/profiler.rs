@@ -73,7 +73,11 @@ impl ProfileLog {
 
     /// A printable table of [`ProfileLog::summary`].
     pub fn table(&self) -> String {
-        let rows = self.summary();
+        Self::table_of(&self.summary())
+    }
+
+    /// A printable table of per-kernel totals.
+    pub fn table_of(rows: &[KernelTime]) -> String {
         let width = rows.iter().map(|r| r.name.len()).max().unwrap_or(6).max(6);
         let mut s = format!(
             "{:<width$}  {:>7}  {:>11}  {:>10}  {:>10}\n",

@@ -1,0 +1,32 @@
+# splitray: `make render` renders the default scene, `make test` runs every test with the
+# Vulkan validation layer on. Both install what is missing first (Debian 12, as root).
+
+CARGO ?= cargo
+SCENE ?= cornell-box
+
+.PHONY: deps build render test lint bench clean
+
+deps:
+	@command -v $(CARGO) >/dev/null || { echo "make: cargo not found: install a Rust toolchain (rustup) first" >&2; exit 1; }
+	@bash tools/install-deps.sh
+
+build: deps
+	$(CARGO) build --release --locked
+
+render: build
+	@mkdir -p out
+	./target/release/splitray render $(SCENE) -o out/$(SCENE).exr --stats out/$(SCENE).stats.json
+
+# Every GPU test opens its device with VK_LAYER_KHRONOS_validation and fails on any
+# validation error or warning (tests/common/mod.rs); SPLITRAY_VALIDATION turns it on for
+# anything else that opens a device.
+test: deps
+	SPLITRAY_VALIDATION=1 $(CARGO) test --locked --all-targets
+
+lint:
+	$(CARGO) fmt --all -- --check
+	$(CARGO) clippy --locked --all-targets -- -D warnings
+
+clean:
+	$(CARGO) clean
+	rm -rf out

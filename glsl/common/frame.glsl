@@ -1,0 +1,26 @@
+// Camera and per-pass parameters shared by the integrator kernels, passed as push
+// constants (112 bytes, within the 128 that every device offers) (src/integrator/gpu.rs
+// `FrameParams` is the Rust side; the layout test in tests/integrators.rs checks it).
+#ifndef SPLITRAY_FRAME_GLSL
+#define SPLITRAY_FRAME_GLSL
+
+struct FrameParams {
+    vec4 origin;        // xyz camera position
+    vec4 forward;       // xyz unit forward
+    vec4 right;         // xyz right, scaled by the image plane's half width at distance 1
+    vec4 up;            // xyz up, scaled by the half height
+    uint width;
+    uint height;
+    uint sample_index;  // which sample of the pixel this pass takes
+    uint seed;
+    uint pixel_offset;  // first pixel of this chunk
+    uint pixel_count;   // pixels in this chunk
+    uint jitter;        // 0: through pixel centres; 1: uniformly jittered in the pixel
+    uint ao_rays;       // ambient-occlusion rays per hit
+    float ao_radius;
+    float ray_epsilon;  // offset of secondary-ray origins, scaled to the scene
+    uint pad0;
+    uint pad1;
+};
+
+#endif

@@ -1,0 +1,140 @@
+//! `splitray info`.
+
+use anyhow::Context;
+use clap::Args;
+use serde::Serialize;
+use splitray::vk::{
+    self, Instance, InstanceDesc, PhysicalDeviceInfo, StreamKind, StreamMapping, StreamPlacement,
+};
+
+#[derive(Debug, Args)]
+pub struct InfoArgs {
+    /// Print machine-readable JSON instead of text.
+    #[arg(long)]
+    json: bool,
+    /// Mark this device (index or name substring) as the one `render` would use.
+    #[arg(long)]
+    device: Option<String>,
+}
+
+#[derive(Serialize)]
+struct DeviceReport {
+    #[serde(flatten)]
+    info: PhysicalDeviceInfo,
+    selected: bool,
+    missing_requirements: Vec<String>,
+    streams: StreamMapping,
+}
+
+#[derive(Serialize)]
+struct InfoReport {
+    validation_layer_available: bool,
+    devices: Vec<DeviceReport>,
+}
+
+pub fn run(args: &InfoArgs) -> anyhow::Result<()> {
+    let instance =
+        Instance::new(InstanceDesc::default()).context("cannot create a Vulkan instance")?;
+    let devices = vk::enumerate(&instance)?;
+    let selected = vk::select(&devices, args.device.as_deref())
+        .ok()
+        .map(|d| d.index);
+    let report = InfoReport {
+        validation_layer_available: vk::validation_layer_available(),
+        devices: devices
+            .iter()
+            .map(|d| DeviceReport {
+                info: d.clone(),
+                selected: Some(d.index) == selected,
+                missing_requirements: d.missing_requirements(),
+                streams: StreamMapping::plan(d, StreamPlacement::Spread),
+            })
+            .collect(),
+    };
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+        return Ok(());
+    }
+    println!(
+        "validation layer: {}",
+        if report.validation_layer_available {
+            "available"
+        } else {
+            "not installed"
+        }
+    );
+    for d in &report.devices {
+        let i = &d.info;
+        println!(
+            "\n[{}] {}{}\n    type {}, Vulkan {}, driver {} {}",
+            i.index,
+            i.name,
+            if d.selected { "  (selected)" } else { "" },
+            i.device_type,
+            i.api_version,
+            i.driver_name,
+            i.driver_info
+        );
+        if !d.missing_requirements.is_empty() {
+            println!(
+                "    cannot run splitray: lacks {}",
+                d.missing_requirements.join(", ")
+            );
+        }
+        println!("    queue families:");
+        for q in &i.queue_families {
+            let mut caps = vec![];
+            if q.graphics {
+                caps.push("graphics");
+            }
+            if q.compute {
+                caps.push("compute");
+            }
+            if q.transfer {
+                caps.push("transfer");
+            }
+            println!(
+                "      {}: {} queue(s), {}, timestamps {} bits",
+                q.index,
+                q.count,
+                caps.join("+"),
+                q.timestamp_valid_bits
+            );
+        }
+        println!("    streams:");
+        for kind in StreamKind::ALL {
+            let s = d.streams.slot(kind);
+            println!(
+                "      {:<9} -> family {} queue {}",
+                kind.name(),
+                s.family,
+                s.index
+            );
+        }
+        if d.streams.is_single_queue() {
+            println!("      (one queue: streams are ordered by timeline semaphores on it)");
+        }
+        let l = &i.limits;
+        let c = &i.capabilities;
+        println!(
+            "    limits: maxStorageBufferRange {} MiB, shared memory {} KiB, workgroup invocations {}, subgroup size {}, push constants {} B, timestampPeriod {} ns",
+            l.max_storage_buffer_range >> 20,
+            l.max_compute_shared_memory_size >> 10,
+            l.max_compute_work_group_invocations,
+            l.subgroup_size,
+            l.max_push_constants_size,
+            l.timestamp_period_ns
+        );
+        println!(
+            "    features: timeline semaphores {}, synchronization2 {}, maintenance4 {}, push descriptors {}, buffer device address {}, ray query {}, subgroup arithmetic {}",
+            c.timeline_semaphore,
+            c.synchronization2,
+            c.maintenance4,
+            c.push_descriptor,
+            c.buffer_device_address,
+            c.ray_query,
+            c.subgroup_arithmetic
+        );
+    }
+    Ok(())
+}

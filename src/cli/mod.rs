@@ -1,0 +1,43 @@
+//! Subcommands of the `splitray` binary. Errors surface as `anyhow` only here, at the
+//! edge; the library speaks in typed errors.
+
+mod info;
+mod render;
+
+use clap::{Parser, Subcommand};
+
+/// splitray renders scenes headlessly on any Vulkan 1.3 device (a GPU, or the lavapipe
+/// CPU driver) with GLSL compute kernels.
+///
+/// Start with `splitray info` to see the devices, `splitray scenes` for the built-in
+/// scenes, and `splitray render` to render the Cornell box to out/cornell-box.exr (+ .png).
+#[derive(Debug, Parser)]
+#[command(name = "splitray", version, about, long_about)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// List Vulkan devices, their queue families, the stream-to-queue mapping, the limits
+    /// that matter and whether the validation layer is installed.
+    Info(info::InfoArgs),
+    /// Render a scene to an EXR (linear HDR, with AOVs) and a PNG preview beside it.
+    Render(render::RenderArgs),
+    /// List the built-in scenes (usable as `splitray render NAME`).
+    Scenes,
+}
+
+pub fn run(cli: Cli) -> anyhow::Result<()> {
+    match cli.command {
+        Command::Info(args) => info::run(&args),
+        Command::Render(args) => render::run(&args),
+        Command::Scenes => {
+            for (name, description) in splitray::scene::builtin_names() {
+                println!("{name:<14} {description}");
+            }
+            Ok(())
+        }
+    }
+}

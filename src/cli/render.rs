@@ -1,0 +1,169 @@
+//! `splitray render`.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context};
+use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+use splitray::film::write_outputs;
+use splitray::integrator::IntegratorKind;
+use splitray::render::{render, RenderOptions};
+use splitray::trace::TracerKind;
+use splitray::vk::{Gpu, GpuDesc, InstanceDesc};
+
+#[derive(Debug, Args)]
+pub struct RenderArgs {
+    /// A built-in scene name (see `splitray scenes`), a scene .toml or an .obj mesh.
+    #[arg(default_value = "cornell-box")]
+    scene: String,
+    /// Output EXR; the PNG preview goes beside it. Default: out/<scene>.exr.
+    #[arg(short, long)]
+    output: Option<PathBuf>,
+    /// Film width in pixels (default: the scene's, else 512).
+    #[arg(long)]
+    width: Option<u32>,
+    /// Film height in pixels (default: the scene's, else 512).
+    #[arg(long)]
+    height: Option<u32>,
+    /// Samples per pixel (default: the scene's, else 1; more than 1 jitters within pixels).
+    #[arg(long)]
+    spp: Option<u32>,
+    /// Random seed (same seed, same device → same image).
+    #[arg(long)]
+    seed: Option<u64>,
+    /// What to compute along the rays: primary (eye-light shading) or ao (ambient occlusion).
+    #[arg(long)]
+    integrator: Option<IntegratorKind>,
+    /// How rays are cast: brute-force (every ray against every triangle, the oracle).
+    #[arg(long)]
+    tracer: Option<TracerKind>,
+    /// Vulkan device by index or name substring (see `splitray info`); also SPLITRAY_DEVICE.
+    #[arg(long)]
+    device: Option<String>,
+    /// Run with VK_LAYER_KHRONOS_validation; any validation message fails the command.
+    #[arg(long)]
+    validation: bool,
+    /// Also enable synchronization validation (slow; implies --validation).
+    #[arg(long)]
+    sync_validation: bool,
+    /// Write per-kernel GPU times, rays traced, rays/s and peak GPU memory as JSON.
+    #[arg(long, value_name = "STATS.json")]
+    stats: Option<PathBuf>,
+    /// Print the per-kernel GPU time table.
+    #[arg(long)]
+    profile: bool,
+}
+
+/// The output path, checked before any work so a bad path fails fast.
+fn output_path(args: &RenderArgs, scene_name: &str) -> anyhow::Result<PathBuf> {
+    let path = match &args.output {
+        Some(p) => p.clone(),
+        None => {
+            let stem: String = scene_name
+                .chars()
+                .map(|c| {
+                    if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                        c
+                    } else {
+                        '_'
+                    }
+                })
+                .collect();
+            std::fs::create_dir_all("out").context("cannot create the folder out/")?;
+            PathBuf::from("out").join(format!("{stem}.exr"))
+        }
+    };
+    if path.extension().and_then(|e| e.to_str()) != Some("exr") {
+        bail!("{}: the output must be an .exr file", path.display());
+    }
+    let parent = path
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    if !parent.is_dir() {
+        bail!(
+            "{}: the folder {} does not exist",
+            path.display(),
+            parent.display()
+        );
+    }
+    Ok(path)
+}
+
+pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
+    let scene = splitray::scene::load(&args.scene)?;
+    let output = output_path(args, &scene.name)?;
+    let options = RenderOptions::resolve(
+        &scene,
+        args.width,
+        args.height,
+        args.spp,
+        args.seed,
+        args.integrator,
+        args.tracer,
+    )?;
+    let gpu = Gpu::new(&GpuDesc {
+        instance: InstanceDesc {
+            validation: args.validation,
+            sync_validation: args.sync_validation,
+        },
+        device: args.device.clone(),
+        ..Default::default()
+    })?;
+
+    let bar = ProgressBar::new(options.spp as u64);
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{spinner} {msg} [{bar:30}] {pos}/{len} spp  {per_sec}  eta {eta}",
+        )
+        .expect("valid progress template")
+        .progress_chars("=> "),
+    );
+    bar.set_message(format!(
+        "{} {}x{}",
+        scene.name, options.width, options.height
+    ));
+    let result = render(&gpu, &scene, &options, &mut |done| {
+        bar.set_position(done as u64)
+    });
+    bar.finish_and_clear();
+    let result = result?;
+
+    let messages = gpu.validation_messages();
+    if !messages.is_empty() {
+        bail!(
+            "{} validation message(s) (see the log above); nothing was written",
+            messages.len()
+        );
+    }
+    let written = write_outputs(&output, &result.film, &result.metadata)?;
+    let s = &result.stats;
+    println!(
+        "{}: {}x{} {} spp, {} + {} on {} in {:.3} s: {} rays, {:.2} Mrays/s, peak GPU memory {:.1} MiB",
+        s.scene,
+        s.width,
+        s.height,
+        s.spp,
+        s.integrator,
+        s.tracer,
+        s.device,
+        s.render_time_s,
+        s.rays_traced,
+        s.rays_per_second * 1e-6,
+        s.peak_gpu_bytes as f64 / (1 << 20) as f64
+    );
+    println!(
+        "wrote {} and {}",
+        written.exr.display(),
+        written.png.display()
+    );
+    if args.profile {
+        print!("{}", splitray::vk::ProfileLog::table_of(&s.kernels));
+    }
+    if let Some(path) = &args.stats {
+        let json = serde_json::to_vec_pretty(s)?;
+        splitray::film::atomic::write_bytes_atomically(path, &json)
+            .with_context(|| format!("cannot write {}", path.display()))?;
+    }
+    Ok(())
+}

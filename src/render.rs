@@ -1,0 +1,228 @@
+//! A render from start to finish: scene → GPU data → tracer → integrator passes → film,
+//! with the statistics a user profiles by.
+
+use std::time::Instant;
+
+use serde::Serialize;
+
+use crate::film::{Film, FilmError, RenderMetadata};
+use crate::integrator::{self, GpuMaterial, IntegratorKind, PassInputs, PassOptions};
+use crate::scene::{Scene, SceneError};
+use crate::trace::{GpuTriangle, TracerKind};
+use crate::vk::{self, Gpu, KernelTime};
+
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    #[error(transparent)]
+    Scene(#[from] Box<SceneError>),
+    #[error(transparent)]
+    Gpu(#[from] vk::VkError),
+    #[error(transparent)]
+    Film(#[from] FilmError),
+    #[error("{0}")]
+    Options(String),
+}
+
+impl From<SceneError> for RenderError {
+    fn from(e: SceneError) -> Self {
+        Self::Scene(Box::new(e))
+    }
+}
+
+/// Everything that decides the image besides the scene.
+#[derive(Clone, Debug)]
+pub struct RenderOptions {
+    pub width: u32,
+    pub height: u32,
+    pub spp: u32,
+    pub seed: u64,
+    pub integrator: IntegratorKind,
+    pub tracer: TracerKind,
+    pub ao_rays: u32,
+}
+
+impl RenderOptions {
+    /// The scene's own settings, overridden by whatever the caller gives.
+    pub fn resolve(
+        scene: &Scene,
+        width: Option<u32>,
+        height: Option<u32>,
+        spp: Option<u32>,
+        seed: Option<u64>,
+        integrator: Option<IntegratorKind>,
+        tracer: Option<TracerKind>,
+    ) -> Result<Self, RenderError> {
+        let s = &scene.settings;
+        let integrator = match (integrator, &s.integrator) {
+            (Some(i), _) => i,
+            (None, Some(name)) => name
+                .parse()
+                .map_err(|e| RenderError::Options(format!("scene '{}': {e}", scene.name)))?,
+            (None, None) => IntegratorKind::default(),
+        };
+        let tracer = match (tracer, &s.tracer) {
+            (Some(t), _) => t,
+            (None, Some(name)) => name
+                .parse()
+                .map_err(|e| RenderError::Options(format!("scene '{}': {e}", scene.name)))?,
+            (None, None) => TracerKind::default(),
+        };
+        let options = Self {
+            width: width.unwrap_or(scene.film.width),
+            height: height.unwrap_or(scene.film.height),
+            spp: spp.or(s.spp).unwrap_or(1),
+            seed: seed.or(s.seed).unwrap_or(0),
+            integrator,
+            tracer,
+            ao_rays: 8,
+        };
+        if options.width == 0
+            || options.height == 0
+            || options.width > 16384
+            || options.height > 16384
+        {
+            return Err(RenderError::Options(format!(
+                "film size {}x{} is outside 1..=16384",
+                options.width, options.height
+            )));
+        }
+        if options.spp == 0 {
+            return Err(RenderError::Options("--spp must be at least 1".into()));
+        }
+        Ok(options)
+    }
+}
+
+/// Figures of one render, written by `--stats`.
+#[derive(Clone, Debug, Serialize)]
+pub struct RenderStats {
+    pub scene: String,
+    pub triangles: usize,
+    pub width: u32,
+    pub height: u32,
+    pub spp: u32,
+    pub seed: u64,
+    pub integrator: String,
+    pub tracer: String,
+    pub device: String,
+    pub render_time_s: f64,
+    pub rays_traced: u64,
+    pub rays_per_second: f64,
+    pub peak_gpu_bytes: u64,
+    /// GPU time per kernel (timestamp queries), longest first.
+    pub kernels: Vec<KernelTime>,
+}
+
+pub struct RenderOutput {
+    pub film: Film,
+    pub metadata: RenderMetadata,
+    pub stats: RenderStats,
+}
+
+/// A one-line description of the device for logs and file headers.
+pub fn device_description(gpu: &Gpu) -> String {
+    let info = gpu.info();
+    format!("{} ({} {})", info.name, info.driver_name, info.driver_info)
+}
+
+/// Renders `scene`. `progress` is told the passes done so far.
+pub fn render(
+    gpu: &Gpu,
+    scene: &Scene,
+    options: &RenderOptions,
+    progress: &mut dyn FnMut(u32),
+) -> Result<RenderOutput, RenderError> {
+    let limit = gpu.info().limits.max_storage_buffer_range;
+    scene.check_fits(limit, size_of::<GpuTriangle>() as u64)?;
+    let triangles: Vec<GpuTriangle> = scene
+        .triangles
+        .iter()
+        .map(|t| GpuTriangle::new(t.p))
+        .collect();
+    let triangle_material: Vec<u32> = scene.triangles.iter().map(|t| t.material).collect();
+    let materials: Vec<GpuMaterial> = scene
+        .materials
+        .iter()
+        .map(|m| GpuMaterial {
+            diffuse: m.diffuse.extend(0.0).into(),
+            emission: m.emission.extend(0.0).into(),
+        })
+        .collect();
+    let camera = scene.camera.frame(options.width, options.height);
+
+    gpu.wait_idle()?;
+    let _ = gpu.take_profile();
+    gpu.reset_peak_memory();
+    let start = Instant::now();
+    let mut tracer = options.tracer.create(gpu, &triangles)?;
+    let output = integrator::render_passes(
+        gpu,
+        tracer.as_mut(),
+        &PassInputs {
+            triangles: &triangles,
+            triangle_material: &triangle_material,
+            materials: &materials,
+            camera,
+            scene_radius: scene.bounds().radius(),
+        },
+        &PassOptions {
+            integrator: options.integrator,
+            spp: options.spp,
+            seed: options.seed,
+            ao_rays: options.ao_rays,
+            ..Default::default()
+        },
+        progress,
+    )?;
+    drop(tracer);
+    let seconds = start.elapsed().as_secs_f64();
+    let (_, peak_gpu_bytes) = gpu.memory_bytes();
+
+    let mean: Vec<[f32; 3]> = output
+        .sum_rgb
+        .iter()
+        .map(|s| {
+            let w = s[3].max(1.0);
+            [s[0] / w, s[1] / w, s[2] / w]
+        })
+        .collect();
+    let mut film = Film::from_mean_rgb(options.width, options.height, &mean)?;
+    film.set_depth(output.depth)?;
+    film.set_triangle_id(output.triangle_id)?;
+    film.set_normal(output.normal.iter().map(|n| [n[0], n[1], n[2]]).collect())?;
+
+    let device = device_description(gpu);
+    let stats = RenderStats {
+        scene: scene.name.clone(),
+        triangles: scene.triangles.len(),
+        width: options.width,
+        height: options.height,
+        spp: options.spp,
+        seed: options.seed,
+        integrator: options.integrator.name().into(),
+        tracer: options.tracer.name().into(),
+        device: device.clone(),
+        render_time_s: seconds,
+        rays_traced: output.rays_traced,
+        rays_per_second: output.rays_traced as f64 / seconds.max(1e-9),
+        peak_gpu_bytes,
+        kernels: gpu.take_profile().summary(),
+    };
+    let metadata = RenderMetadata {
+        spp: options.spp,
+        seed: options.seed,
+        integrator: options.integrator.name().into(),
+        tracer: options.tracer.name().into(),
+        device,
+        render_time_s: seconds,
+        extra: vec![
+            ("scene".into(), scene.name.clone()),
+            ("rays_traced".into(), output.rays_traced.to_string()),
+        ],
+    };
+    Ok(RenderOutput {
+        film,
+        metadata,
+        stats,
+    })
+}
