@@ -1,0 +1,213 @@
+//! The `splitray` binary as a user runs it: info, scenes, a tiny render, and bad input
+//! giving a clear error, a non-zero exit status and no output file.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn splitray(args: &[&str], cwd: &Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_splitray"))
+        .args(args)
+        .current_dir(cwd)
+        .env("RUST_LOG", "warn")
+        .output()
+        .expect("run splitray")
+}
+
+fn text(o: &Output) -> String {
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    )
+}
+
+#[test]
+fn info_lists_devices_streams_and_validation() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = splitray(&["info"], dir.path());
+    assert!(out.status.success(), "{}", text(&out));
+    let t = text(&out);
+    for part in [
+        "validation layer: available",
+        "queue families",
+        "streams:",
+        "main",
+        "aux0",
+        "transfer",
+        "maxStorageBufferRange",
+    ] {
+        assert!(t.contains(part), "missing {part:?} in:\n{t}");
+    }
+
+    let out = splitray(&["info", "--json"], dir.path());
+    assert!(out.status.success(), "{}", text(&out));
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let devices = json["devices"].as_array().unwrap();
+    assert!(!devices.is_empty());
+    assert_eq!(devices.iter().filter(|d| d["selected"] == true).count(), 1);
+    assert!(devices[0]["streams"]["slots"].as_array().unwrap().len() == 4);
+    assert!(devices[0]["driver_info"].is_string());
+}
+
+#[test]
+fn scenes_lists_the_builtins() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = splitray(&["scenes"], dir.path());
+    assert!(out.status.success());
+    let t = text(&out);
+    assert!(t.contains("cornell-box") && t.contains("fixture"), "{t}");
+}
+
+#[test]
+fn tiny_render_writes_exr_png_and_stats_with_validation_on() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = splitray(
+        &[
+            "render",
+            "cornell-box",
+            "-o",
+            "img.exr",
+            "--width",
+            "40",
+            "--height",
+            "30",
+            "--spp",
+            "2",
+            "--seed",
+            "7",
+            "--validation",
+            "--stats",
+            "stats.json",
+        ],
+        dir.path(),
+    );
+    assert!(out.status.success(), "{}", text(&out));
+    let (film, meta) = splitray::film::read_exr(dir.path().join("img.exr")).unwrap();
+    assert_eq!((film.width(), film.height()), (40, 30));
+    assert_eq!((meta.spp, meta.seed), (2, 7));
+    assert_eq!(meta.integrator, "primary");
+    assert_eq!(meta.tracer, "brute-force");
+    assert!(film.depth.is_some() && film.triangle_id.is_some() && film.normal.is_some());
+    assert!(dir.path().join("img.png").is_file());
+    let stats: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("stats.json")).unwrap()).unwrap();
+    assert_eq!(stats["rays_traced"], 40 * 30 * 2);
+    assert!(stats["rays_per_second"].as_f64().unwrap() > 0.0);
+    assert!(stats["peak_gpu_bytes"].as_u64().unwrap() > 0);
+    let kernels: Vec<_> = stats["kernels"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|k| k["name"].as_str().unwrap().to_string())
+        .collect();
+    assert!(
+        kernels.contains(&"trace_brute_force".to_string()),
+        "{kernels:?}"
+    );
+}
+
+#[test]
+fn default_output_goes_to_out_folder() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = splitray(
+        &[
+            "render",
+            "--width",
+            "8",
+            "--height",
+            "8",
+            "--integrator",
+            "ao",
+        ],
+        dir.path(),
+    );
+    assert!(out.status.success(), "{}", text(&out));
+    assert!(dir.path().join("out/cornell-box.exr").is_file());
+    assert!(dir.path().join("out/cornell-box.png").is_file());
+}
+
+/// Runs a render expected to fail; checks the message and that no file was written.
+fn assert_fails(dir: &Path, args: &[&str], expect: &[&str]) {
+    let out = splitray(args, dir);
+    let t = text(&out);
+    assert!(!out.status.success(), "{args:?} succeeded:\n{t}");
+    assert_eq!(out.status.code(), Some(1), "{t}");
+    assert!(!t.contains("panicked"), "{t}");
+    for e in expect {
+        assert!(t.contains(e), "{args:?}: expected {e:?} in:\n{t}");
+    }
+    let leftovers: Vec<_> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".exr") || n.ends_with(".png") || n.contains(".tmp"))
+        .collect();
+    assert!(leftovers.is_empty(), "{args:?} left {leftovers:?}");
+}
+
+#[test]
+fn bad_input_gives_a_clear_error_and_no_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(
+        d.join("bad.toml"),
+        "[camera]\nposition = [0, 0, 1]\nlook_at = [0, 0, 0]\nfov = 40\n",
+    )
+    .unwrap();
+    std::fs::write(d.join("nan.obj"), "v 0 0 0\nv 1 0 nan\nv 0 1 0\nf 1 2 3\n").unwrap();
+    std::fs::write(d.join("idx.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n").unwrap();
+    std::fs::write(d.join("empty.obj"), "# nothing\n").unwrap();
+    std::fs::write(d.join("flat.obj"), "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n").unwrap();
+    std::fs::write(d.join("nomesh.toml"), "[[mesh]]\npath = \"missing.obj\"\n").unwrap();
+    assert_fails(
+        d,
+        &["render", "missing.toml", "-o", "a.exr"],
+        &["missing.toml"],
+    );
+    assert_fails(
+        d,
+        &["render", "bad.toml", "-o", "a.exr"],
+        &["bad.toml:4", "fov"],
+    );
+    assert_fails(d, &["render", "nan.obj", "-o", "a.exr"], &["nan.obj:2"]);
+    assert_fails(
+        d,
+        &["render", "idx.obj", "-o", "a.exr"],
+        &["idx.obj:4", "vertex 7"],
+    );
+    assert_fails(d, &["render", "empty.obj", "-o", "a.exr"], &["empty.obj"]);
+    assert_fails(d, &["render", "flat.obj", "-o", "a.exr"], &["flat.obj"]);
+    assert_fails(
+        d,
+        &["render", "nomesh.toml", "-o", "a.exr"],
+        &["missing.obj", "nomesh.toml"],
+    );
+    assert_fails(
+        d,
+        &["render", "no-such-scene", "-o", "a.exr"],
+        &["no-such-scene"],
+    );
+    assert_fails(
+        d,
+        &[
+            "render",
+            "-o",
+            "nowhere/a.exr",
+            "--width",
+            "4",
+            "--height",
+            "4",
+        ],
+        &["nowhere"],
+    );
+    assert_fails(d, &["render", "-o", "a.png"], &[".exr"]);
+    assert_fails(d, &["render", "--spp", "0", "-o", "a.exr"], &["spp"]);
+    assert_fails(d, &["render", "--width", "0", "-o", "a.exr"], &["0x"]);
+    assert_fails(
+        d,
+        &["render", "--device", "no-such-gpu", "-o", "a.exr"],
+        &["no-such-gpu"],
+    );
+    // clap's own usage errors exit with 2; an unknown integrator is one of them.
+    let out = splitray(&["render", "--integrator", "bogus"], d);
+    assert!(!out.status.success() && text(&out).contains("bogus"));
+}
