@@ -1,0 +1,66 @@
+#version 460
+// Child pivots and terminal marking, Algorithm 2 lines 13–15 and Algorithm 1 line 6.
+// Node p's sorted lists hold its elements as [left | both | right | none], so its left
+// child takes [start, start + L + B) and its right child [start + L, start + L + B + R).
+// A child with no triangles or no rays is dropped (nothing to intersect); one with fewer
+// than α triangles or β rays, at the depth limit, or too thin to split further is
+// terminal; the rest form the next level. Writes the six channels that are then
+// prefix-summed into next-level and terminal-buffer positions.
+#include "grid.glsl"
+#include "pdacrt.glsl"
+
+layout(std430, set = 0, binding = 0) readonly buffer Nodes { Node nodes[]; };
+layout(std430, set = 0, binding = 1) readonly buffer TriCounts { uint tri_counts[]; };
+layout(std430, set = 0, binding = 2) readonly buffer RayCounts { uint ray_counts[]; };
+layout(std430, set = 0, binding = 3) writeonly buffer Children { Child children[]; };
+layout(std430, set = 0, binding = 4) writeonly buffer Channels { uint channels[]; };
+layout(push_constant) uniform Push {
+    uint child_count;
+    uint stride;
+    uint alpha;
+    uint beta;
+    uint last_level;  // 1: every surviving child is terminal (depth limit)
+    float min_extent;
+} pc;
+
+void main() {
+    uint c = linear_invocation_id();
+    if (c >= pc.child_count) return;
+    uint p = c >> 1;
+    bool right = (c & 1u) != 0u;
+    Node nd = nodes[p];
+    uvec3 tc = uvec3(tri_counts[4u * p + CODE_LEFT], tri_counts[4u * p + CODE_BOTH], tri_counts[4u * p + CODE_RIGHT]);
+    uvec3 rc = uvec3(ray_counts[4u * p + CODE_LEFT], ray_counts[4u * p + CODE_BOTH], ray_counts[4u * p + CODE_RIGHT]);
+
+    Child ch;
+    ch.tri_count = right ? tc.y + tc.z : tc.x + tc.y;
+    ch.ray_count = right ? rc.y + rc.z : rc.x + rc.y;
+    ch.tri_src = nd.tri_start + (right ? tc.x : 0u);
+    ch.ray_src = nd.ray_start + (right ? rc.x : 0u);
+    uint axis = split_axis(nd.box_min.xyz, nd.box_max.xyz);
+    float mid = split_position(nd.box_min.xyz, nd.box_max.xyz, axis);
+    ch.box_min = nd.box_min;
+    ch.box_max = nd.box_max;
+    if (right) ch.box_min[axis] = mid; else ch.box_max[axis] = mid;
+    float extent = ch.box_max[axis] - ch.box_min[axis];
+    if (ch.tri_count == 0u || ch.ray_count == 0u) {
+        ch.kind = CHILD_DROPPED;
+    } else if (ch.tri_count < pc.alpha || ch.ray_count < pc.beta || pc.last_level != 0u
+               || extent <= pc.min_extent) {
+        ch.kind = CHILD_TERMINAL;
+    } else {
+        ch.kind = CHILD_NEXT;
+    }
+    ch.pad0 = 0u;
+    ch.pad1 = 0u;
+    ch.pad2 = 0u;
+    children[c] = ch;
+    bool next = ch.kind == CHILD_NEXT;
+    bool term = ch.kind == CHILD_TERMINAL;
+    channels[CH_NEXT_FLAG * pc.stride + c] = next ? 1u : 0u;
+    channels[CH_NEXT_TRIS * pc.stride + c] = next ? ch.tri_count : 0u;
+    channels[CH_NEXT_RAYS * pc.stride + c] = next ? ch.ray_count : 0u;
+    channels[CH_TERM_FLAG * pc.stride + c] = term ? 1u : 0u;
+    channels[CH_TERM_TRIS * pc.stride + c] = term ? ch.tri_count : 0u;
+    channels[CH_TERM_RAYS * pc.stride + c] = term ? ch.ray_count : 0u;
+}

@@ -1,0 +1,42 @@
+#version 460
+// Ray filtering, Algorithm 2 lines 2–6: which halves of its node's box the ray's live
+// segment meets. The segment ends at the closest hit found so far by earlier flushes
+// (Algorithm 1 line 9 updates it), so rays shed nodes beyond their hit; in occlusion
+// mode a ray with any hit leaves the hierarchy at once. Boxes and the segment end are
+// padded by `eps`, so rounding can only add work, never lose a hit or a tie.
+#include "grid.glsl"
+#include "geometry.glsl"
+#include "pdacrt.glsl"
+
+layout(std430, set = 0, binding = 0) readonly buffer Rays { Ray rays[]; };
+layout(std430, set = 0, binding = 1) readonly buffer Nodes { Node nodes[]; };
+layout(std430, set = 0, binding = 2) readonly buffer Ids { uint ids[]; };
+layout(std430, set = 0, binding = 3) buffer Keys { uint keys[]; };
+layout(std430, set = 0, binding = 4) readonly buffer BestT { float best_t[]; };
+layout(std430, set = 0, binding = 5) readonly buffer BestTri { uint best_tri[]; };
+layout(push_constant) uniform Push { uint n; float eps; uint occlusion; uint ray_offset; } pc;
+
+void main() {
+    uint i = linear_invocation_id();
+    if (i >= pc.n) return;
+    uint node = keys[i] >> 2;
+    uint id = ids[i];
+    uint code = CODE_NONE;
+    if (pc.occlusion == 0u || best_tri[id] == MISS) {
+        Node nd = nodes[node];
+        vec3 lo = nd.box_min.xyz - pc.eps;
+        vec3 hi = nd.box_max.xyz + pc.eps;
+        uint axis = split_axis(nd.box_min.xyz, nd.box_max.xyz);
+        float mid = split_position(nd.box_min.xyz, nd.box_max.xyz, axis);
+        Ray r = rays[pc.ray_offset + id];
+        float t1 = min(r.tmax, best_t[id] + pc.eps);
+        vec3 left_hi = hi;
+        left_hi[axis] = mid + pc.eps;
+        vec3 right_lo = lo;
+        right_lo[axis] = mid - pc.eps;
+        bool left = ray_meets_box(r.origin, r.dir, r.tmin, t1, lo, left_hi);
+        bool right = ray_meets_box(r.origin, r.dir, r.tmin, t1, right_lo, hi);
+        code = (left && right) ? CODE_BOTH : (left ? CODE_LEFT : (right ? CODE_RIGHT : CODE_NONE));
+    }
+    keys[i] = (node << 2) | code;
+}

@@ -1,0 +1,88 @@
+// Records and helpers shared by the PDACRT kernels (src/trace/pdacrt/ is the host side,
+// with the same layouts in src/trace/pdacrt/types.rs).
+//
+// Status codes (paper §2.1 encodes left/both/right/none as 1/2/3/4 in "the right-most 2
+// bits", which cannot hold 4; we use 0/1/2/3 so they fit and still sort as
+// left < both < right < none, which keeps the pivot property of Figure 4: the left
+// child's range is [left, both], the right child's [both, right]).
+#ifndef SPLITRAY_PDACRT_GLSL
+#define SPLITRAY_PDACRT_GLSL
+
+#define CODE_LEFT 0u
+#define CODE_BOTH 1u
+#define CODE_RIGHT 2u
+#define CODE_NONE 3u
+
+#define CHILD_DROPPED 0u
+#define CHILD_NEXT 1u
+#define CHILD_TERMINAL 2u
+
+// Channels of the per-child arrays that are prefix-summed each level.
+#define CH_NEXT_FLAG 0u
+#define CH_NEXT_TRIS 1u
+#define CH_NEXT_RAYS 2u
+#define CH_TERM_FLAG 3u
+#define CH_TERM_TRIS 4u
+#define CH_TERM_RAYS 5u
+
+// A node of the implicit hierarchy: its box and its pivots (start, count) into the
+// level's triangle and ray id lists.
+struct Node {
+    vec4 box_min;
+    vec4 box_max;
+    uint tri_start;
+    uint tri_count;
+    uint ray_start;
+    uint ray_count;
+};
+
+// One child of a node after filtering (two per node: left = 2p, right = 2p + 1).
+struct Child {
+    vec4 box_min;
+    vec4 box_max;
+    uint kind;       // CHILD_DROPPED / CHILD_NEXT / CHILD_TERMINAL
+    uint tri_src;    // first of its triangles in the parent's sorted triangle list
+    uint tri_count;
+    uint ray_src;    // first of its rays in the parent's sorted ray list
+    uint ray_count;
+    uint pad0;
+    uint pad1;
+    uint pad2;
+};
+
+// A terminal node in the terminal-node buffer: ranges of its triangle and ray ids.
+struct Segment {
+    uint tri_start;
+    uint tri_count;
+    uint ray_start;
+    uint ray_count;
+};
+
+// The split of Algorithm 2 line 4: the midpoint of the box's largest extent.
+uint split_axis(vec3 lo, vec3 hi) {
+    vec3 e = hi - lo;
+    return (e.x >= e.y && e.x >= e.z) ? 0u : (e.y >= e.z ? 1u : 2u);
+}
+
+float split_position(vec3 lo, vec3 hi, uint axis) {
+    return 0.5 * (lo[axis] + hi[axis]);
+}
+
+// Whether the segment [t0, t1] of the ray meets the closed box [lo, hi]. An axis the ray
+// runs parallel to is tested by the origin alone, so no 0 × inf NaN arises.
+bool ray_meets_box(vec3 o, vec3 d, float t0, float t1, vec3 lo, vec3 hi) {
+    for (uint k = 0u; k < 3u; ++k) {
+        if (d[k] == 0.0) {
+            if (o[k] < lo[k] || o[k] > hi[k]) return false;
+        } else {
+            float inv = 1.0 / d[k];
+            float ta = (lo[k] - o[k]) * inv;
+            float tb = (hi[k] - o[k]) * inv;
+            t0 = max(t0, min(ta, tb));
+            t1 = min(t1, max(ta, tb));
+        }
+    }
+    return t0 <= t1;
+}
+
+#endif

@@ -1,0 +1,47 @@
+#version 460
+// Next-level index lists, Algorithm 1 lines 12–13: every sorted element is copied into
+// the list of each child it belongs to — the next level's list (with the child's new
+// node index as its key) or the terminal-node buffer. A "both" element goes to both
+// children, a "none" ray to neither. Position = the child's new start + the element's
+// offset within the child's range of the sorted parent list.
+#include "grid.glsl"
+#include "pdacrt.glsl"
+
+layout(std430, set = 0, binding = 0) readonly buffer Keys { uint keys[]; };
+layout(std430, set = 0, binding = 1) readonly buffer Ids { uint ids[]; };
+layout(std430, set = 0, binding = 2) readonly buffer Children { Child children[]; };
+layout(std430, set = 0, binding = 3) readonly buffer Offsets { uint offsets[]; };
+layout(std430, set = 0, binding = 4) writeonly buffer NextIds { uint next_ids[]; };
+layout(std430, set = 0, binding = 5) writeonly buffer NextKeys { uint next_keys[]; };
+layout(std430, set = 0, binding = 6) writeonly buffer TermIds { uint term_ids[]; };
+layout(push_constant) uniform Push {
+    uint n;
+    uint stride;
+    uint rays;       // 0: triangle lists, 1: ray lists
+    uint term_base;  // where this level's terminal ids start in the buffer
+} pc;
+
+void main() {
+    uint j = linear_invocation_id();
+    if (j >= pc.n) return;
+    uint key = keys[j];
+    uint node = key >> 2;
+    uint code = key & 3u;
+    if (code == CODE_NONE) return;
+    uint id = ids[j];
+    uint next_channel = pc.rays != 0u ? CH_NEXT_RAYS : CH_NEXT_TRIS;
+    uint term_channel = pc.rays != 0u ? CH_TERM_RAYS : CH_TERM_TRIS;
+    for (uint side = 0u; side < 2u; ++side) {
+        if ((side == 0u && code == CODE_RIGHT) || (side == 1u && code == CODE_LEFT)) continue;
+        uint c = 2u * node + side;
+        Child ch = children[c];
+        uint offset = j - (pc.rays != 0u ? ch.ray_src : ch.tri_src);
+        if (ch.kind == CHILD_NEXT) {
+            uint at = offsets[next_channel * pc.stride + c] + offset;
+            next_ids[at] = id;
+            next_keys[at] = offsets[CH_NEXT_FLAG * pc.stride + c] << 2;
+        } else if (ch.kind == CHILD_TERMINAL) {
+            term_ids[pc.term_base + offsets[term_channel * pc.stride + c] + offset] = id;
+        }
+    }
+}

@@ -1,0 +1,65 @@
+#version 460
+// Segmented naive intersection, Algorithm 3 lines 2–10: one workgroup per terminal node
+// (segment); each invocation takes one of the segment's rays at a time (line 3) while
+// the workgroup stages the segment's triangles through shared memory in batches of BATCH
+// (line 4) and every ray tests the batch (lines 5–7). The result per buffer entry — the
+// closest (t, triangle) of that ray within that segment — is reduced per ray afterwards
+// (lines 12–13). Ties go to the smaller triangle index, as in every splitray tracer.
+#include "grid.glsl"
+#include "geometry.glsl"
+#include "pdacrt.glsl"
+
+layout(constant_id = 1) const uint BATCH = 256;
+
+layout(std430, set = 0, binding = 0) readonly buffer Triangles { Triangle triangles[]; };
+layout(std430, set = 0, binding = 1) readonly buffer Rays { Ray rays[]; };
+layout(std430, set = 0, binding = 2) readonly buffer Segments { Segment segments[]; };
+layout(std430, set = 0, binding = 3) readonly buffer TermTris { uint term_tris[]; };
+layout(std430, set = 0, binding = 4) readonly buffer TermRays { uint term_rays[]; };
+layout(std430, set = 0, binding = 5) writeonly buffer EntryT { float entry_t[]; };
+layout(std430, set = 0, binding = 6) writeonly buffer EntryTri { uint entry_tri[]; };
+layout(push_constant) uniform Push { uint segment_count; uint ray_offset; } pc;
+
+shared Triangle staged[BATCH];
+shared uint staged_id[BATCH];
+
+void main() {
+    uint seg = linear_group_id();
+    // Uniform per workgroup: the whole group leaves together, before any barrier.
+    if (seg >= pc.segment_count) return;
+    Segment s = segments[seg];
+    uint lid = gl_LocalInvocationID.x;
+    for (uint ray_base = 0u; ray_base < s.ray_count; ray_base += WORKGROUP_SIZE) {
+        uint k = ray_base + lid;
+        bool has_ray = k < s.ray_count;
+        Ray r;
+        if (has_ray) r = rays[pc.ray_offset + term_rays[s.ray_start + k]];
+        float best_t = 1.0 / 0.0;
+        uint best = MISS;
+        for (uint tri_base = 0u; tri_base < s.tri_count; tri_base += BATCH) {
+            uint count = min(BATCH, s.tri_count - tri_base);
+            for (uint j = lid; j < count; j += WORKGROUP_SIZE) {
+                uint id = term_tris[s.tri_start + tri_base + j];
+                staged[j] = triangles[id];
+                staged_id[j] = id;
+            }
+            barrier();
+            if (has_ray) {
+                for (uint j = 0u; j < count; ++j) {
+                    float u, v;
+                    float t = intersect_triangle(r.origin, r.dir, r.tmin, r.tmax, staged[j].v0.xyz,
+                                                 staged[j].e1.xyz, staged[j].e2.xyz, u, v);
+                    if (t < best_t || (t == best_t && t < 1.0 / 0.0 && staged_id[j] < best)) {
+                        best_t = t;
+                        best = staged_id[j];
+                    }
+                }
+            }
+            barrier();
+        }
+        if (has_ray) {
+            entry_t[s.ray_start + k] = best_t;
+            entry_tri[s.ray_start + k] = best;
+        }
+    }
+}

@@ -1,0 +1,27 @@
+#version 460
+// Global closest-hit update, Algorithm 1 line 9: each ray's minimum over this flush
+// (one run per ray after the segmented arg-min) replaces the global one when closer, or
+// equally close with a smaller triangle index.
+#include "grid.glsl"
+#include "geometry.glsl"
+
+layout(std430, set = 0, binding = 0) readonly buffer RunRays { uint run_rays[]; };
+layout(std430, set = 0, binding = 1) readonly buffer RunT { float run_t[]; };
+layout(std430, set = 0, binding = 2) readonly buffer RunTri { uint run_tri[]; };
+layout(std430, set = 0, binding = 3) readonly buffer RunTotal { uint run_total; };
+layout(std430, set = 0, binding = 4) buffer BestT { float best_t[]; };
+layout(std430, set = 0, binding = 5) buffer BestTri { uint best_tri[]; };
+layout(push_constant) uniform Push { uint max_runs; } pc;
+
+void main() {
+    uint i = linear_invocation_id();
+    if (i >= min(run_total, pc.max_runs)) return;
+    uint ray = run_rays[i];
+    float t = run_t[i];
+    uint tri = run_tri[i];
+    if (tri == MISS) return;
+    if (t < best_t[ray] || (t == best_t[ray] && tri < best_tri[ray])) {
+        best_t[ray] = t;
+        best_tri[ray] = tri;
+    }
+}

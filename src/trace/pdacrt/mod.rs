@@ -1,0 +1,764 @@
+//! PDACRT: Parallel Divide-and-Conquer Ray Tracing (Ravichandran & Narayanan, SIGGRAPH
+//! Asia 2013; ../shared/papers/pdacrt-siggraph-asia-2013.txt and thesis chapter 2).
+//!
+//! No acceleration structure is built. The host drives Algorithm 1 as an explicit loop
+//! over the levels of an implicit k-d hierarchy; each level is a handful of GPU passes
+//! over linear id lists (filter → sort by status key → run-length counts → child pivots
+//! → prefix sums → gather into the next level or the terminal-node buffer). Terminal
+//! nodes are intersected in batches by the segmented brute-force kernel of Algorithm 3,
+//! followed by a sort by ray id and a segmented arg-min into the global closest hits.
+//!
+//! Host round trips: one 24-byte readback per level (the level's totals, needed to size
+//! the next level's lists and to decide a flush, Algorithm 1 lines 7 and 11); everything
+//! else is chained on the GPU without waiting.
+//!
+//! Choices where the paper is silent, and why:
+//! - Status codes are 0/1/2/3 (see pdacrt.glsl): the paper's 1..4 does not fit 2 bits.
+//! - Child sizes come from run-length encoding of the sorted keys instead of summing
+//!   codes and dividing (equivalent, and correct for code 0).
+//! - Rays are clipped to the closest hit found by earlier flushes, so a ray leaves the
+//!   hierarchy behind its hit once that hit is known (the breadth-first order of the
+//!   paper cannot terminate rays early; flushes give a partial form of it for free).
+//! - Triangle filtering is a bounding-box test along the split axis (conservative).
+//! - A child also becomes terminal at `max_depth` or when thinner than `min_extent`, so
+//!   coincident triangles cannot recurse forever.
+//! - The terminal-node buffer grows when a single level produces more than η ids.
+//! - Ray batches larger than `max_rays_per_chunk` are traced chunk by chunk.
+
+mod kernels;
+mod pool;
+pub mod types;
+
+use std::time::Instant;
+
+use glam::Vec3;
+use serde::Serialize;
+
+use self::kernels::*;
+use self::pool::BufferPool;
+use self::types::{LevelTotals, Node, Segment, CHILD_BYTES};
+use super::{GpuTriangle, Query, Tracer};
+use crate::primitives::{
+    gather::Direction,
+    reduce_by_key::{Reduction, RunOutputs},
+    Gather, RadixSort, ReduceByKey, Scan, ScanKind, SortScratch, Tuning,
+};
+use crate::vk::{self, grid_for, Buffer, BufferSlice, Gpu, MemoryKind, Recorder, StreamKind, TimelinePoint};
+
+/// PDACRT's parameters (paper §2.1–2.2).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct PdacrtParams {
+    /// α: a node with fewer triangles becomes terminal.
+    pub alpha: u32,
+    /// β: a node with fewer rays becomes terminal.
+    pub beta: u32,
+    /// η: capacity of the terminal-node buffer, in triangle ids and in ray ids.
+    pub eta: u32,
+    /// λ < η: the buffer is flushed when adding a level's terminal nodes would pass it.
+    pub lambda: u32,
+    /// T: triangles staged per shared-memory batch in the segmented intersection.
+    pub batch: u32,
+    /// N: invocations per workgroup (one terminal node each) in the segmented intersection.
+    pub intersect_workgroup: u32,
+    /// Rays traced per pass of the level loop; larger batches go in chunks.
+    pub max_rays_per_chunk: u32,
+    /// Deepest level; its surviving children are all terminal.
+    pub max_depth: u32,
+}
+
+impl Default for PdacrtParams {
+    fn default() -> Self {
+        Self {
+            alpha: 256,
+            beta: 256,
+            eta: 1 << 21,
+            lambda: 3 << 19,
+            batch: 256,
+            intersect_workgroup: 64,
+            max_rays_per_chunk: 1 << 19,
+            max_depth: 28,
+        }
+    }
+}
+
+impl PdacrtParams {
+    /// Defaults fitted to the device: the batch must fit shared memory (48 + 4 bytes per
+    /// staged triangle).
+    pub fn for_device(gpu: &Gpu) -> Self {
+        let mut p = Self::default();
+        let shared = gpu.info().limits.max_compute_shared_memory_size;
+        p.batch = p.batch.min(shared / 52);
+        if !gpu.info().is_cpu() {
+            p.intersect_workgroup = 128;
+        }
+        p
+    }
+
+    fn validate(&self) -> vk::Result<()> {
+        let bad = |what: &str| Err(vk::VkError::Usage(format!("PDACRT parameters: {what}")));
+        if self.alpha == 0 || self.beta == 0 {
+            return bad("α and β must be at least 1");
+        }
+        if self.lambda == 0 || self.lambda > self.eta {
+            return bad("λ must be in 1..=η");
+        }
+        if self.batch == 0 || self.intersect_workgroup == 0 || self.max_rays_per_chunk == 0 {
+            return bad("T, N and the chunk size must be at least 1");
+        }
+        Ok(())
+    }
+}
+
+/// What one level of the loop did (per-level statistics, on request).
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct LevelStats {
+    pub chunk: u32,
+    pub level: u32,
+    pub nodes: u32,
+    /// Triangle ids in the level's list (triangles are duplicated across nodes).
+    pub triangles: u32,
+    /// Ray ids in the level's list.
+    pub rays: u32,
+    /// Ray ids per ray of the chunk.
+    pub ray_duplication: f64,
+    pub terminal_nodes: u32,
+    pub flushed: bool,
+    /// Host time from the level's first submission to reading its totals.
+    pub ms: f64,
+}
+
+/// Totals of the last `trace` call.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct TraceStats {
+    pub levels: Vec<LevelStats>,
+    pub host_round_trips: u32,
+    pub flushes: u32,
+    pub chunks: u32,
+}
+
+/// Level lists: the ids of each node's triangles and rays, with keys (node << 2 | code).
+struct Level {
+    nodes: Buffer,
+    node_count: u32,
+    tri_ids: Buffer,
+    tri_keys: Buffer,
+    tri_total: u32,
+    ray_ids: Buffer,
+    ray_keys: Buffer,
+    ray_total: u32,
+}
+
+/// The terminal-node buffer and its fill.
+struct TerminalBuffer {
+    tri_ids: Buffer,
+    ray_ids: Buffer,
+    segments: Buffer,
+    tri_capacity: u32,
+    ray_capacity: u32,
+    segment_capacity: u32,
+    tris: u32,
+    rays: u32,
+    segment_count: u32,
+}
+
+/// Reusable scratch of the primitives, grown on demand.
+#[derive(Default)]
+struct Scratch {
+    sort: Option<(u32, SortScratch)>,
+    misc: Option<Buffer>,
+}
+
+pub struct PdacrtTracer {
+    gpu: Gpu,
+    params: PdacrtParams,
+    kernels: Kernels,
+    sort: RadixSort,
+    reduce: ReduceByKey,
+    scan: Scan,
+    gather: Gather,
+    triangles: Buffer,
+    triangle_count: u32,
+    scene_min: Vec3,
+    scene_max: Vec3,
+    /// Padding of every box test, relative to the scene's size.
+    eps: f32,
+    pool: BufferPool,
+    scratch: Scratch,
+    stats: TraceStats,
+}
+
+fn bits_for(count: u32) -> u32 {
+    32 - count.saturating_sub(1).leading_zeros()
+}
+
+impl PdacrtTracer {
+    pub fn new(gpu: &Gpu, triangles: &[GpuTriangle]) -> vk::Result<Self> {
+        Self::with_params(gpu, triangles, PdacrtParams::for_device(gpu))
+    }
+
+    pub fn with_params(gpu: &Gpu, triangles: &[GpuTriangle], params: PdacrtParams) -> vk::Result<Self> {
+        params.validate()?;
+        let tuning = Tuning::for_device(gpu.info());
+        let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+        for t in triangles {
+            for p in [t.v0(), t.v0() + t.e1(), t.v0() + t.e2()] {
+                lo = lo.min(p);
+                hi = hi.max(p);
+            }
+        }
+        if triangles.is_empty() {
+            (lo, hi) = (Vec3::ZERO, Vec3::ZERO);
+        }
+        let extent = (hi - lo).max_element().max(lo.abs().max(hi.abs()).max_element()).max(1e-6);
+        Ok(Self {
+            gpu: gpu.clone(),
+            params,
+            kernels: Kernels::new(gpu, params.intersect_workgroup, params.batch)?,
+            sort: RadixSort::new(gpu, &tuning)?,
+            reduce: ReduceByKey::new(gpu, &tuning)?,
+            scan: Scan::new(gpu, &tuning)?,
+            gather: Gather::new(gpu, &tuning)?,
+            triangles: gpu.upload("pdacrt-triangles", triangles)?,
+            triangle_count: triangles.len() as u32,
+            scene_min: lo,
+            scene_max: hi,
+            eps: extent * 1e-5,
+            pool: BufferPool::new(gpu),
+            scratch: Scratch::default(),
+            stats: TraceStats::default(),
+        })
+    }
+
+    pub fn params(&self) -> &PdacrtParams {
+        &self.params
+    }
+
+    /// Statistics of the last `trace` call.
+    pub fn stats(&self) -> &TraceStats {
+        &self.stats
+    }
+
+    /// Frees pooled memory between frames (the next trace allocates again).
+    pub fn release_memory(&mut self) {
+        self.pool.clear();
+        self.scratch = Scratch::default();
+    }
+
+    fn sort_scratch(&mut self, n: u32) -> vk::Result<()> {
+        if self.scratch.sort.as_ref().is_none_or(|(cap, _)| *cap < n) {
+            let cap = n.max(1024).next_power_of_two();
+            self.scratch.sort = Some((cap, self.sort.alloc_scratch(&self.gpu, cap)?));
+        }
+        Ok(())
+    }
+
+    fn misc_scratch(&mut self, n: u32) -> vk::Result<()> {
+        let need = self
+            .reduce
+            .scratch_bytes(n)
+            .max(self.scan.scratch_bytes(n))
+            .max(self.gather.scratch_bytes(n));
+        if self.scratch.misc.as_ref().is_none_or(|b| b.size() < need) {
+            let bytes = need.next_power_of_two();
+            self.scratch.misc = Some(self.gpu.create_buffer("pdacrt-scratch", bytes, MemoryKind::Device)?);
+        }
+        Ok(())
+    }
+
+    fn new_terminal_buffer(&mut self, tri_capacity: u32, ray_capacity: u32) -> vk::Result<TerminalBuffer> {
+        let segment_capacity = ray_capacity.div_ceil(4).max(1024);
+        Ok(TerminalBuffer {
+            tri_ids: self.pool.take("pdacrt-term-tris", tri_capacity as u64 * 4)?,
+            ray_ids: self.pool.take("pdacrt-term-rays", ray_capacity as u64 * 4)?,
+            segments: self
+                .pool
+                .take("pdacrt-term-segments", segment_capacity as u64 * size_of::<Segment>() as u64)?,
+            tri_capacity,
+            ray_capacity,
+            segment_capacity,
+            tris: 0,
+            rays: 0,
+            segment_count: 0,
+        })
+    }
+
+    fn iota(&self, rec: &mut Recorder, ids: &Buffer, tags: &Buffer, n: u32, base: u32, tag: u32) -> vk::Result<()> {
+        rec.dispatch_items(
+            &self.kernels.iota,
+            &[ids.into(), tags.into()],
+            &IotaPush { n, base, tag },
+            n as u64,
+        )
+    }
+
+    /// Traces rays `offset..offset + n` of `rays` into the same slots of `hits`.
+    fn trace_chunk(&mut self, rays: &Buffer, hits: &Buffer, offset: u32, n: u32, query: Query, chunk: u32) -> vk::Result<()> {
+        let gpu = self.gpu.clone();
+        let best_t = self.pool.take("pdacrt-best-t", n as u64 * 4)?;
+        let best_tri = self.pool.take("pdacrt-best-tri", n as u64 * 4)?;
+        let mut rec = gpu.recorder(StreamKind::Main)?;
+        rec.fill(&best_t, f32::INFINITY.to_bits());
+        rec.fill(&best_tri, super::MISS);
+        let p = self.params;
+        let mut term = self.new_terminal_buffer(p.eta, p.eta)?;
+        let tris = self.triangle_count;
+        let root = Node {
+            box_min: (self.scene_min - self.eps).extend(0.0).into(),
+            box_max: (self.scene_max + self.eps).extend(0.0).into(),
+            tri_start: 0,
+            tri_count: tris,
+            ray_start: 0,
+            ray_count: n,
+        };
+
+        // Algorithm 1 line 2: the root level. A root already below α or β is terminal.
+        let mut level = if tris == 0 {
+            None // every ray misses
+        } else if tris < p.alpha || n < p.beta {
+            if tris > term.tri_capacity || n > term.ray_capacity {
+                let bigger = self.new_terminal_buffer(tris.max(term.tri_capacity), n.max(term.ray_capacity))?;
+                let old = std::mem::replace(&mut term, bigger);
+                self.give_terminal(old);
+            }
+            let seg_tags = self.pool.take("pdacrt-tags", tris.max(n) as u64 * 4)?;
+            self.iota(&mut rec, &term.tri_ids, &seg_tags, tris, 0, 0)?;
+            self.iota(&mut rec, &term.ray_ids, &seg_tags, n, 0, 0)?;
+            rec.update(&term.segments, 0, &[Segment { tri_start: 0, tri_count: tris, ray_start: 0, ray_count: n }])?;
+            rec.barrier();
+            term.tris = tris;
+            term.rays = n;
+            term.segment_count = 1;
+            self.pool.give(seg_tags);
+            None
+        } else {
+            let level = Level {
+                nodes: self.pool.take("pdacrt-nodes", size_of::<Node>() as u64)?,
+                node_count: 1,
+                tri_ids: self.pool.take("pdacrt-tri-ids", tris as u64 * 4)?,
+                tri_keys: self.pool.take("pdacrt-tri-keys", tris as u64 * 4)?,
+                tri_total: tris,
+                ray_ids: self.pool.take("pdacrt-ray-ids", n as u64 * 4)?,
+                ray_keys: self.pool.take("pdacrt-ray-keys", n as u64 * 4)?,
+                ray_total: n,
+            };
+            rec.update(&level.nodes, 0, &[root])?;
+            self.iota(&mut rec, &level.tri_ids, &level.tri_keys, tris, 0, 0)?;
+            self.iota(&mut rec, &level.ray_ids, &level.ray_keys, n, 0, 0)?;
+            rec.barrier();
+            Some(level)
+        };
+        rec.submit(&[])?;
+
+        let mut depth = 0u32;
+        while let Some(current) = level.take() {
+            let started = Instant::now();
+            let (totals, children, offsets, stride) = self.filter_level(&current, rays, &best_t, &best_tri, offset, query, depth)?;
+            self.stats.host_round_trips += 1;
+
+            // Algorithm 1 lines 7–10: flush first if this level's terminal nodes would
+            // push the buffer past λ.
+            let flushed = term.tris + totals.term_tris > p.lambda
+                || term.rays + totals.term_rays > p.lambda
+                || term.segment_count + totals.term_nodes > term.segment_capacity;
+            if flushed && term.segment_count > 0 {
+                self.flush(&mut term, rays, offset, n, &best_t, &best_tri)?;
+            }
+            if totals.term_tris > term.tri_capacity
+                || totals.term_rays > term.ray_capacity
+                || totals.term_nodes > term.segment_capacity
+            {
+                // One level alone exceeds η: grow the (now empty) buffer to fit it.
+                let old = std::mem::replace(
+                    &mut term,
+                    self.new_terminal_buffer(
+                        totals.term_tris.max(term.tri_capacity),
+                        totals.term_rays.max(term.ray_capacity).max(totals.term_nodes * 4),
+                    )?,
+                );
+                self.give_terminal(old);
+            }
+
+            // Lines 11–15: the next level's lists, the terminal nodes into the buffer.
+            let next = (totals.next_nodes > 0)
+                .then(|| -> vk::Result<Level> {
+                    Ok(Level {
+                        nodes: self.pool.take("pdacrt-nodes", totals.next_nodes as u64 * size_of::<Node>() as u64)?,
+                        node_count: totals.next_nodes,
+                        tri_ids: self.pool.take("pdacrt-tri-ids", totals.next_tris as u64 * 4)?,
+                        tri_keys: self.pool.take("pdacrt-tri-keys", totals.next_tris as u64 * 4)?,
+                        tri_total: totals.next_tris,
+                        ray_ids: self.pool.take("pdacrt-ray-ids", totals.next_rays as u64 * 4)?,
+                        ray_keys: self.pool.take("pdacrt-ray-keys", totals.next_rays as u64 * 4)?,
+                        ray_total: totals.next_rays,
+                    })
+                })
+                .transpose()?;
+            let child_count = current.node_count * 2;
+            let mut rec = gpu.recorder(StreamKind::Main)?;
+            let empty = &term.segments; // bound where a list is empty; never written then
+            let (next_nodes, next_tri_ids, next_tri_keys, next_ray_ids, next_ray_keys) = match &next {
+                Some(l) => (&l.nodes, &l.tri_ids, &l.tri_keys, &l.ray_ids, &l.ray_keys),
+                None => (empty, empty, empty, empty, empty),
+            };
+            rec.dispatch_items(
+                &self.kernels.write_nodes,
+                &[(&children).into(), (&offsets).into(), next_nodes.into(), (&term.segments).into()],
+                &WriteNodesPush {
+                    child_count,
+                    stride,
+                    segment_base: term.segment_count,
+                    term_tri_base: term.tris,
+                    term_ray_base: term.rays,
+                },
+                child_count as u64,
+            )?;
+            for (rays_list, n_list, keys, ids, next_ids, next_keys, term_ids, term_base) in [
+                (0, current.tri_total, &current.tri_keys, &current.tri_ids, next_tri_ids, next_tri_keys, &term.tri_ids, term.tris),
+                (1, current.ray_total, &current.ray_keys, &current.ray_ids, next_ray_ids, next_ray_keys, &term.ray_ids, term.rays),
+            ] {
+                rec.dispatch_items(
+                    &self.kernels.scatter,
+                    &[
+                        keys.into(),
+                        ids.into(),
+                        (&children).into(),
+                        (&offsets).into(),
+                        next_ids.into(),
+                        next_keys.into(),
+                        term_ids.into(),
+                    ],
+                    &ScatterPush {
+                        n: n_list,
+                        stride,
+                        rays: rays_list,
+                        term_base,
+                    },
+                    n_list as u64,
+                )?;
+            }
+            rec.barrier();
+            rec.submit(&[])?;
+            term.tris += totals.term_tris;
+            term.rays += totals.term_rays;
+            term.segment_count += totals.term_nodes;
+
+            self.stats.levels.push(LevelStats {
+                chunk,
+                level: depth,
+                nodes: current.node_count,
+                triangles: current.tri_total,
+                rays: current.ray_total,
+                ray_duplication: current.ray_total as f64 / n.max(1) as f64,
+                terminal_nodes: totals.term_nodes,
+                flushed,
+                ms: started.elapsed().as_secs_f64() * 1e3,
+            });
+            // Line 16: the current level's lists go back to the pool.
+            for b in [current.nodes, current.tri_ids, current.tri_keys, current.ray_ids, current.ray_keys, children, offsets] {
+                self.pool.give(b);
+            }
+            level = next;
+            depth += 1;
+        }
+
+        // Lines 18–20: the remaining terminal nodes.
+        if term.segment_count > 0 {
+            self.flush(&mut term, rays, offset, n, &best_t, &best_tri)?;
+        }
+        let mut rec = gpu.recorder(StreamKind::Main)?;
+        rec.dispatch_items(
+            &self.kernels.finalize_hits,
+            &[(&self.triangles).into(), rays.into(), (&best_t).into(), (&best_tri).into(), hits.into()],
+            &FinalizePush { n, ray_offset: offset },
+            n as u64,
+        )?;
+        rec.submit(&[])?;
+        self.give_terminal(term);
+        self.pool.give(best_t);
+        self.pool.give(best_tri);
+        Ok(())
+    }
+
+    fn give_terminal(&mut self, term: TerminalBuffer) {
+        self.pool.give(term.tri_ids);
+        self.pool.give(term.ray_ids);
+        self.pool.give(term.segments);
+    }
+
+    /// Filters one level (Algorithm 1 lines 4–6, Algorithm 2) and reads its totals back:
+    /// the loop's one host round trip per level. Returns the totals, the per-child
+    /// records, the prefix-summed channels and their stride.
+    #[allow(clippy::too_many_arguments)]
+    fn filter_level(
+        &mut self,
+        level: &Level,
+        rays: &Buffer,
+        best_t: &Buffer,
+        best_tri: &Buffer,
+        ray_offset: u32,
+        query: Query,
+        depth: u32,
+    ) -> vk::Result<(LevelTotals, Buffer, Buffer, u32)> {
+        let gpu = self.gpu.clone();
+        let max_list = level.tri_total.max(level.ray_total);
+        self.sort_scratch(max_list)?;
+        let child_count = level.node_count * 2;
+        // Channel stride: a multiple of 64 words keeps every channel slice aligned.
+        let stride = child_count.next_multiple_of(64);
+        self.misc_scratch(max_list.max(stride))?;
+        let run_keys = self.pool.take("pdacrt-run-keys", max_list as u64 * 4)?;
+        let run_counts = self.pool.take("pdacrt-run-counts", max_list as u64 * 4)?;
+        let run_total = self.pool.take("pdacrt-run-total", 4)?;
+        let tri_counts = self.pool.take("pdacrt-tri-counts", level.node_count as u64 * 16)?;
+        let ray_counts = self.pool.take("pdacrt-ray-counts", level.node_count as u64 * 16)?;
+        let children = self.pool.take("pdacrt-children", child_count as u64 * CHILD_BYTES)?;
+        let channels = self.pool.take("pdacrt-channels", stride as u64 * 6 * 4)?;
+        let offsets = self.pool.take("pdacrt-offsets", stride as u64 * 6 * 4)?;
+        let summary = gpu.create_buffer("pdacrt-level-totals", size_of::<LevelTotals>() as u64, MemoryKind::Readback)?;
+        let (_, sort_scratch) = self.scratch.sort.as_ref().unwrap();
+        let misc = self.scratch.misc.as_ref().unwrap();
+
+        let mut rec = gpu.recorder(StreamKind::Main)?;
+        rec.begin_scope("pdacrt-level")?;
+        // Algorithm 2 lines 2–6: status codes.
+        rec.dispatch_items(
+            &self.kernels.filter_triangles,
+            &[(&self.triangles).into(), (&level.nodes).into(), (&level.tri_ids).into(), (&level.tri_keys).into()],
+            &FilterTrianglesPush { n: level.tri_total, eps: self.eps },
+            level.tri_total as u64,
+        )?;
+        rec.dispatch_items(
+            &self.kernels.filter_rays,
+            &[
+                rays.into(),
+                (&level.nodes).into(),
+                (&level.ray_ids).into(),
+                (&level.ray_keys).into(),
+                best_t.into(),
+                best_tri.into(),
+            ],
+            &FilterRaysPush {
+                n: level.ray_total,
+                eps: self.eps,
+                occlusion: (query == Query::Occlusion) as u32,
+                ray_offset,
+            },
+            level.ray_total as u64,
+        )?;
+        rec.fill(&tri_counts, 0);
+        rec.fill(&ray_counts, 0);
+        rec.barrier();
+        let key_bits = 2 + bits_for(level.node_count);
+        for (list_n, keys, ids, counts) in [
+            (level.tri_total, &level.tri_keys, &level.tri_ids, &tri_counts),
+            (level.ray_total, &level.ray_keys, &level.ray_ids, &ray_counts),
+        ] {
+            // Sort by status key (Figure 4), then count each (node, code) run
+            // (Algorithm 2 lines 9–12).
+            self.sort.record(&mut rec, list_n, keys.into(), Some(ids.into()), 0..key_bits, sort_scratch)?;
+            self.reduce.record(
+                &mut rec,
+                list_n,
+                keys.into(),
+                Reduction::Count,
+                RunOutputs {
+                    keys: (&run_keys).into(),
+                    a: (&run_counts).into(),
+                    b: None,
+                    count: (&run_total).into(),
+                },
+                misc,
+            )?;
+            rec.dispatch_items(
+                &self.kernels.child_counts,
+                &[(&run_keys).into(), (&run_counts).into(), (&run_total).into(), counts.into()],
+                &MaxRunsPush { max_runs: list_n },
+                (level.node_count * 4) as u64,
+            )?;
+            rec.barrier();
+        }
+        // Algorithm 2 lines 13–15 and Algorithm 1 line 6.
+        let min_extent = self.eps * 4.0;
+        rec.dispatch_items(
+            &self.kernels.children,
+            &[
+                (&level.nodes).into(),
+                (&tri_counts).into(),
+                (&ray_counts).into(),
+                (&children).into(),
+                (&channels).into(),
+            ],
+            &ChildrenPush {
+                child_count,
+                stride,
+                alpha: self.params.alpha,
+                beta: self.params.beta,
+                last_level: (depth + 1 >= self.params.max_depth) as u32,
+                min_extent,
+            },
+            child_count as u64,
+        )?;
+        rec.barrier();
+        // Algorithm 1 line 11: positions of the next level and of the terminal nodes.
+        for k in 0..6u64 {
+            let bytes = stride as u64 * 4;
+            self.scan.record(
+                &mut rec,
+                child_count,
+                channels.slice(k * bytes, bytes),
+                offsets.slice(k * bytes, bytes),
+                ScanKind::Exclusive,
+                misc,
+            )?;
+        }
+        rec.dispatch(
+            &self.kernels.level_summary,
+            &[(&channels).into(), (&offsets).into(), (&summary).into()],
+            &SummaryPush { child_count, stride },
+            [1, 1, 1],
+        )?;
+        rec.end_scope()?;
+        let done = rec.submit(&[])?;
+        gpu.wait(&done)?;
+        let totals = summary.read::<LevelTotals>()?[0];
+        for b in [run_keys, run_counts, run_total, tri_counts, ray_counts, channels] {
+            self.pool.give(b);
+        }
+        Ok((totals, children, offsets, stride))
+    }
+
+    /// Processes the terminal-node buffer (Algorithm 3) and updates the global closest
+    /// hits (Algorithm 1 line 9). Recorded without a host wait.
+    #[allow(clippy::too_many_arguments)]
+    fn flush(
+        &mut self,
+        term: &mut TerminalBuffer,
+        rays: &Buffer,
+        ray_offset: u32,
+        chunk_rays: u32,
+        best_t: &Buffer,
+        best_tri: &Buffer,
+    ) -> vk::Result<()> {
+        let gpu = self.gpu.clone();
+        let entries = term.rays;
+        self.stats.flushes += 1;
+        self.sort_scratch(entries)?;
+        self.misc_scratch(entries)?;
+        let entry_t = self.pool.take("pdacrt-entry-t", entries as u64 * 4)?;
+        let entry_tri = self.pool.take("pdacrt-entry-tri", entries as u64 * 4)?;
+        let keys = self.pool.take("pdacrt-entry-rays", entries as u64 * 4)?;
+        let order = self.pool.take("pdacrt-entry-order", entries as u64 * 4)?;
+        let sorted_t = self.pool.take("pdacrt-sorted-t", entries as u64 * 4)?;
+        let sorted_tri = self.pool.take("pdacrt-sorted-tri", entries as u64 * 4)?;
+        let run_rays = self.pool.take("pdacrt-run-rays", entries as u64 * 4)?;
+        let run_t = self.pool.take("pdacrt-run-t", entries as u64 * 4)?;
+        let run_tri = self.pool.take("pdacrt-run-tri", entries as u64 * 4)?;
+        let run_total = self.pool.take("pdacrt-run-total", 4)?;
+        let (_, sort_scratch) = self.scratch.sort.as_ref().unwrap();
+        let misc = self.scratch.misc.as_ref().unwrap();
+
+        let mut rec = gpu.recorder(StreamKind::Main)?;
+        rec.begin_scope("pdacrt-flush")?;
+        // Algorithm 3 lines 2–10.
+        let groups = grid_for(&gpu, term.segment_count as u64, 1);
+        rec.dispatch(
+            &self.kernels.segmented_intersect,
+            &[
+                (&self.triangles).into(),
+                rays.into(),
+                (&term.segments).into(),
+                (&term.tri_ids).into(),
+                (&term.ray_ids).into(),
+                (&entry_t).into(),
+                (&entry_tri).into(),
+            ],
+            &IntersectPush {
+                segment_count: term.segment_count,
+                ray_offset,
+            },
+            groups,
+        )?;
+        // Lines 12–13: sort the entries by ray id, then the segmented arg-min.
+        rec.copy(&term.ray_ids, 0, &keys, 0, entries as u64 * 4);
+        rec.dispatch_items(
+            &self.kernels.iota,
+            &[(&order).into(), (&sorted_t).into()],
+            &IotaPush { n: entries, base: 0, tag: 0 },
+            entries as u64,
+        )?;
+        rec.barrier();
+        self.sort.record(&mut rec, entries, (&keys).into(), Some((&order).into()), 0..bits_for(chunk_rays), sort_scratch)?;
+        for (src, out) in [(&entry_t, &sorted_t), (&entry_tri, &sorted_tri)] {
+            self.gather.record(&mut rec, entries, Direction::Gather, src.into(), (&order).into(), out.into(), misc)?;
+        }
+        self.reduce.record(
+            &mut rec,
+            entries,
+            (&keys).into(),
+            Reduction::ArgMin {
+                t: (&sorted_t).into(),
+                ids: (&sorted_tri).into(),
+            },
+            RunOutputs {
+                keys: (&run_rays).into(),
+                a: (&run_t).into(),
+                b: Some((&run_tri).into()),
+                count: (&run_total).into(),
+            },
+            misc,
+        )?;
+        // Algorithm 1 line 9.
+        rec.dispatch_items(
+            &self.kernels.update_hits,
+            &[
+                (&run_rays).into(),
+                (&run_t).into(),
+                (&run_tri).into(),
+                (&run_total).into(),
+                best_t.into(),
+                best_tri.into(),
+            ],
+            &MaxRunsPush { max_runs: entries },
+            entries as u64,
+        )?;
+        rec.barrier();
+        rec.end_scope()?;
+        rec.submit(&[])?;
+        for b in [entry_t, entry_tri, keys, order, sorted_t, sorted_tri, run_rays, run_t, run_tri, run_total] {
+            self.pool.give(b);
+        }
+        term.tris = 0;
+        term.rays = 0;
+        term.segment_count = 0;
+        Ok(())
+    }
+}
+
+impl Tracer for PdacrtTracer {
+    fn name(&self) -> &'static str {
+        "pdacrt"
+    }
+
+    fn trace(
+        &mut self,
+        rays: &Buffer,
+        hits: &Buffer,
+        ray_count: u32,
+        query: Query,
+        after: &[&TimelinePoint],
+    ) -> vk::Result<TimelinePoint> {
+        self.stats = TraceStats::default();
+        // Everything below runs on the main stream after `after`.
+        let rec = self.gpu.recorder(StreamKind::Main)?;
+        rec.submit(after)?;
+        let chunk = self.params.max_rays_per_chunk;
+        let mut offset = 0;
+        while offset < ray_count {
+            let n = chunk.min(ray_count - offset);
+            self.trace_chunk(rays, hits, offset, n, query, self.stats.chunks)?;
+            self.stats.chunks += 1;
+            offset += n;
+        }
+        self.gpu.recorder(StreamKind::Main)?.submit(&[])
+    }
+}
