@@ -9,7 +9,9 @@
 //! - [`integrator`]: what is computed along the rays.
 //! - [`render`]: ties a scene, a tracer and an integrator into a film.
 
+pub mod bench;
 pub mod film;
+pub mod primitives;
 pub mod scene;
 pub mod shaders;
 pub mod vk;
