@@ -4,13 +4,17 @@
 //! - [`vk`]: the only place with `unsafe` and raw `ash` — instance, device, streams,
 //!   buffers, pipelines, command recording, profiling.
 //! - [`shaders`]: SPIR-V compiled from `glsl/` at build time.
+//! - [`primitives`]: GPU scan, radix sort, reduce-by-key, compaction, gather/scatter.
 //! - [`scene`], [`film`]: scene input and image output (CPU only).
 //! - [`trace`]: the `Tracer` interface and its implementations.
 //! - [`integrator`]: what is computed along the rays.
 //! - [`render`]: ties a scene, a tracer and an integrator into a film.
+//! - [`bench`]: the measurements behind `splitray bench`.
 
+pub mod bench;
 pub mod film;
 pub mod integrator;
+pub mod primitives;
 pub mod render;
 pub mod scene;
 pub mod shaders;

@@ -7,12 +7,14 @@
 
 pub mod brute_force;
 pub mod cpu;
+pub mod pdacrt;
 pub mod types;
 
 use std::fmt;
 use std::str::FromStr;
 
 pub use brute_force::BruteForceTracer;
+pub use pdacrt::{PdacrtParams, PdacrtTracer};
 pub use types::{GpuTriangle, Hit, Ray, MISS};
 
 use crate::vk::{self, Buffer, Gpu, TimelinePoint};
@@ -47,17 +49,25 @@ pub trait Tracer {
 #[serde(rename_all = "kebab-case")]
 pub enum TracerKind {
     #[default]
+    Pdacrt,
     BruteForce,
 }
 
 impl TracerKind {
-    pub const ALL: &'static [(TracerKind, &'static str)] = &[(
-        TracerKind::BruteForce,
-        "every ray against every triangle on the GPU: the correctness oracle",
-    )];
+    pub const ALL: &'static [(TracerKind, &'static str)] = &[
+        (
+            TracerKind::Pdacrt,
+            "parallel divide-and-conquer ray tracing: no acceleration structure, level loops on the GPU",
+        ),
+        (
+            TracerKind::BruteForce,
+            "every ray against every triangle on the GPU: the correctness oracle",
+        ),
+    ];
 
     pub fn name(self) -> &'static str {
         match self {
+            Self::Pdacrt => "pdacrt",
             Self::BruteForce => "brute-force",
         }
     }
@@ -65,6 +75,7 @@ impl TracerKind {
     /// Builds the tracer over `triangles`.
     pub fn create(self, gpu: &Gpu, triangles: &[GpuTriangle]) -> vk::Result<Box<dyn Tracer>> {
         match self {
+            Self::Pdacrt => Ok(Box::new(PdacrtTracer::new(gpu, triangles)?)),
             Self::BruteForce => Ok(Box::new(BruteForceTracer::new(gpu, triangles)?)),
         }
     }

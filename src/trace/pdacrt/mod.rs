@@ -43,7 +43,7 @@ use crate::primitives::{
     reduce_by_key::{Reduction, RunOutputs},
     Gather, RadixSort, ReduceByKey, Scan, ScanKind, SortScratch, Tuning,
 };
-use crate::vk::{self, grid_for, Buffer, BufferSlice, Gpu, MemoryKind, Recorder, StreamKind, TimelinePoint};
+use crate::vk::{self, grid_for, Buffer, Gpu, MemoryKind, Recorder, StreamKind, TimelinePoint};
 
 /// PDACRT's parameters (paper §2.1–2.2).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -368,13 +368,11 @@ impl PdacrtTracer {
                 || totals.term_nodes > term.segment_capacity
             {
                 // One level alone exceeds η: grow the (now empty) buffer to fit it.
-                let old = std::mem::replace(
-                    &mut term,
-                    self.new_terminal_buffer(
-                        totals.term_tris.max(term.tri_capacity),
-                        totals.term_rays.max(term.ray_capacity).max(totals.term_nodes * 4),
-                    )?,
-                );
+                let bigger = self.new_terminal_buffer(
+                    totals.term_tris.max(term.tri_capacity),
+                    totals.term_rays.max(term.ray_capacity).max(totals.term_nodes * 4),
+                )?;
+                let old = std::mem::replace(&mut term, bigger);
                 self.give_terminal(old);
             }
 

@@ -1,0 +1,40 @@
+#version 460
+// Radix sort pass, step 1: the digit histogram of each tile of WORKGROUP_SIZE * KEYS
+// keys. Each invocation counts its own contiguous KEYS keys into its own column of
+// shared counters (no atomics); two barriers per tile. The histogram is written
+// digit-major (hist[digit * tiles + tile]) so one exclusive scan gives every
+// (digit, tile) its global offset.
+#include "grid.glsl"
+#include "prim.glsl"
+layout(constant_id = 1) const uint KEYS = 64;
+layout(constant_id = 2) const uint RADIX_BITS = 8;
+const uint RADIX = 1u << RADIX_BITS;
+layout(std430, set = 0, binding = 0) readonly buffer Hdr { uint hdr[]; };
+layout(std430, set = 0, binding = 1) readonly buffer Keys { uint keys[]; };
+layout(std430, set = 0, binding = 2) writeonly buffer Hist { uint hist[]; };
+layout(push_constant) uniform Push { uint shift; uint bits; uint flags; } pc;
+
+shared uint counts[RADIX * WORKGROUP_SIZE];
+
+void main() {
+    uint g = linear_group_id();
+    uint tiles = hdr[HDR_GROUPS + 1u];
+    if (g >= tiles) return;
+    uint n = hdr[HDR_N];
+    uint lid = gl_LocalInvocationID.x;
+    for (uint j = lid; j < RADIX * WORKGROUP_SIZE; j += WORKGROUP_SIZE) counts[j] = 0u;
+    barrier();
+    uint mask = (1u << pc.bits) - 1u;
+    uint begin = min(g * WORKGROUP_SIZE * KEYS + lid * KEYS, n);
+    uint end = min(begin + KEYS, n);
+    for (uint i = begin; i < end; ++i) {
+        uint d = (keys[i] >> pc.shift) & mask;
+        counts[d * WORKGROUP_SIZE + lid] += 1u;
+    }
+    barrier();
+    for (uint d = lid; d < RADIX; d += WORKGROUP_SIZE) {
+        uint s = 0u;
+        for (uint w = 0u; w < WORKGROUP_SIZE; ++w) s += counts[d * WORKGROUP_SIZE + w];
+        hist[d * tiles + g] = s;
+    }
+}

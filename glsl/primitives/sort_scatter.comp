@@ -1,0 +1,56 @@
+#version 460
+// Radix sort pass, step 3: stable scatter. Each invocation recounts its own contiguous
+// KEYS keys, the workgroup turns the per-invocation counts into offsets (digit by digit,
+// invocations in order, starting at the tile's scanned global offset), then each
+// invocation writes its keys (and values) in their original order. Stable without any
+// cross-workgroup communication; three barriers per tile.
+#include "grid.glsl"
+#include "prim.glsl"
+layout(constant_id = 1) const uint KEYS = 64;
+layout(constant_id = 2) const uint RADIX_BITS = 8;
+const uint RADIX = 1u << RADIX_BITS;
+layout(std430, set = 0, binding = 0) readonly buffer Hdr { uint hdr[]; };
+layout(std430, set = 0, binding = 1) readonly buffer KeysIn { uint keys_in[]; };
+layout(std430, set = 0, binding = 2) readonly buffer ValsIn { uint vals_in[]; };
+layout(std430, set = 0, binding = 3) readonly buffer Hist { uint hist[]; };
+layout(std430, set = 0, binding = 4) writeonly buffer KeysOut { uint keys_out[]; };
+layout(std430, set = 0, binding = 5) writeonly buffer ValsOut { uint vals_out[]; };
+layout(push_constant) uniform Push { uint shift; uint bits; uint flags; } pc; // bit 0: values
+
+shared uint counts[RADIX * WORKGROUP_SIZE];
+
+void main() {
+    uint g = linear_group_id();
+    uint tiles = hdr[HDR_GROUPS + 1u];
+    if (g >= tiles) return;
+    uint n = hdr[HDR_N];
+    uint lid = gl_LocalInvocationID.x;
+    for (uint j = lid; j < RADIX * WORKGROUP_SIZE; j += WORKGROUP_SIZE) counts[j] = 0u;
+    barrier();
+    uint mask = (1u << pc.bits) - 1u;
+    uint begin = min(g * WORKGROUP_SIZE * KEYS + lid * KEYS, n);
+    uint end = min(begin + KEYS, n);
+    for (uint i = begin; i < end; ++i) {
+        uint d = (keys_in[i] >> pc.shift) & mask;
+        counts[d * WORKGROUP_SIZE + lid] += 1u;
+    }
+    barrier();
+    for (uint d = lid; d < RADIX; d += WORKGROUP_SIZE) {
+        uint run = hist[d * tiles + g];
+        for (uint w = 0u; w < WORKGROUP_SIZE; ++w) {
+            uint v = counts[d * WORKGROUP_SIZE + w];
+            counts[d * WORKGROUP_SIZE + w] = run;
+            run += v;
+        }
+    }
+    barrier();
+    bool values = (pc.flags & 1u) != 0u;
+    for (uint i = begin; i < end; ++i) {
+        uint k = keys_in[i];
+        uint d = (k >> pc.shift) & mask;
+        uint pos = counts[d * WORKGROUP_SIZE + lid];
+        counts[d * WORKGROUP_SIZE + lid] = pos + 1u;
+        keys_out[pos] = k;
+        if (values) vals_out[pos] = vals_in[i];
+    }
+}

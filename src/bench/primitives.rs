@@ -1,0 +1,582 @@
+//! `splitray bench primitives`: every primitive verified against its CPU twin, then
+//! timed (median of `runs` after a warm-up) with GPU timestamps and wall clock, next to
+//! CPU references measured in the same run.
+
+use std::fmt;
+use std::time::Instant;
+
+use rayon::slice::ParallelSliceMut;
+use serde::Serialize;
+
+use crate::primitives::compact::Kept;
+use crate::primitives::gather::Direction;
+use crate::primitives::reduce_by_key::{Reduction, RunOutputs};
+use crate::primitives::{cpu, Compact, Gather, RadixSort, ReduceByKey, Scan, ScanKind, Tuning};
+use crate::vk::{Buffer, Gpu, MemoryKind, Recorder, StreamKind};
+
+/// What to measure.
+#[derive(Clone, Debug)]
+pub struct PrimitivesBenchOptions {
+    /// Items for the sort, reduce-by-key, compaction and gather (default 4M).
+    pub n: usize,
+    /// Items for the scan and the copy it is compared with (default 16M).
+    pub scan_n: usize,
+    /// Timed runs per primitive (at least 5 are made).
+    pub runs: usize,
+    /// Tuning to use instead of [`Tuning::for_device`].
+    pub tuning: Option<Tuning>,
+}
+
+impl Default for PrimitivesBenchOptions {
+    fn default() -> Self {
+        Self {
+            n: 1 << 22,
+            scan_n: 1 << 24,
+            runs: 5,
+            tuning: None,
+        }
+    }
+}
+
+/// One timed primitive.
+#[derive(Clone, Debug, Serialize)]
+pub struct BenchRow {
+    pub primitive: String,
+    pub n: usize,
+    /// Median GPU time (timestamps around the whole recording).
+    pub gpu_ms: f64,
+    /// Median wall-clock time of submit + wait.
+    pub wall_ms: f64,
+    /// Items per second from `gpu_ms`, in millions.
+    pub mkeys_per_s: f64,
+    /// Reference timings in the same run (name, median ms, reference ms / gpu ms).
+    pub references: Vec<Reference>,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct Reference {
+    pub name: String,
+    pub ms: f64,
+    /// `ms / gpu_ms`: above 1 the GPU primitive is faster.
+    pub speedup: f64,
+}
+
+/// A target of issue 3 and whether this run met it.
+#[derive(Clone, Debug, Serialize)]
+pub struct TargetCheck {
+    pub target: String,
+    pub measured: f64,
+    pub required: f64,
+    pub met: bool,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct PrimitivesReport {
+    pub device: String,
+    pub driver: String,
+    pub subgroup_size: u32,
+    pub variant: String,
+    pub tuning: Tuning,
+    pub runs: usize,
+    pub rows: Vec<BenchRow>,
+    pub targets: Vec<TargetCheck>,
+}
+
+impl PrimitivesReport {
+    pub fn print(&self) {
+        print!("{self}");
+    }
+}
+
+impl fmt::Display for PrimitivesReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(f, "device : {} ({})", self.device, self.driver)?;
+        writeln!(f, "variant: {}", self.variant)?;
+        writeln!(f, "runs   : median of {}", self.runs)?;
+        writeln!(
+            f,
+            "{:<28} {:>10} {:>10} {:>10} {:>10}  references (ms, speedup)",
+            "primitive", "n", "gpu ms", "wall ms", "Mkeys/s"
+        )?;
+        for r in &self.rows {
+            let refs: Vec<String> = r
+                .references
+                .iter()
+                .map(|x| format!("{} {:.2} ms ({:.2}x)", x.name, x.ms, x.speedup))
+                .collect();
+            writeln!(
+                f,
+                "{:<28} {:>10} {:>10.2} {:>10.2} {:>10.1}  {}",
+                r.primitive,
+                r.n,
+                r.gpu_ms,
+                r.wall_ms,
+                r.mkeys_per_s,
+                refs.join("; ")
+            )?;
+        }
+        for t in &self.targets {
+            writeln!(
+                f,
+                "target {:<52} measured {:.2}, required {:.2}: {}",
+                t.target,
+                t.measured,
+                t.required,
+                if t.met { "MET" } else { "MISSED" }
+            )?;
+        }
+        Ok(())
+    }
+}
+
+pub type BenchResult<T> = std::result::Result<T, Box<dyn std::error::Error + Send + Sync>>;
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v[v.len() / 2]
+}
+
+fn time_cpu(runs: usize, mut f: impl FnMut() -> f64) -> f64 {
+    median((0..runs).map(|_| f()).collect())
+}
+
+/// Runs `record` once as a warm-up, then `runs` times; returns median (gpu ms, wall ms).
+/// `before` runs on the host before each submission (e.g. to restore an input).
+fn time_gpu(
+    gpu: &Gpu,
+    runs: usize,
+    mut before: impl FnMut() -> BenchResult<()>,
+    record: impl Fn(&mut Recorder) -> crate::vk::Result<()>,
+) -> BenchResult<(f64, f64)> {
+    let scope = "bench-primitive";
+    let mut gpu_ms = Vec::new();
+    let mut wall_ms = Vec::new();
+    for run in 0..=runs {
+        before()?;
+        gpu.wait_idle()?;
+        let _ = gpu.take_profile();
+        let mut rec = gpu.recorder(StreamKind::Main)?;
+        rec.begin_scope(scope)?;
+        record(&mut rec)?;
+        rec.end_scope()?;
+        let t0 = Instant::now();
+        let point = rec.submit(&[])?;
+        gpu.wait(&point)?;
+        let wall = t0.elapsed().as_secs_f64() * 1e3;
+        gpu.wait_idle()?;
+        let profile = gpu.take_profile();
+        let g: f64 = profile
+            .records
+            .iter()
+            .filter(|r| r.name == scope)
+            .map(|r| r.duration_ms())
+            .sum();
+        if run > 0 {
+            gpu_ms.push(if g > 0.0 { g } else { wall });
+            wall_ms.push(wall);
+        }
+    }
+    Ok((median(gpu_ms), median(wall_ms)))
+}
+
+fn check<T: PartialEq + fmt::Debug>(what: &str, gpu: &[T], cpu: &[T]) -> BenchResult<()> {
+    if gpu.len() != cpu.len() {
+        return Err(format!("{what}: GPU gave {} items, CPU {}", gpu.len(), cpu.len()).into());
+    }
+    if let Some(i) = (0..gpu.len()).find(|&i| gpu[i] != cpu[i]) {
+        return Err(format!(
+            "{what}: mismatch at {i}: GPU {:?}, CPU {:?}",
+            gpu[i], cpu[i]
+        )
+        .into());
+    }
+    Ok(())
+}
+
+fn random_u32s(n: usize, seed: u64) -> Vec<u32> {
+    let mut state = seed;
+    (0..n)
+        .map(|_| {
+            state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+            let mut z = state;
+            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+            (z ^ (z >> 31)) as u32
+        })
+        .collect()
+}
+
+fn row(primitive: &str, n: usize, (gpu_ms, wall_ms): (f64, f64), refs: &[(&str, f64)]) -> BenchRow {
+    BenchRow {
+        primitive: primitive.to_string(),
+        n,
+        gpu_ms,
+        wall_ms,
+        mkeys_per_s: n as f64 / gpu_ms / 1e3,
+        references: refs
+            .iter()
+            .map(|&(name, ms)| Reference {
+                name: name.to_string(),
+                ms,
+                speedup: ms / gpu_ms,
+            })
+            .collect(),
+    }
+}
+
+fn device_buffer(gpu: &Gpu, name: &str, bytes: u64) -> crate::vk::Result<Buffer> {
+    gpu.create_buffer(name, bytes, MemoryKind::Device)
+}
+
+/// Verifies and times every primitive.
+pub fn run(gpu: &Gpu, opts: &PrimitivesBenchOptions) -> BenchResult<PrimitivesReport> {
+    let runs = opts.runs.max(5);
+    let tuning = opts
+        .tuning
+        .unwrap_or_else(|| Tuning::for_device(gpu.info()));
+    let n = opts.n;
+    let n32 = u32::try_from(n)?;
+    let mut rows = Vec::new();
+    let mut targets = Vec::new();
+
+    // --- Radix sort of key-value pairs (all 32 bits), against sort_unstable_by_key.
+    let sort = RadixSort::new(gpu, &tuning)?;
+    let keys = random_u32s(n, 1);
+    let values: Vec<u32> = (0..n as u32).collect();
+    let kbuf = gpu.upload("bench-keys", &keys)?;
+    let vbuf = gpu.upload("bench-values", &values)?;
+    let scratch = sort.alloc_scratch(gpu, n32)?;
+    let record_sort = |rec: &mut Recorder, bits: std::ops::Range<u32>| {
+        sort.record(
+            rec,
+            n32,
+            (&kbuf).into(),
+            Some((&vbuf).into()),
+            bits,
+            &scratch,
+        )
+    };
+    let mut rec = gpu.recorder(StreamKind::Main)?;
+    record_sort(&mut rec, 0..32)?;
+    gpu.wait(&rec.submit(&[])?)?;
+    let (ck, cv) = cpu::sort_pairs(&keys, &values, 0..32);
+    check("radix sort keys", &kbuf.read::<u32>()?, &ck)?;
+    check("radix sort values", &vbuf.read::<u32>()?, &cv)?;
+    let restore = || -> BenchResult<()> {
+        kbuf.write(&keys)?;
+        vbuf.write(&values)?;
+        Ok(())
+    };
+    let pairs: Vec<(u32, u32)> = keys.iter().copied().zip(values.iter().copied()).collect();
+    let single = time_cpu(runs, || {
+        let mut p = pairs.clone();
+        let t = Instant::now();
+        p.sort_unstable_by_key(|x| x.0);
+        let ms = t.elapsed().as_secs_f64() * 1e3;
+        std::hint::black_box(&p);
+        ms
+    });
+    let par = time_cpu(runs, || {
+        let mut p = pairs.clone();
+        let t = Instant::now();
+        p.par_sort_unstable_by_key(|x| x.0);
+        let ms = t.elapsed().as_secs_f64() * 1e3;
+        std::hint::black_box(&p);
+        ms
+    });
+    let t = time_gpu(gpu, runs, restore, |rec| record_sort(rec, 0..32))?;
+    let r = row(
+        "sort_pairs (32 bits)",
+        n,
+        t,
+        &[
+            ("cpu sort_unstable_by_key", single),
+            ("cpu rayon par_sort", par),
+        ],
+    );
+    targets.push(TargetCheck {
+        target: format!("sort {n} pairs vs single-thread sort_unstable_by_key"),
+        measured: single / r.gpu_ms,
+        required: 1.5,
+        met: single / r.gpu_ms >= 1.5,
+    });
+    rows.push(r);
+    // Keys with 16 significant bits: the bit range halves the passes.
+    let keys16: Vec<u32> = keys.iter().map(|k| k >> 16).collect();
+    let restore16 = || -> BenchResult<()> {
+        kbuf.write(&keys16)?;
+        vbuf.write(&values)?;
+        Ok(())
+    };
+    restore16()?;
+    let mut rec = gpu.recorder(StreamKind::Main)?;
+    record_sort(&mut rec, 0..16)?;
+    gpu.wait(&rec.submit(&[])?)?;
+    let (ck, cv) = cpu::sort_pairs(&keys16, &values, 0..16);
+    check("radix sort 16-bit keys", &kbuf.read::<u32>()?, &ck)?;
+    check("radix sort 16-bit values", &vbuf.read::<u32>()?, &cv)?;
+    let pairs16: Vec<(u32, u32)> = keys16.iter().copied().zip(values.iter().copied()).collect();
+    let single16 = time_cpu(runs, || {
+        let mut p = pairs16.clone();
+        let t = Instant::now();
+        p.sort_unstable_by_key(|x| x.0);
+        let ms = t.elapsed().as_secs_f64() * 1e3;
+        std::hint::black_box(&p);
+        ms
+    });
+    let t = time_gpu(gpu, runs, restore16, |rec| record_sort(rec, 0..16))?;
+    rows.push(row(
+        "sort_pairs (bits 0..16)",
+        n,
+        t,
+        &[("cpu sort_unstable_by_key", single16)],
+    ));
+    drop(scratch);
+
+    // --- Scan against a copy of the same bytes.
+    let scan_n = opts.scan_n;
+    let scan_n32 = u32::try_from(scan_n)?;
+    let scan = Scan::new(gpu, &tuning)?;
+    let data: Vec<u32> = random_u32s(scan_n, 2).iter().map(|x| x & 0xFF).collect();
+    let input = gpu.upload("bench-scan-in", &data)?;
+    let output = device_buffer(gpu, "bench-scan-out", scan_n as u64 * 4)?;
+    let scan_scratch = device_buffer(gpu, "bench-scan-scratch", scan.scratch_bytes(scan_n32))?;
+    let record_scan = |rec: &mut Recorder| {
+        scan.record(
+            rec,
+            scan_n32,
+            (&input).into(),
+            (&output).into(),
+            ScanKind::Exclusive,
+            &scan_scratch,
+        )
+    };
+    let mut rec = gpu.recorder(StreamKind::Main)?;
+    record_scan(&mut rec)?;
+    gpu.wait(&rec.submit(&[])?)?;
+    check(
+        "exclusive scan",
+        &output.read::<u32>()?,
+        &cpu::exclusive_scan(&data),
+    )?;
+    let scan_cpu = time_cpu(runs, || {
+        let t = Instant::now();
+        std::hint::black_box(cpu::exclusive_scan(&data));
+        t.elapsed().as_secs_f64() * 1e3
+    });
+    let copy_t = time_gpu(
+        gpu,
+        runs,
+        || Ok(()),
+        |rec| {
+            rec.copy(&input, 0, &output, 0, scan_n as u64 * 4);
+            Ok(())
+        },
+    )?;
+    let t = time_gpu(gpu, runs, || Ok(()), record_scan)?;
+    let r = row(
+        "scan (exclusive)",
+        scan_n,
+        t,
+        &[
+            ("vkCmdCopyBuffer same bytes", copy_t.0),
+            ("cpu scan", scan_cpu),
+        ],
+    );
+    targets.push(TargetCheck {
+        target: format!("scan {scan_n} u32 vs vkCmdCopyBuffer bandwidth"),
+        measured: copy_t.0 / r.gpu_ms,
+        required: 0.5,
+        met: copy_t.0 / r.gpu_ms >= 0.5,
+    });
+    rows.push(r);
+    rows.push(row("vkCmdCopyBuffer (reference)", scan_n, copy_t, &[]));
+    drop((input, output, scan_scratch));
+
+    // --- Reduce-by-key (sum, arg-min) and run-length encoding over sorted keys with
+    // runs of 1..=16 items (like PDACRT's per-ray hit candidates).
+    let rbk = ReduceByKey::new(gpu, &tuning)?;
+    let mut rkeys = Vec::with_capacity(n);
+    let lens = random_u32s(n, 3);
+    let mut k = 0u32;
+    while rkeys.len() < n {
+        let len = (lens[rkeys.len()] % 16 + 1) as usize;
+        rkeys.extend(std::iter::repeat_n(k, len.min(n - rkeys.len())));
+        k += 1;
+    }
+    let rvals = random_u32s(n, 4);
+    let tvals: Vec<f32> = rvals.iter().map(|&v| (v >> 8) as f32 / 65536.0).collect();
+    let ids: Vec<u32> = (0..n as u32).collect();
+    let bk = gpu.upload("bench-rbk-keys", &rkeys)?;
+    let bv = gpu.upload("bench-rbk-values", &rvals)?;
+    let bt = gpu.upload("bench-rbk-t", &tvals)?;
+    let bi = gpu.upload("bench-rbk-ids", &ids)?;
+    let ok = device_buffer(gpu, "bench-rbk-out-keys", n as u64 * 4)?;
+    let oa = device_buffer(gpu, "bench-rbk-out-a", n as u64 * 4)?;
+    let ob = device_buffer(gpu, "bench-rbk-out-b", n as u64 * 4)?;
+    let oc = device_buffer(gpu, "bench-rbk-count", 4)?;
+    let rs = device_buffer(gpu, "bench-rbk-scratch", rbk.scratch_bytes(n32))?;
+    let outs = RunOutputs {
+        keys: (&ok).into(),
+        a: (&oa).into(),
+        b: Some((&ob).into()),
+        count: (&oc).into(),
+    };
+    let reductions: [(&str, Reduction); 3] = [
+        (
+            "reduce_by_key sum",
+            Reduction::Sum {
+                values: (&bv).into(),
+            },
+        ),
+        (
+            "reduce_by_key arg-min",
+            Reduction::ArgMin {
+                t: (&bt).into(),
+                ids: (&bi).into(),
+            },
+        ),
+        ("run_length_encode", Reduction::Count),
+    ];
+    for (name, reduction) in reductions {
+        let record = |rec: &mut Recorder| rbk.record(rec, n32, (&bk).into(), reduction, outs, &rs);
+        let mut rec = gpu.recorder(StreamKind::Main)?;
+        record(&mut rec)?;
+        gpu.wait(&rec.submit(&[])?)?;
+        let runs_n = oc.read::<u32>()?[0] as usize;
+        let gk = &ok.read::<u32>()?[..runs_n.min(n)];
+        let ga = &oa.read::<u32>()?[..runs_n.min(n)];
+        let t0 = Instant::now();
+        match reduction {
+            Reduction::Sum { .. } => {
+                let (ck, cv) = cpu::reduce_by_key_sum(&rkeys, &rvals);
+                check(name, gk, &ck)?;
+                check(name, ga, &cv)?;
+            }
+            Reduction::Count => {
+                let (ck, cv) = cpu::run_length_encode(&rkeys);
+                check(name, gk, &ck)?;
+                check(name, ga, &cv)?;
+            }
+            Reduction::ArgMin { .. } => {
+                let (ck, ct, ci) = cpu::reduce_by_key_argmin(&rkeys, &tvals, &ids);
+                let gb = &ob.read::<u32>()?[..runs_n.min(n)];
+                let ct: Vec<u32> = ct.iter().map(|t| t.to_bits()).collect();
+                check(name, gk, &ck)?;
+                check(name, ga, &ct)?;
+                check(name, gb, &ci)?;
+            }
+        }
+        let _ = t0;
+        let cpu_ms = time_cpu(runs, || {
+            let t = Instant::now();
+            match reduction {
+                Reduction::Sum { .. } => {
+                    std::hint::black_box(cpu::reduce_by_key_sum(&rkeys, &rvals));
+                }
+                Reduction::Count => {
+                    std::hint::black_box(cpu::run_length_encode(&rkeys));
+                }
+                Reduction::ArgMin { .. } => {
+                    std::hint::black_box(cpu::reduce_by_key_argmin(&rkeys, &tvals, &ids));
+                }
+            }
+            t.elapsed().as_secs_f64() * 1e3
+        });
+        let t = time_gpu(gpu, runs, || Ok(()), record)?;
+        rows.push(row(name, n, t, &[("cpu twin", cpu_ms)]));
+    }
+    drop((bk, bt, bi, ok, ob, rs));
+
+    // --- Compaction (half kept) and gather/scatter by a random permutation.
+    let compact = Compact::new(gpu, &tuning)?;
+    let flags: Vec<u32> = random_u32s(n, 5).iter().map(|x| x & 1).collect();
+    let bf = gpu.upload("bench-flags", &flags)?;
+    let cs = device_buffer(gpu, "bench-compact-scratch", compact.scratch_bytes(n32))?;
+    let record = |rec: &mut Recorder| {
+        compact.record(
+            rec,
+            n32,
+            (&bf).into(),
+            Kept::Values((&bv).into()),
+            (&oa).into(),
+            (&oc).into(),
+            &cs,
+        )
+    };
+    let mut rec = gpu.recorder(StreamKind::Main)?;
+    record(&mut rec)?;
+    gpu.wait(&rec.submit(&[])?)?;
+    let kept = oc.read::<u32>()?[0] as usize;
+    let expect = cpu::compact(&flags, &rvals);
+    check("compaction", &oa.read::<u32>()?[..kept.min(n)], &expect)?;
+    let cpu_ms = time_cpu(runs, || {
+        let t = Instant::now();
+        std::hint::black_box(cpu::compact(&flags, &rvals));
+        t.elapsed().as_secs_f64() * 1e3
+    });
+    let t = time_gpu(gpu, runs, || Ok(()), record)?;
+    rows.push(row("compact (by flag)", n, t, &[("cpu twin", cpu_ms)]));
+    drop((bf, cs));
+
+    let gather = Gather::new(gpu, &tuning)?;
+    let mut perm: Vec<u32> = (0..n as u32).collect();
+    let shuffle = random_u32s(n, 6);
+    for i in (1..n).rev() {
+        perm.swap(i, shuffle[i] as usize % (i + 1));
+    }
+    let bp = gpu.upload("bench-perm", &perm)?;
+    let gs = device_buffer(gpu, "bench-gather-scratch", gather.scratch_bytes(n32))?;
+    for (name, dir) in [
+        ("gather", Direction::Gather),
+        ("scatter", Direction::Scatter),
+    ] {
+        let record = |rec: &mut Recorder| {
+            gather.record(rec, n32, dir, (&bv).into(), (&bp).into(), (&oa).into(), &gs)
+        };
+        let mut rec = gpu.recorder(StreamKind::Main)?;
+        record(&mut rec)?;
+        gpu.wait(&rec.submit(&[])?)?;
+        let expect = match dir {
+            Direction::Gather => cpu::gather(&rvals, &perm),
+            Direction::Scatter => {
+                let mut o = vec![0; n];
+                cpu::scatter(&rvals, &perm, &mut o);
+                o
+            }
+        };
+        check(name, &oa.read::<u32>()?, &expect)?;
+        let cpu_ms = time_cpu(runs, || {
+            let t = Instant::now();
+            match dir {
+                Direction::Gather => {
+                    std::hint::black_box(cpu::gather(&rvals, &perm));
+                }
+                Direction::Scatter => {
+                    let mut o = vec![0; n];
+                    cpu::scatter(&rvals, &perm, &mut o);
+                    std::hint::black_box(o);
+                }
+            }
+            t.elapsed().as_secs_f64() * 1e3
+        });
+        let t = time_gpu(gpu, runs, || Ok(()), record)?;
+        rows.push(row(name, n, t, &[("cpu twin", cpu_ms)]));
+    }
+    gpu.wait_idle()?;
+
+    let info = gpu.info();
+    Ok(PrimitivesReport {
+        device: info.name.clone(),
+        driver: format!("{} {}", info.driver_name, info.driver_info),
+        subgroup_size: info.limits.subgroup_size,
+        variant: tuning.describe(),
+        tuning,
+        runs,
+        rows,
+        targets,
+    })
+}

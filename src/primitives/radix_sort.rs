@@ -1,0 +1,266 @@
+//! Stable LSD radix sort of u32 keys carrying u32 values, over an optional bit range.
+//!
+//! Per pass of `radix_bits` bits: (1) per-tile digit histograms, each invocation
+//! counting its own contiguous keys into its own shared-memory column; (2) one
+//! exclusive [`Scan`] of the digit-major histogram (`hist[digit * tiles + tile]`) gives
+//! every (digit, tile) its global offset; (3) a stable scatter in which each tile
+//! recounts, turns per-invocation counts into offsets, and writes its keys in order. No
+//! workgroup ever waits on another (no forward-progress assumption). Passes ping-pong
+//! between the caller's buffers and the scratch pair; after an odd number of passes a
+//! copy brings the result home, so the sorted pairs always end in the caller's buffers.
+
+use super::{
+    args_offset, check_scratch, pipeline, region, Count, Scan, ScanKind, Setup, Tuning,
+    HEADER_BYTES,
+};
+use crate::shaders;
+use crate::vk::{Buffer, BufferSlice, ComputePipeline, Gpu, MemoryKind, Recorder, Result, VkError};
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct PassPush {
+    shift: u32,
+    bits: u32,
+    flags: u32,
+}
+
+/// The ping-pong pair and the misc scratch of one sort.
+pub struct SortScratch {
+    /// `max_n` u32 keys.
+    pub keys: Buffer,
+    /// `max_n` u32 values.
+    pub values: Buffer,
+    /// Header, histograms and the histogram scan's scratch: [`RadixSort::scratch_bytes`].
+    pub misc: Buffer,
+}
+
+pub struct RadixSort {
+    setup: Setup,
+    histogram: ComputePipeline,
+    scatter: ComputePipeline,
+    copy: ComputePipeline,
+    scan: Scan,
+    tuning: Tuning,
+}
+
+impl RadixSort {
+    pub fn new(gpu: &Gpu, tuning: &Tuning) -> Result<Self> {
+        let spec = [
+            tuning.sort_workgroup_size,
+            tuning.sort_keys_per_invocation,
+            tuning.radix_bits,
+        ];
+        let shared = gpu.info().limits.max_compute_shared_memory_size as u64;
+        if tuning.sort_shared_bytes() > shared {
+            return Err(VkError::Usage(format!(
+                "radix sort tuning needs {} bytes of shared memory; the device has {shared}",
+                tuning.sort_shared_bytes()
+            )));
+        }
+        Ok(Self {
+            setup: Setup::new(gpu)?,
+            histogram: pipeline(gpu, shaders::PRIMITIVES_SORT_HISTOGRAM, 3, 12, &spec)?,
+            scatter: pipeline(gpu, shaders::PRIMITIVES_SORT_SCATTER, 6, 12, &spec)?,
+            copy: pipeline(
+                gpu,
+                shaders::PRIMITIVES_COPY_PAIRS,
+                5,
+                4,
+                &[tuning.workgroup_size, tuning.items_per_invocation],
+            )?,
+            scan: Scan::new(gpu, tuning)?,
+            tuning: *tuning,
+        })
+    }
+
+    pub fn tuning(&self) -> &Tuning {
+        &self.tuning
+    }
+
+    fn radix(&self) -> u32 {
+        1 << self.tuning.radix_bits
+    }
+
+    fn tiles(&self, max_n: u32) -> u64 {
+        (max_n as u64)
+            .div_ceil(self.tuning.sort_tile() as u64)
+            .max(1)
+    }
+
+    fn hist_len(&self, max_n: u32) -> u32 {
+        (self.tiles(max_n) * self.radix() as u64) as u32
+    }
+
+    /// (histogram offset, inner scan offset) inside the misc scratch.
+    fn layout(&self, max_n: u32) -> (u64, u64) {
+        let hist = HEADER_BYTES;
+        let scan = hist + region(self.hist_len(max_n) as u64 * 4);
+        (hist, scan)
+    }
+
+    /// Bytes of the misc scratch for up to `max_n` keys (the ping-pong pair needs
+    /// `4 * max_n` bytes each on top).
+    pub fn scratch_bytes(&self, max_n: u32) -> u64 {
+        let (_, scan) = self.layout(max_n);
+        scan + self.scan.scratch_bytes(self.hist_len(max_n))
+    }
+
+    /// Allocates the scratch for sorts of up to `max_n` keys.
+    pub fn alloc_scratch(&self, gpu: &Gpu, max_n: u32) -> Result<SortScratch> {
+        let bytes = max_n as u64 * 4;
+        Ok(SortScratch {
+            keys: gpu.create_buffer("sort-scratch-keys", bytes, MemoryKind::Device)?,
+            values: gpu.create_buffer("sort-scratch-values", bytes, MemoryKind::Device)?,
+            misc: gpu.create_buffer(
+                "sort-scratch-misc",
+                self.scratch_bytes(max_n),
+                MemoryKind::Device,
+            )?,
+        })
+    }
+
+    /// Number of passes for the bit range `[begin_bit, end_bit)`.
+    pub fn passes(&self, begin_bit: u32, end_bit: u32) -> u32 {
+        end_bit
+            .saturating_sub(begin_bit)
+            .div_ceil(self.tuning.radix_bits)
+    }
+
+    /// Sorts the first `n` pairs of (`keys`, `values`) in place by the bits
+    /// `[begin_bit, end_bit)` of the keys (0..32 for whole keys), stably: pairs whose
+    /// keys agree on those bits keep their order. `values: None` sorts keys alone.
+    /// Inputs must be visible to compute reads; ends with a barrier.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record(
+        &self,
+        rec: &mut Recorder,
+        n: u32,
+        keys: BufferSlice<'_>,
+        values: Option<BufferSlice<'_>>,
+        bits: std::ops::Range<u32>,
+        scratch: &SortScratch,
+    ) -> Result<()> {
+        self.record_count(rec, Count::Host(n), keys, values, bits, scratch)
+    }
+
+    /// As [`RadixSort::record`], with n read on the GPU from the u32 at byte
+    /// `count_offset` of `count`, clamped to `max_n` (the capacity of `scratch`).
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_indirect(
+        &self,
+        rec: &mut Recorder,
+        count: &Buffer,
+        count_offset: u64,
+        max_n: u32,
+        keys: BufferSlice<'_>,
+        values: Option<BufferSlice<'_>>,
+        bits: std::ops::Range<u32>,
+        scratch: &SortScratch,
+    ) -> Result<()> {
+        let count = Count::Gpu {
+            buffer: count,
+            offset: count_offset,
+            max: max_n,
+        };
+        self.record_count(rec, count, keys, values, bits, scratch)
+    }
+
+    fn record_count(
+        &self,
+        rec: &mut Recorder,
+        count: Count<'_>,
+        keys: BufferSlice<'_>,
+        values: Option<BufferSlice<'_>>,
+        bits: std::ops::Range<u32>,
+        scratch: &SortScratch,
+    ) -> Result<()> {
+        if bits.start > bits.end || bits.end > 32 {
+            return Err(VkError::Usage(format!(
+                "radix sort: bad bit range {bits:?}"
+            )));
+        }
+        let cap = count.capacity();
+        let passes = self.passes(bits.start, bits.end);
+        if passes == 0 {
+            return Ok(());
+        }
+        let misc = &scratch.misc;
+        check_scratch("radix sort", misc, 0, self.scratch_bytes(cap))?;
+        for b in [&scratch.keys, &scratch.values] {
+            check_scratch("radix sort", b, 0, cap as u64 * 4)?;
+        }
+        let (hist_off, scan_off) = self.layout(cap);
+        let header = misc.slice(0, HEADER_BYTES);
+        let hist = misc.slice(hist_off, region(self.hist_len(cap) as u64 * 4));
+        self.setup.record(
+            rec,
+            count,
+            1,
+            header,
+            [self.tuning.tile(), self.tuning.sort_tile(), 0, 0],
+            None,
+        )?;
+        // The histogram scan's n = tiles × radix, read from this header on the GPU.
+        let tiles_count = Count::Gpu {
+            buffer: misc,
+            offset: 4 * 2, // HDR_GROUPS + 1: the tile count of dispatch kind 1
+            max: self.tiles(cap) as u32,
+        };
+        self.scan
+            .record_setup(rec, tiles_count, self.radix(), misc, scan_off)?;
+
+        let with_values = values.is_some() as u32;
+        let tmp_keys = BufferSlice::from(&scratch.keys);
+        let tmp_vals = BufferSlice::from(&scratch.values);
+        let vals = values.unwrap_or(keys);
+        let tmp_v = if values.is_some() { tmp_vals } else { tmp_keys };
+        let mut src = (keys, vals);
+        let mut dst = (tmp_keys, tmp_v);
+        for pass in 0..passes {
+            let shift = bits.start + pass * self.tuning.radix_bits;
+            let push = PassPush {
+                shift,
+                bits: (bits.end - shift).min(self.tuning.radix_bits),
+                flags: with_values,
+            };
+            rec.dispatch_indirect(
+                &self.histogram,
+                &[header, src.0, hist],
+                &push,
+                misc,
+                args_offset(1),
+            )?;
+            rec.barrier();
+            self.scan.record_passes(
+                rec,
+                hist,
+                hist,
+                ScanKind::Exclusive,
+                false,
+                self.hist_len(cap),
+                misc,
+                scan_off,
+            )?;
+            rec.dispatch_indirect(
+                &self.scatter,
+                &[header, src.0, src.1, hist, dst.0, dst.1],
+                &push,
+                misc,
+                args_offset(1),
+            )?;
+            rec.barrier();
+            std::mem::swap(&mut src, &mut dst);
+        }
+        if passes % 2 == 1 {
+            rec.dispatch_indirect(
+                &self.copy,
+                &[header, src.0, src.1, dst.0, dst.1],
+                &with_values,
+                misc,
+                args_offset(0),
+            )?;
+            rec.barrier();
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,199 @@
+//! Prefix scan (exclusive or inclusive) of u32, any n: reduce-then-scan in three
+//! dispatches — tile sums, one-workgroup scan of the tile sums, then each tile scans
+//! itself from its offset. Each invocation works through a contiguous run.
+
+use super::{args_offset, check_scratch, pipeline, region, Count, Setup, Tuning, HEADER_BYTES};
+use crate::shaders;
+use crate::vk::{Buffer, BufferSlice, ComputePipeline, Gpu, Recorder, Result};
+
+/// Exclusive (`out[i] = x[0] + .. + x[i-1]`) or inclusive (`.. + x[i]`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ScanKind {
+    Exclusive,
+    Inclusive,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct FlagsPush {
+    flags: u32,
+}
+
+/// Prefix sums of u32 (wrapping), in place or out of place.
+pub struct Scan {
+    setup: Setup,
+    reduce: ComputePipeline,
+    block_sums: ComputePipeline,
+    downsweep: ComputePipeline,
+    tuning: Tuning,
+}
+
+impl Scan {
+    pub fn new(gpu: &Gpu, tuning: &Tuning) -> Result<Self> {
+        let spec = [tuning.workgroup_size, tuning.items_per_invocation];
+        Ok(Self {
+            setup: Setup::new(gpu)?,
+            reduce: pipeline(gpu, shaders::PRIMITIVES_SCAN_REDUCE, 3, 4, &spec)?,
+            block_sums: pipeline(
+                gpu,
+                shaders::PRIMITIVES_SCAN_BLOCK_SUMS,
+                2,
+                0,
+                &[tuning.workgroup_size],
+            )?,
+            downsweep: pipeline(gpu, shaders::PRIMITIVES_SCAN_DOWNSWEEP, 4, 4, &spec)?,
+            tuning: *tuning,
+        })
+    }
+
+    fn tiles(&self, max_n: u32) -> u64 {
+        (max_n as u64).div_ceil(self.tuning.tile() as u64).max(1)
+    }
+
+    /// Scratch bytes for scans of up to `max_n` items.
+    pub fn scratch_bytes(&self, max_n: u32) -> u64 {
+        HEADER_BYTES + region(self.tiles(max_n) * 4)
+    }
+
+    /// Records `output[i] = scan(input)[i]` for `i < n`. `input` and `output` may be the
+    /// same buffer. Inputs must be visible to compute reads; ends with a barrier.
+    pub fn record(
+        &self,
+        rec: &mut Recorder,
+        n: u32,
+        input: BufferSlice<'_>,
+        output: BufferSlice<'_>,
+        kind: ScanKind,
+        scratch: &Buffer,
+    ) -> Result<()> {
+        self.record_count(rec, Count::Host(n), input, output, kind, false, scratch, 0)
+    }
+
+    /// As [`Scan::record`], with n read on the GPU from the u32 at byte `count_offset` of
+    /// `count` (clamped to `max_n`, the capacity the scratch was sized for).
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_indirect(
+        &self,
+        rec: &mut Recorder,
+        count: &Buffer,
+        count_offset: u64,
+        max_n: u32,
+        input: BufferSlice<'_>,
+        output: BufferSlice<'_>,
+        kind: ScanKind,
+        scratch: &Buffer,
+    ) -> Result<()> {
+        let count = Count::Gpu {
+            buffer: count,
+            offset: count_offset,
+            max: max_n,
+        };
+        self.record_count(rec, count, input, output, kind, false, scratch, 0)
+    }
+
+    /// Scans with n from `count`; `predicate` scans `(x != 0) as u32` instead of `x`.
+    /// The scratch region starts at byte `base` of `scratch`.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn record_count(
+        &self,
+        rec: &mut Recorder,
+        count: Count<'_>,
+        input: BufferSlice<'_>,
+        output: BufferSlice<'_>,
+        kind: ScanKind,
+        predicate: bool,
+        scratch: &Buffer,
+        base: u64,
+    ) -> Result<()> {
+        self.record_setup(rec, count, 1, scratch, base)?;
+        self.record_passes(
+            rec,
+            input,
+            output,
+            kind,
+            predicate,
+            count.capacity(),
+            scratch,
+            base,
+        )
+    }
+
+    /// Writes the scan's header (n = count × `mul`).
+    pub(crate) fn record_setup(
+        &self,
+        rec: &mut Recorder,
+        count: Count<'_>,
+        mul: u32,
+        scratch: &Buffer,
+        base: u64,
+    ) -> Result<()> {
+        let cap = count
+            .capacity()
+            .saturating_mul(if matches!(count, Count::Host(_)) {
+                1
+            } else {
+                mul
+            });
+        check_scratch("scan", scratch, base, self.scratch_bytes(cap))?;
+        let count = match count {
+            Count::Gpu {
+                buffer,
+                offset,
+                max,
+            } => Count::Gpu {
+                buffer,
+                offset,
+                max: max.saturating_mul(mul),
+            },
+            c => c,
+        };
+        self.setup.record(
+            rec,
+            count,
+            mul,
+            scratch.slice(base, HEADER_BYTES),
+            [self.tuning.tile(), 0, 0, 0],
+            None,
+        )
+    }
+
+    /// The three scan passes, reading n from the header at `base` (already written).
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn record_passes(
+        &self,
+        rec: &mut Recorder,
+        input: BufferSlice<'_>,
+        output: BufferSlice<'_>,
+        kind: ScanKind,
+        predicate: bool,
+        max_n: u32,
+        scratch: &Buffer,
+        base: u64,
+    ) -> Result<()> {
+        let header = scratch.slice(base, HEADER_BYTES);
+        let sums = scratch.slice(base + HEADER_BYTES, region(self.tiles(max_n) * 4));
+        let pred = predicate as u32;
+        rec.dispatch_indirect(
+            &self.reduce,
+            &[header, input, sums],
+            &FlagsPush { flags: pred },
+            scratch,
+            base + args_offset(0),
+        )?;
+        rec.barrier();
+        rec.dispatch(&self.block_sums, &[header, sums], &(), [1, 1, 1])?;
+        rec.barrier();
+        let inclusive = if kind == ScanKind::Inclusive { 2 } else { 0 };
+        rec.dispatch_indirect(
+            &self.downsweep,
+            &[header, input, sums, output],
+            &FlagsPush {
+                flags: pred | inclusive,
+            },
+            scratch,
+            base + args_offset(0),
+        )?;
+        rec.barrier();
+        Ok(())
+    }
+}

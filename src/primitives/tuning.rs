@@ -1,0 +1,128 @@
+//! Per-device choice of algorithm variant and tuning.
+//!
+//! All primitives use the same portable, barrier-light algorithms (no forward progress
+//! between workgroups is ever assumed; no decoupled look-back): each invocation owns a
+//! contiguous run of items and works through it sequentially, and workgroups cooperate
+//! only through a few barriers per tile and through separate dispatches. What changes
+//! per device is the shape, set by specialization constants:
+//!
+//! - **CPU devices (lavapipe/llvmpipe)** — variant `cpu-segments`: a workgroup is one
+//!   SIMD subgroup (`workgroup_size = subgroup_size`, queried, never assumed), each
+//!   invocation owns long runs (64 scan items, 256 sort keys), and the sort uses 8-bit
+//!   digits (4 passes for 32-bit keys). Measured on lavapipe: workgroup barriers between
+//!   several subgroups cost a coroutine switch each, so one-subgroup workgroups with
+//!   long sequential runs win.
+//! - **GPUs** — variant `gpu-wide`: 128-invocation workgroups (at least one subgroup),
+//!   short runs (8 to 16 items) for occupancy, and 4-bit digits so the per-invocation
+//!   counter table (`2^bits × workgroup_size` words) stays small in shared memory.
+//!
+//! Both are checked against the device's shared-memory and workgroup limits.
+
+use serde::Serialize;
+
+use crate::vk::PhysicalDeviceInfo;
+
+/// Shapes of the primitives' kernels (specialization constants).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub struct Tuning {
+    /// Variant name, printed by the benchmark.
+    pub variant: &'static str,
+    /// Workgroup size of the scan, compaction, reduce-by-key and gather kernels.
+    pub workgroup_size: u32,
+    /// Items per invocation of those kernels.
+    pub items_per_invocation: u32,
+    /// Workgroup size of the radix sort's histogram and scatter kernels.
+    pub sort_workgroup_size: u32,
+    /// Keys per invocation in the radix sort.
+    pub sort_keys_per_invocation: u32,
+    /// Digit width of one radix sort pass, in bits (1..=8).
+    pub radix_bits: u32,
+}
+
+impl Tuning {
+    /// The variant for CPU implementations of Vulkan.
+    pub fn cpu(subgroup_size: u32) -> Self {
+        let w = subgroup_size.clamp(4, 64);
+        Self {
+            variant: "cpu-segments",
+            workgroup_size: w,
+            items_per_invocation: 64,
+            sort_workgroup_size: w,
+            sort_keys_per_invocation: 256,
+            radix_bits: 8,
+        }
+    }
+
+    /// The variant for GPUs.
+    pub fn gpu(subgroup_size: u32) -> Self {
+        let w = subgroup_size.max(128).min(1024);
+        Self {
+            variant: "gpu-wide",
+            workgroup_size: w,
+            items_per_invocation: 16,
+            sort_workgroup_size: w,
+            sort_keys_per_invocation: 8,
+            radix_bits: 4,
+        }
+    }
+
+    /// Chooses the variant for a device and fits it to the device's limits.
+    pub fn for_device(info: &PhysicalDeviceInfo) -> Self {
+        let subgroup = info.limits.subgroup_size.max(1);
+        let t = if info.is_cpu() {
+            Self::cpu(subgroup)
+        } else {
+            Self::gpu(subgroup)
+        };
+        t.fit(info)
+    }
+
+    /// Shrinks the shapes until they fit the device's limits.
+    pub fn fit(mut self, info: &PhysicalDeviceInfo) -> Self {
+        let max_inv = info.limits.max_compute_work_group_invocations.max(1);
+        self.workgroup_size = self.workgroup_size.clamp(1, max_inv);
+        self.sort_workgroup_size = self.sort_workgroup_size.clamp(1, max_inv);
+        self.radix_bits = self.radix_bits.clamp(1, 8);
+        self.items_per_invocation = self.items_per_invocation.max(1);
+        self.sort_keys_per_invocation = self.sort_keys_per_invocation.max(1);
+        let shared = info.limits.max_compute_shared_memory_size as u64;
+        while self.sort_shared_bytes() > shared {
+            if self.radix_bits > 4 {
+                self.radix_bits -= 1;
+            } else if self.sort_workgroup_size > 1 {
+                self.sort_workgroup_size /= 2;
+            } else {
+                self.radix_bits -= 1;
+            }
+        }
+        self
+    }
+
+    /// Shared memory of the sort kernels: one counter per digit per invocation.
+    pub fn sort_shared_bytes(&self) -> u64 {
+        (1u64 << self.radix_bits) * self.sort_workgroup_size as u64 * 4
+    }
+
+    /// Items per workgroup of the scan-like kernels.
+    pub fn tile(&self) -> u32 {
+        self.workgroup_size * self.items_per_invocation
+    }
+
+    /// Keys per workgroup of the sort.
+    pub fn sort_tile(&self) -> u32 {
+        self.sort_workgroup_size * self.sort_keys_per_invocation
+    }
+
+    /// One line for logs and benchmark output.
+    pub fn describe(&self) -> String {
+        format!(
+            "{} (workgroup {} x {} items; sort workgroup {} x {} keys, {}-bit digits)",
+            self.variant,
+            self.workgroup_size,
+            self.items_per_invocation,
+            self.sort_workgroup_size,
+            self.sort_keys_per_invocation,
+            self.radix_bits
+        )
+    }
+}

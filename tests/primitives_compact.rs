@@ -1,0 +1,241 @@
+//! Stream compaction, gather and scatter against their CPU twins.
+
+mod common;
+
+use splitray::primitives::compact::Kept;
+use splitray::primitives::gather::Direction;
+use splitray::primitives::{cpu, Compact, Gather, Tuning};
+use splitray::vk::{Gpu, MemoryKind, StreamKind};
+
+const SENTINEL: u32 = 0xDEAD_BEEF;
+
+fn flag_patterns(n: usize) -> Vec<(&'static str, Vec<u32>)> {
+    let r = common::random_u32s(n, n as u64 + 1);
+    vec![
+        ("random", r.iter().map(|x| x & 1).collect()),
+        (
+            "random values as flags",
+            r.iter().map(|x| x & 0x8000_0003).collect(),
+        ),
+        ("none", vec![0; n]),
+        ("all", vec![1; n]),
+        ("sparse", r.iter().map(|x| (x % 1000 == 0) as u32).collect()),
+    ]
+}
+
+/// Compacts on the GPU (directly or with n set on the GPU) and checks both outputs.
+fn check_compact(
+    gpu: &Gpu,
+    compact: &Compact,
+    flags: &[u32],
+    what: &str,
+    indirect_cap: Option<u32>,
+) {
+    let n = flags.len();
+    let values = common::random_u32s(n, 5);
+    let fb = gpu.upload("flags", flags).unwrap();
+    let vb = gpu.upload("values", &values).unwrap();
+    let cap = indirect_cap.unwrap_or(n as u32);
+    let scratch = gpu
+        .create_buffer("scratch", compact.scratch_bytes(cap), MemoryKind::Device)
+        .unwrap();
+    for indices in [false, true] {
+        let out = gpu.upload("out", &vec![SENTINEL; n + 4]).unwrap();
+        let count = gpu.upload("count", &[SENTINEL; 2]).unwrap();
+        let kept = if indices {
+            Kept::Indices
+        } else {
+            Kept::Values((&vb).into())
+        };
+        let mut rec = gpu.recorder(StreamKind::Main).unwrap();
+        match indirect_cap {
+            None => {
+                compact
+                    .record(
+                        &mut rec,
+                        n as u32,
+                        (&fb).into(),
+                        kept,
+                        (&out).into(),
+                        count.slice(0, 4),
+                        &scratch,
+                    )
+                    .unwrap();
+                gpu.wait(&rec.submit(&[]).unwrap()).unwrap();
+            }
+            Some(cap) => {
+                let staging = gpu.upload("n", &[n as u32]).unwrap();
+                let nb = gpu.upload("n-on-gpu", &[0u32; 2]).unwrap();
+                rec.copy(&staging, 0, &nb, 4, 4);
+                rec.barrier();
+                compact
+                    .record_indirect(
+                        &mut rec,
+                        &nb,
+                        4,
+                        cap,
+                        (&fb).into(),
+                        kept,
+                        (&out).into(),
+                        count.slice(0, 4),
+                        &scratch,
+                    )
+                    .unwrap();
+                gpu.wait(&rec.submit(&[]).unwrap()).unwrap();
+            }
+        }
+        let expect = if indices {
+            cpu::compact_indices(flags)
+        } else {
+            cpu::compact(flags, &values)
+        };
+        let c = count.read::<u32>().unwrap();
+        assert_eq!(c[0] as usize, expect.len(), "{what}: count");
+        assert_eq!(c[1], SENTINEL);
+        let o = out.read::<u32>().unwrap();
+        assert!(
+            o[..expect.len()] == expect[..],
+            "{what}: kept items (indices {indices})"
+        );
+        assert!(
+            o[expect.len()..].iter().all(|&x| x == SENTINEL),
+            "{what}: wrote past the count"
+        );
+    }
+}
+
+#[test]
+fn compact_matches_cpu_at_awkward_sizes() {
+    let gpu = common::gpu();
+    let compact = Compact::new(&gpu, &Tuning::for_device(gpu.info())).unwrap();
+    for n in [
+        0usize,
+        1,
+        2,
+        255,
+        256,
+        257,
+        1000,
+        65_537,
+        1_000_003,
+        1 << 22,
+    ] {
+        let flags: Vec<u32> = common::random_u32s(n, n as u64)
+            .iter()
+            .map(|x| x & 1)
+            .collect();
+        check_compact(&gpu, &compact, &flags, &format!("n = {n}"), None);
+    }
+    common::assert_clean(&gpu);
+}
+
+#[test]
+fn compact_adversarial_flags_and_indirect() {
+    let gpu = common::gpu();
+    let compact = Compact::new(&gpu, &Tuning::for_device(gpu.info())).unwrap();
+    for n in [257usize, 1_000_003] {
+        for (name, flags) in flag_patterns(n) {
+            check_compact(&gpu, &compact, &flags, &format!("{name} n = {n}"), None);
+        }
+    }
+    for n in [0usize, 1, 257, 65_537] {
+        let flags: Vec<u32> = common::random_u32s(n, 3).iter().map(|x| x & 1).collect();
+        check_compact(
+            &gpu,
+            &compact,
+            &flags,
+            &format!("indirect n = {n}"),
+            Some(70_000),
+        );
+    }
+    common::assert_clean(&gpu);
+}
+
+#[test]
+fn gather_and_scatter_match_cpu() {
+    let gpu = common::gpu();
+    let gather = Gather::new(&gpu, &Tuning::for_device(gpu.info())).unwrap();
+    let scratch = gpu
+        .create_buffer("scratch", gather.scratch_bytes(0), MemoryKind::Device)
+        .unwrap();
+    for n in [
+        0usize,
+        1,
+        2,
+        255,
+        256,
+        257,
+        1000,
+        65_537,
+        1_000_003,
+        1 << 22,
+    ] {
+        let src = common::random_u32s(n, 1);
+        // A permutation, plus a few out-of-range indices for gather.
+        let r = common::random_u32s(n, 2);
+        let mut perm: Vec<u32> = (0..n as u32).collect();
+        for i in (1..n).rev() {
+            perm.swap(i, r[i] as usize % (i + 1));
+        }
+        let mut wild = perm.clone();
+        for i in (0..n).step_by(97) {
+            wild[i] = n as u32 + (i as u32 % 3);
+        }
+        let sb = gpu.upload("src", &src).unwrap();
+        for (dir, idx) in [(Direction::Gather, &wild), (Direction::Scatter, &perm)] {
+            let ib = gpu.upload("idx", idx).unwrap();
+            let out = gpu.upload("out", &vec![SENTINEL; n]).unwrap();
+            let pad = gpu.upload("pad", &vec![SENTINEL; 4]).unwrap();
+            let mut rec = gpu.recorder(StreamKind::Main).unwrap();
+            gather
+                .record(
+                    &mut rec,
+                    n as u32,
+                    dir,
+                    (&sb).into(),
+                    (&ib).into(),
+                    (&out).into(),
+                    &scratch,
+                )
+                .unwrap();
+            gpu.wait(&rec.submit(&[]).unwrap()).unwrap();
+            let expect = match dir {
+                Direction::Gather => cpu::gather(&src, idx),
+                Direction::Scatter => {
+                    let mut o = vec![SENTINEL; n];
+                    cpu::scatter(&src, idx, &mut o);
+                    o
+                }
+            };
+            assert!(out.read::<u32>().unwrap() == expect, "{dir:?} n = {n}");
+            assert_eq!(pad.read::<u32>().unwrap(), vec![SENTINEL; 4]);
+        }
+    }
+    // Indirect: n from the GPU, larger buffers.
+    let n = 1000u32;
+    let src = common::random_u32s(2000, 4);
+    let idx: Vec<u32> = (0..2000u32).rev().collect();
+    let sb = gpu.upload("src", &src).unwrap();
+    let ib = gpu.upload("idx", &idx).unwrap();
+    let out = gpu.upload("out", &vec![SENTINEL; 2000]).unwrap();
+    let count = gpu.upload("count", &[n]).unwrap();
+    let mut rec = gpu.recorder(StreamKind::Main).unwrap();
+    gather
+        .record_indirect(
+            &mut rec,
+            &count,
+            0,
+            2000,
+            Direction::Gather,
+            (&sb).into(),
+            (&ib).into(),
+            (&out).into(),
+            &scratch,
+        )
+        .unwrap();
+    gpu.wait(&rec.submit(&[]).unwrap()).unwrap();
+    let o = out.read::<u32>().unwrap();
+    assert_eq!(&o[..1000], &cpu::gather(&src, &idx[..1000])[..]);
+    assert!(o[1000..].iter().all(|&x| x == SENTINEL));
+    common::assert_clean(&gpu);
+}

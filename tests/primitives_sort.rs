@@ -1,0 +1,239 @@
+//! Radix sort against a stable CPU sort: awkward sizes, adversarial keys, bit ranges,
+//! stability, keys only, other tunings, and the indirect variant.
+
+mod common;
+
+use splitray::primitives::{cpu, RadixSort, SortScratch, Tuning};
+use splitray::vk::{Gpu, StreamKind};
+
+const SENTINEL: u32 = 0xDEAD_BEEF;
+
+fn patterns(n: usize) -> Vec<(&'static str, Vec<u32>)> {
+    let r = common::random_u32s(n, n as u64 + 11);
+    let mut sorted = r.clone();
+    sorted.sort_unstable();
+    let mut reverse = sorted.clone();
+    reverse.reverse();
+    vec![
+        ("all equal", vec![0x1234_5678; n]),
+        ("sorted", sorted),
+        ("reverse", reverse),
+        (
+            "high bits only",
+            r.iter().map(|k| k & 0xF000_0000).collect(),
+        ),
+        ("low bits only", r.iter().map(|k| k & 0x3).collect()),
+        ("random", r),
+    ]
+}
+
+/// Sorts (keys, index) pairs on the GPU; checks against the CPU twin, that values are
+/// increasing within equal keys (stability), and that nothing past n was touched.
+fn check_sort(
+    gpu: &Gpu,
+    sort: &RadixSort,
+    scratch: &SortScratch,
+    keys: &[u32],
+    bits: std::ops::Range<u32>,
+    what: &str,
+) {
+    let n = keys.len();
+    let values: Vec<u32> = (0..n as u32).collect();
+    let mut kpad = keys.to_vec();
+    kpad.extend([SENTINEL; 5]);
+    let mut vpad = values.clone();
+    vpad.extend([SENTINEL; 5]);
+    let kb = gpu.upload("keys", &kpad).unwrap();
+    let vb = gpu.upload("values", &vpad).unwrap();
+    let mut rec = gpu.recorder(StreamKind::Main).unwrap();
+    sort.record(
+        &mut rec,
+        n as u32,
+        (&kb).into(),
+        Some((&vb).into()),
+        bits.clone(),
+        scratch,
+    )
+    .unwrap();
+    gpu.wait(&rec.submit(&[]).unwrap()).unwrap();
+    let gk = kb.read::<u32>().unwrap();
+    let gv = vb.read::<u32>().unwrap();
+    assert_eq!(&gk[n..], &[SENTINEL; 5], "{what}: keys past n");
+    assert_eq!(&gv[n..], &[SENTINEL; 5], "{what}: values past n");
+    let (ck, cv) = cpu::sort_pairs(keys, &values, bits.clone());
+    assert!(gk[..n] == ck[..], "{what}: keys differ from the CPU twin");
+    for i in 1..n {
+        let (a, b) = (cpu::key_bits(gk[i - 1], &bits), cpu::key_bits(gk[i], &bits));
+        assert!(
+            a < b || (a == b && gv[i - 1] < gv[i]),
+            "{what}: unstable or unsorted at {i}"
+        );
+    }
+    assert!(gv[..n] == cv[..], "{what}: values differ from the CPU twin");
+}
+
+#[test]
+fn sort_matches_cpu_at_awkward_sizes() {
+    let gpu = common::gpu();
+    let tuning = Tuning::for_device(gpu.info());
+    println!("variant: {}", tuning.describe());
+    let sort = RadixSort::new(&gpu, &tuning).unwrap();
+    let scratch = sort.alloc_scratch(&gpu, 1 << 22).unwrap();
+    for n in [
+        0usize,
+        1,
+        2,
+        255,
+        256,
+        257,
+        1000,
+        65_537,
+        1_000_003,
+        1 << 22,
+    ] {
+        let keys = common::random_u32s(n, n as u64);
+        check_sort(
+            &gpu,
+            &sort,
+            &scratch,
+            &keys,
+            0..32,
+            &format!("random n = {n}"),
+        );
+    }
+    common::assert_clean(&gpu);
+}
+
+#[test]
+fn sort_adversarial_keys() {
+    let gpu = common::gpu();
+    let sort = RadixSort::new(&gpu, &Tuning::for_device(gpu.info())).unwrap();
+    let scratch = sort.alloc_scratch(&gpu, 1_000_003).unwrap();
+    for n in [2usize, 257, 65_537, 1_000_003] {
+        for (name, keys) in patterns(n) {
+            check_sort(
+                &gpu,
+                &sort,
+                &scratch,
+                &keys,
+                0..32,
+                &format!("{name} n = {n}"),
+            );
+        }
+    }
+    common::assert_clean(&gpu);
+}
+
+#[test]
+fn sort_bit_ranges() {
+    // PDACRT-style keys: node index in the high bits, a 2-bit code in the low bits; only
+    // the significant bits are sorted. Odd pass counts exercise the copy home; an empty
+    // range is a no-op.
+    let gpu = common::gpu();
+    let sort = RadixSort::new(&gpu, &Tuning::for_device(gpu.info())).unwrap();
+    let scratch = sort.alloc_scratch(&gpu, 100_000).unwrap();
+    let r = common::random_u32s(100_000, 3);
+    let pdacrt: Vec<u32> = r.iter().map(|k| ((k >> 20) << 2) | (k & 3)).collect();
+    check_sort(
+        &gpu,
+        &sort,
+        &scratch,
+        &pdacrt,
+        0..14,
+        "node|code keys, bits 0..14",
+    );
+    check_sort(
+        &gpu,
+        &sort,
+        &scratch,
+        &r,
+        0..24,
+        "random, bits 0..24 (3 passes)",
+    );
+    check_sort(&gpu, &sort, &scratch, &r, 8..20, "random, bits 8..20");
+    check_sort(&gpu, &sort, &scratch, &r, 31..32, "random, top bit");
+    check_sort(&gpu, &sort, &scratch, &r, 5..5, "empty range");
+    common::assert_clean(&gpu);
+}
+
+#[test]
+fn sort_keys_only_and_other_tunings() {
+    let gpu = common::gpu();
+    let base = Tuning::for_device(gpu.info());
+    for (w, k, bits) in [(1, 1, 8), (8, 3, 4), (32, 16, 6), (64, 8, 5)] {
+        let tuning = Tuning {
+            sort_workgroup_size: w,
+            sort_keys_per_invocation: k,
+            radix_bits: bits,
+            ..base
+        }
+        .fit(gpu.info());
+        let sort = RadixSort::new(&gpu, &tuning).unwrap();
+        let scratch = sort.alloc_scratch(&gpu, 70_000).unwrap();
+        for n in [0usize, 1, 1000, 65_537] {
+            let keys = common::random_u32s(n, 4);
+            check_sort(
+                &gpu,
+                &sort,
+                &scratch,
+                &keys,
+                0..32,
+                &format!("{} n = {n}", tuning.describe()),
+            );
+        }
+    }
+    // Keys alone.
+    let sort = RadixSort::new(&gpu, &base).unwrap();
+    let scratch = sort.alloc_scratch(&gpu, 65_537).unwrap();
+    let keys = common::random_u32s(65_537, 8);
+    let kb = gpu.upload("keys", &keys).unwrap();
+    let mut rec = gpu.recorder(StreamKind::Main).unwrap();
+    sort.record(&mut rec, 65_537, (&kb).into(), None, 0..32, &scratch)
+        .unwrap();
+    gpu.wait(&rec.submit(&[]).unwrap()).unwrap();
+    let mut expect = keys.clone();
+    expect.sort_unstable();
+    assert_eq!(kb.read::<u32>().unwrap(), expect);
+    common::assert_clean(&gpu);
+}
+
+#[test]
+fn sort_indirect_reads_n_written_on_the_gpu() {
+    let gpu = common::gpu();
+    let sort = RadixSort::new(&gpu, &Tuning::for_device(gpu.info())).unwrap();
+    let max_n = 70_000u32;
+    let scratch = sort.alloc_scratch(&gpu, max_n).unwrap();
+    let keys = common::random_u32s(max_n as usize, 21);
+    let values: Vec<u32> = (0..max_n).collect();
+    for n in [0u32, 1, 257, 65_537, max_n, max_n + 9] {
+        let staging = gpu.upload("n", &[n]).unwrap();
+        let count = gpu.upload("count", &[0u32; 2]).unwrap();
+        let kb = gpu.upload("keys", &keys).unwrap();
+        let vb = gpu.upload("values", &values).unwrap();
+        let mut rec = gpu.recorder(StreamKind::Main).unwrap();
+        rec.copy(&staging, 0, &count, 4, 4);
+        rec.barrier();
+        sort.record_indirect(
+            &mut rec,
+            &count,
+            4,
+            max_n,
+            (&kb).into(),
+            Some((&vb).into()),
+            0..32,
+            &scratch,
+        )
+        .unwrap();
+        gpu.wait(&rec.submit(&[]).unwrap()).unwrap();
+        let m = n.min(max_n) as usize;
+        let (ck, cv) = cpu::sort_pairs(&keys[..m], &values[..m], 0..32);
+        let gk = kb.read::<u32>().unwrap();
+        let gv = vb.read::<u32>().unwrap();
+        assert!(gk[..m] == ck[..] && gv[..m] == cv[..], "n = {n}");
+        assert!(
+            gk[m..] == keys[m..] && gv[m..] == values[m..],
+            "touched past n = {n}"
+        );
+    }
+    common::assert_clean(&gpu);
+}
