@@ -4,79 +4,8 @@ mod common;
 
 use glam::Vec3;
 use splitray::shaders;
-use splitray::trace::{cpu, BruteForceTracer, GpuTriangle, Hit, Query, Ray, Tracer};
-use splitray::vk::{ComputePipeline, Gpu, PipelineDesc, StreamKind};
-
-/// Uniform floats in [0, 1) from the shared deterministic generator.
-fn uniforms(n: usize, seed: u64) -> Vec<f32> {
-    common::random_u32s(n, seed)
-        .into_iter()
-        .map(|x| (x >> 8) as f32 / (1u32 << 24) as f32)
-        .collect()
-}
-
-/// A soup of `n` triangles in the unit cube, of mixed sizes, a few of them degenerate.
-fn triangle_soup(n: usize, seed: u64) -> Vec<GpuTriangle> {
-    let r = uniforms(n * 10, seed);
-    (0..n)
-        .map(|i| {
-            let c = &r[i * 10..];
-            let centre = Vec3::new(c[0], c[1], c[2]);
-            let size = 0.02 + 0.3 * c[9];
-            let a = centre + size * (Vec3::new(c[3], c[4], c[5]) - 0.5);
-            let b = centre + size * (Vec3::new(c[6], c[7], c[8]) - 0.5);
-            let tri = match i % 97 {
-                0 => [centre, centre, centre],                 // a point
-                1 => [centre, a, centre + 2.0 * (a - centre)], // collinear
-                _ => [centre, a, b],
-            };
-            GpuTriangle::new(tri)
-        })
-        .collect()
-}
-
-fn random_rays(n: usize, seed: u64) -> Vec<Ray> {
-    let r = uniforms(n * 6, seed);
-    (0..n)
-        .map(|i| {
-            let c = &r[i * 6..];
-            let origin = Vec3::new(c[0], c[1], c[2]) * 1.4 - 0.2;
-            let target = Vec3::new(c[3], c[4], c[5]);
-            let dir = (target - origin).try_normalize().unwrap_or(Vec3::X);
-            Ray::new(
-                origin,
-                dir,
-                0.0,
-                if i % 5 == 0 { 0.3 } else { f32::INFINITY },
-            )
-        })
-        .collect()
-}
-
-fn gpu_hits(gpu: &Gpu, tracer: &mut dyn Tracer, rays: &[Ray], query: Query) -> Vec<Hit> {
-    let ray_buf = gpu.upload("rays", rays).unwrap();
-    let hit_buf = gpu.zeroed::<Hit>("hits", rays.len()).unwrap();
-    let done = tracer
-        .trace(&ray_buf, &hit_buf, rays.len() as u32, query, &[])
-        .unwrap();
-    gpu.wait(&done).unwrap();
-    hit_buf.read::<Hit>().unwrap()
-}
-
-fn assert_hits_match(gpu_hits: &[Hit], cpu_hits: &[Hit], what: &str) {
-    assert_eq!(gpu_hits.len(), cpu_hits.len());
-    let mismatches: Vec<_> = gpu_hits
-        .iter()
-        .zip(cpu_hits)
-        .enumerate()
-        .filter(|(_, (g, c))| !cpu::same_hit(g, c, 1e-5, false))
-        .take(5)
-        .collect();
-    assert!(
-        mismatches.is_empty(),
-        "{what}: GPU/CPU hits differ: {mismatches:?}"
-    );
-}
+use splitray::trace::{cpu, BruteForceTracer, GpuTriangle, Hit, Query, Ray};
+use splitray::vk::{ComputePipeline, PipelineDesc, StreamKind};
 
 #[test]
 fn brute_force_matches_cpu_on_random_triangle_soups() {
@@ -88,19 +17,19 @@ fn brute_force_matches_cpu_on_random_triangle_soups() {
         (3, 0, 4),
         (2000, 1, 5),
     ] {
-        let soup = triangle_soup(triangles, seed);
-        let rays = random_rays(rays, seed + 100);
+        let soup = common::triangle_soup(triangles, seed);
+        let rays = common::random_rays(rays, seed + 100);
         let mut tracer = BruteForceTracer::new(&gpu, &soup).unwrap();
-        let hits = gpu_hits(&gpu, &mut tracer, &rays, Query::ClosestHit);
+        let hits = common::trace_hits(&gpu, &mut tracer, &rays, Query::ClosestHit);
         let expected = cpu::closest_hits(&rays, &soup);
-        assert_hits_match(&hits, &expected, &format!("{triangles} triangles"));
+        common::assert_same_hits(&hits, &expected, &format!("{triangles} triangles"));
         if !rays.is_empty() && triangles > 100 {
             assert!(
                 hits.iter().filter(|h| h.is_hit()).count() > rays.len() / 10,
                 "too few hits to be a test"
             );
         }
-        let occ = gpu_hits(&gpu, &mut tracer, &rays, Query::Occlusion);
+        let occ = common::trace_hits(&gpu, &mut tracer, &rays, Query::Occlusion);
         for (i, (h, r)) in occ.iter().zip(&rays).enumerate() {
             assert_eq!(h.is_hit(), cpu::occluded(r, &soup), "occlusion of ray {i}");
         }
@@ -112,8 +41,8 @@ fn brute_force_matches_cpu_on_random_triangle_soups() {
 fn results_do_not_depend_on_batching() {
     use splitray::trace::brute_force::BruteForceTuning;
     let gpu = common::gpu();
-    let soup = triangle_soup(777, 9);
-    let rays = random_rays(3001, 10);
+    let soup = common::triangle_soup(777, 9);
+    let rays = common::random_rays(3001, 10);
     let expected = cpu::closest_hits(&rays, &soup);
     for (workgroup_size, batch) in [(1, 1), (8, 7), (64, 512), (256, 64)] {
         let mut tracer = BruteForceTracer::with_tuning(
@@ -125,8 +54,8 @@ fn results_do_not_depend_on_batching() {
             },
         )
         .unwrap();
-        let hits = gpu_hits(&gpu, &mut tracer, &rays, Query::ClosestHit);
-        assert_hits_match(
+        let hits = common::trace_hits(&gpu, &mut tracer, &rays, Query::ClosestHit);
+        common::assert_same_hits(
             &hits,
             &expected,
             &format!("wg {workgroup_size}, batch {batch}"),
@@ -139,7 +68,7 @@ fn results_do_not_depend_on_batching() {
 fn rust_and_glsl_struct_layouts_agree() {
     let gpu = common::gpu();
     let n = 5usize;
-    let f = uniforms(n * 24, 77);
+    let f = common::uniforms(n * 24, 77);
     let rays: Vec<Ray> = (0..n)
         .map(|i| {
             Ray::new(

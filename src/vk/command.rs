@@ -370,12 +370,21 @@ impl Recorder {
 
     /// Writes a few bytes (at most 64 KiB, a multiple of 4) into a buffer from the
     /// command stream itself (vkCmdUpdateBuffer): no staging, ordered like a transfer.
-    pub fn update<T: bytemuck::Pod>(&mut self, buffer: &Buffer, offset: u64, data: &[T]) -> Result<()> {
+    pub fn update<T: bytemuck::Pod>(
+        &mut self,
+        buffer: &Buffer,
+        offset: u64,
+        data: &[T],
+    ) -> Result<()> {
         let bytes: &[u8] = bytemuck::cast_slice(data);
         if bytes.is_empty() {
             return Ok(());
         }
-        if bytes.len() > 65536 || bytes.len() % 4 != 0 || offset % 4 != 0 || offset + bytes.len() as u64 > buffer.size() {
+        if bytes.len() > 65536
+            || bytes.len() % 4 != 0
+            || offset % 4 != 0
+            || offset + bytes.len() as u64 > buffer.size()
+        {
             return Err(VkError::Usage(format!(
                 "update of {} bytes at {offset} into '{}' ({} bytes): needs ≤ 64 KiB, 4-byte aligned, in range",
                 bytes.len(),
@@ -384,7 +393,10 @@ impl Recorder {
             )));
         }
         // SAFETY: recording; size and alignment checked above.
-        unsafe { self.device().cmd_update_buffer(self.cmd, buffer.raw, offset, bytes) };
+        unsafe {
+            self.device()
+                .cmd_update_buffer(self.cmd, buffer.raw, offset, bytes)
+        };
         Ok(())
     }
 

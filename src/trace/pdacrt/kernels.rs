@@ -125,20 +125,60 @@ impl Kernels {
                 size_of::<FilterTrianglesPush>(),
                 wg,
             )?,
-            filter_rays: make(shaders::TRACE_PDACRT_FILTER_RAYS, 6, size_of::<FilterRaysPush>(), wg)?,
-            child_counts: make(shaders::TRACE_PDACRT_CHILD_COUNTS, 4, size_of::<MaxRunsPush>(), wg)?,
-            children: make(shaders::TRACE_PDACRT_CHILDREN, 5, size_of::<ChildrenPush>(), wg)?,
-            level_summary: make(shaders::TRACE_PDACRT_LEVEL_SUMMARY, 3, size_of::<SummaryPush>(), &[])?,
-            write_nodes: make(shaders::TRACE_PDACRT_WRITE_NODES, 4, size_of::<WriteNodesPush>(), wg)?,
-            scatter: make(shaders::TRACE_PDACRT_SCATTER_ELEMENTS, 7, size_of::<ScatterPush>(), wg)?,
+            filter_rays: make(
+                shaders::TRACE_PDACRT_FILTER_RAYS,
+                6,
+                size_of::<FilterRaysPush>(),
+                wg,
+            )?,
+            child_counts: make(
+                shaders::TRACE_PDACRT_CHILD_COUNTS,
+                4,
+                size_of::<MaxRunsPush>(),
+                wg,
+            )?,
+            children: make(
+                shaders::TRACE_PDACRT_CHILDREN,
+                5,
+                size_of::<ChildrenPush>(),
+                wg,
+            )?,
+            level_summary: make(
+                shaders::TRACE_PDACRT_LEVEL_SUMMARY,
+                3,
+                size_of::<SummaryPush>(),
+                &[],
+            )?,
+            write_nodes: make(
+                shaders::TRACE_PDACRT_WRITE_NODES,
+                4,
+                size_of::<WriteNodesPush>(),
+                wg,
+            )?,
+            scatter: make(
+                shaders::TRACE_PDACRT_SCATTER_ELEMENTS,
+                7,
+                size_of::<ScatterPush>(),
+                wg,
+            )?,
             segmented_intersect: make(
                 shaders::TRACE_PDACRT_SEGMENTED_INTERSECT,
                 7,
                 size_of::<IntersectPush>(),
                 &[intersect_workgroup, batch],
             )?,
-            update_hits: make(shaders::TRACE_PDACRT_UPDATE_HITS, 6, size_of::<MaxRunsPush>(), wg)?,
-            finalize_hits: make(shaders::TRACE_PDACRT_FINALIZE_HITS, 5, size_of::<FinalizePush>(), wg)?,
+            update_hits: make(
+                shaders::TRACE_PDACRT_UPDATE_HITS,
+                6,
+                size_of::<MaxRunsPush>(),
+                wg,
+            )?,
+            finalize_hits: make(
+                shaders::TRACE_PDACRT_FINALIZE_HITS,
+                5,
+                size_of::<FinalizePush>(),
+                wg,
+            )?,
         })
     }
 }

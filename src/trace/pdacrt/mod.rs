@@ -166,6 +166,9 @@ struct TerminalBuffer {
 struct Scratch {
     sort: Option<(u32, SortScratch)>,
     misc: Option<Buffer>,
+    /// Outgrown scratch that submitted work may still read: freed at the next host wait
+    /// (all PDACRT work is in order on one stream, so that wait covers it).
+    retired: Vec<Buffer>,
 }
 
 pub struct PdacrtTracer {
@@ -196,7 +199,11 @@ impl PdacrtTracer {
         Self::with_params(gpu, triangles, PdacrtParams::for_device(gpu))
     }
 
-    pub fn with_params(gpu: &Gpu, triangles: &[GpuTriangle], params: PdacrtParams) -> vk::Result<Self> {
+    pub fn with_params(
+        gpu: &Gpu,
+        triangles: &[GpuTriangle],
+        params: PdacrtParams,
+    ) -> vk::Result<Self> {
         params.validate()?;
         let tuning = Tuning::for_device(gpu.info());
         let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
@@ -209,7 +216,10 @@ impl PdacrtTracer {
         if triangles.is_empty() {
             (lo, hi) = (Vec3::ZERO, Vec3::ZERO);
         }
-        let extent = (hi - lo).max_element().max(lo.abs().max(hi.abs()).max_element()).max(1e-6);
+        let extent = (hi - lo)
+            .max_element()
+            .max(lo.abs().max(hi.abs()).max_element())
+            .max(1e-6);
         Ok(Self {
             gpu: gpu.clone(),
             params,
@@ -247,7 +257,12 @@ impl PdacrtTracer {
     fn sort_scratch(&mut self, n: u32) -> vk::Result<()> {
         if self.scratch.sort.as_ref().is_none_or(|(cap, _)| *cap < n) {
             let cap = n.max(1024).next_power_of_two();
-            self.scratch.sort = Some((cap, self.sort.alloc_scratch(&self.gpu, cap)?));
+            let fresh = self.sort.alloc_scratch(&self.gpu, cap)?;
+            if let Some((_, old)) = self.scratch.sort.replace((cap, fresh)) {
+                self.scratch
+                    .retired
+                    .extend([old.keys, old.values, old.misc]);
+            }
         }
         Ok(())
     }
@@ -260,19 +275,33 @@ impl PdacrtTracer {
             .max(self.gather.scratch_bytes(n));
         if self.scratch.misc.as_ref().is_none_or(|b| b.size() < need) {
             let bytes = need.next_power_of_two();
-            self.scratch.misc = Some(self.gpu.create_buffer("pdacrt-scratch", bytes, MemoryKind::Device)?);
+            let fresh = self
+                .gpu
+                .create_buffer("pdacrt-scratch", bytes, MemoryKind::Device)?;
+            self.scratch
+                .retired
+                .extend(self.scratch.misc.replace(fresh));
         }
         Ok(())
     }
 
-    fn new_terminal_buffer(&mut self, tri_capacity: u32, ray_capacity: u32) -> vk::Result<TerminalBuffer> {
+    fn new_terminal_buffer(
+        &mut self,
+        tri_capacity: u32,
+        ray_capacity: u32,
+    ) -> vk::Result<TerminalBuffer> {
         let segment_capacity = ray_capacity.div_ceil(4).max(1024);
         Ok(TerminalBuffer {
-            tri_ids: self.pool.take("pdacrt-term-tris", tri_capacity as u64 * 4)?,
-            ray_ids: self.pool.take("pdacrt-term-rays", ray_capacity as u64 * 4)?,
-            segments: self
+            tri_ids: self
                 .pool
-                .take("pdacrt-term-segments", segment_capacity as u64 * size_of::<Segment>() as u64)?,
+                .take("pdacrt-term-tris", tri_capacity as u64 * 4)?,
+            ray_ids: self
+                .pool
+                .take("pdacrt-term-rays", ray_capacity as u64 * 4)?,
+            segments: self.pool.take(
+                "pdacrt-term-segments",
+                segment_capacity as u64 * size_of::<Segment>() as u64,
+            )?,
             tri_capacity,
             ray_capacity,
             segment_capacity,
@@ -282,7 +311,15 @@ impl PdacrtTracer {
         })
     }
 
-    fn iota(&self, rec: &mut Recorder, ids: &Buffer, tags: &Buffer, n: u32, base: u32, tag: u32) -> vk::Result<()> {
+    fn iota(
+        &self,
+        rec: &mut Recorder,
+        ids: &Buffer,
+        tags: &Buffer,
+        n: u32,
+        base: u32,
+        tag: u32,
+    ) -> vk::Result<()> {
         rec.dispatch_items(
             &self.kernels.iota,
             &[ids.into(), tags.into()],
@@ -292,7 +329,15 @@ impl PdacrtTracer {
     }
 
     /// Traces rays `offset..offset + n` of `rays` into the same slots of `hits`.
-    fn trace_chunk(&mut self, rays: &Buffer, hits: &Buffer, offset: u32, n: u32, query: Query, chunk: u32) -> vk::Result<()> {
+    fn trace_chunk(
+        &mut self,
+        rays: &Buffer,
+        hits: &Buffer,
+        offset: u32,
+        n: u32,
+        query: Query,
+        chunk: u32,
+    ) -> vk::Result<()> {
         let gpu = self.gpu.clone();
         let best_t = self.pool.take("pdacrt-best-t", n as u64 * 4)?;
         let best_tri = self.pool.take("pdacrt-best-tri", n as u64 * 4)?;
@@ -316,14 +361,24 @@ impl PdacrtTracer {
             None // every ray misses
         } else if tris < p.alpha || n < p.beta {
             if tris > term.tri_capacity || n > term.ray_capacity {
-                let bigger = self.new_terminal_buffer(tris.max(term.tri_capacity), n.max(term.ray_capacity))?;
+                let bigger = self
+                    .new_terminal_buffer(tris.max(term.tri_capacity), n.max(term.ray_capacity))?;
                 let old = std::mem::replace(&mut term, bigger);
                 self.give_terminal(old);
             }
             let seg_tags = self.pool.take("pdacrt-tags", tris.max(n) as u64 * 4)?;
             self.iota(&mut rec, &term.tri_ids, &seg_tags, tris, 0, 0)?;
             self.iota(&mut rec, &term.ray_ids, &seg_tags, n, 0, 0)?;
-            rec.update(&term.segments, 0, &[Segment { tri_start: 0, tri_count: tris, ray_start: 0, ray_count: n }])?;
+            rec.update(
+                &term.segments,
+                0,
+                &[Segment {
+                    tri_start: 0,
+                    tri_count: tris,
+                    ray_start: 0,
+                    ray_count: n,
+                }],
+            )?;
             rec.barrier();
             term.tris = tris;
             term.rays = n;
@@ -352,7 +407,8 @@ impl PdacrtTracer {
         let mut depth = 0u32;
         while let Some(current) = level.take() {
             let started = Instant::now();
-            let (totals, children, offsets, stride) = self.filter_level(&current, rays, &best_t, &best_tri, offset, query, depth)?;
+            let (totals, children, offsets, stride) =
+                self.filter_level(&current, rays, &best_t, &best_tri, offset, query, depth)?;
             self.stats.host_round_trips += 1;
 
             // Algorithm 1 lines 7–10: flush first if this level's terminal nodes would
@@ -370,7 +426,10 @@ impl PdacrtTracer {
                 // One level alone exceeds η: grow the (now empty) buffer to fit it.
                 let bigger = self.new_terminal_buffer(
                     totals.term_tris.max(term.tri_capacity),
-                    totals.term_rays.max(term.ray_capacity).max(totals.term_nodes * 4),
+                    totals
+                        .term_rays
+                        .max(term.ray_capacity)
+                        .max(totals.term_nodes * 4),
                 )?;
                 let old = std::mem::replace(&mut term, bigger);
                 self.give_terminal(old);
@@ -380,13 +439,24 @@ impl PdacrtTracer {
             let next = (totals.next_nodes > 0)
                 .then(|| -> vk::Result<Level> {
                     Ok(Level {
-                        nodes: self.pool.take("pdacrt-nodes", totals.next_nodes as u64 * size_of::<Node>() as u64)?,
+                        nodes: self.pool.take(
+                            "pdacrt-nodes",
+                            totals.next_nodes as u64 * size_of::<Node>() as u64,
+                        )?,
                         node_count: totals.next_nodes,
-                        tri_ids: self.pool.take("pdacrt-tri-ids", totals.next_tris as u64 * 4)?,
-                        tri_keys: self.pool.take("pdacrt-tri-keys", totals.next_tris as u64 * 4)?,
+                        tri_ids: self
+                            .pool
+                            .take("pdacrt-tri-ids", totals.next_tris as u64 * 4)?,
+                        tri_keys: self
+                            .pool
+                            .take("pdacrt-tri-keys", totals.next_tris as u64 * 4)?,
                         tri_total: totals.next_tris,
-                        ray_ids: self.pool.take("pdacrt-ray-ids", totals.next_rays as u64 * 4)?,
-                        ray_keys: self.pool.take("pdacrt-ray-keys", totals.next_rays as u64 * 4)?,
+                        ray_ids: self
+                            .pool
+                            .take("pdacrt-ray-ids", totals.next_rays as u64 * 4)?,
+                        ray_keys: self
+                            .pool
+                            .take("pdacrt-ray-keys", totals.next_rays as u64 * 4)?,
                         ray_total: totals.next_rays,
                     })
                 })
@@ -394,13 +464,19 @@ impl PdacrtTracer {
             let child_count = current.node_count * 2;
             let mut rec = gpu.recorder(StreamKind::Main)?;
             let empty = &term.segments; // bound where a list is empty; never written then
-            let (next_nodes, next_tri_ids, next_tri_keys, next_ray_ids, next_ray_keys) = match &next {
+            let (next_nodes, next_tri_ids, next_tri_keys, next_ray_ids, next_ray_keys) = match &next
+            {
                 Some(l) => (&l.nodes, &l.tri_ids, &l.tri_keys, &l.ray_ids, &l.ray_keys),
                 None => (empty, empty, empty, empty, empty),
             };
             rec.dispatch_items(
                 &self.kernels.write_nodes,
-                &[(&children).into(), (&offsets).into(), next_nodes.into(), (&term.segments).into()],
+                &[
+                    (&children).into(),
+                    (&offsets).into(),
+                    next_nodes.into(),
+                    (&term.segments).into(),
+                ],
                 &WriteNodesPush {
                     child_count,
                     stride,
@@ -411,8 +487,26 @@ impl PdacrtTracer {
                 child_count as u64,
             )?;
             for (rays_list, n_list, keys, ids, next_ids, next_keys, term_ids, term_base) in [
-                (0, current.tri_total, &current.tri_keys, &current.tri_ids, next_tri_ids, next_tri_keys, &term.tri_ids, term.tris),
-                (1, current.ray_total, &current.ray_keys, &current.ray_ids, next_ray_ids, next_ray_keys, &term.ray_ids, term.rays),
+                (
+                    0,
+                    current.tri_total,
+                    &current.tri_keys,
+                    &current.tri_ids,
+                    next_tri_ids,
+                    next_tri_keys,
+                    &term.tri_ids,
+                    term.tris,
+                ),
+                (
+                    1,
+                    current.ray_total,
+                    &current.ray_keys,
+                    &current.ray_ids,
+                    next_ray_ids,
+                    next_ray_keys,
+                    &term.ray_ids,
+                    term.rays,
+                ),
             ] {
                 rec.dispatch_items(
                     &self.kernels.scatter,
@@ -452,7 +546,15 @@ impl PdacrtTracer {
                 ms: started.elapsed().as_secs_f64() * 1e3,
             });
             // Line 16: the current level's lists go back to the pool.
-            for b in [current.nodes, current.tri_ids, current.tri_keys, current.ray_ids, current.ray_keys, children, offsets] {
+            for b in [
+                current.nodes,
+                current.tri_ids,
+                current.tri_keys,
+                current.ray_ids,
+                current.ray_keys,
+                children,
+                offsets,
+            ] {
                 self.pool.give(b);
             }
             level = next;
@@ -466,8 +568,17 @@ impl PdacrtTracer {
         let mut rec = gpu.recorder(StreamKind::Main)?;
         rec.dispatch_items(
             &self.kernels.finalize_hits,
-            &[(&self.triangles).into(), rays.into(), (&best_t).into(), (&best_tri).into(), hits.into()],
-            &FinalizePush { n, ray_offset: offset },
+            &[
+                (&self.triangles).into(),
+                rays.into(),
+                (&best_t).into(),
+                (&best_tri).into(),
+                hits.into(),
+            ],
+            &FinalizePush {
+                n,
+                ray_offset: offset,
+            },
             n as u64,
         )?;
         rec.submit(&[])?;
@@ -507,12 +618,22 @@ impl PdacrtTracer {
         let run_keys = self.pool.take("pdacrt-run-keys", max_list as u64 * 4)?;
         let run_counts = self.pool.take("pdacrt-run-counts", max_list as u64 * 4)?;
         let run_total = self.pool.take("pdacrt-run-total", 4)?;
-        let tri_counts = self.pool.take("pdacrt-tri-counts", level.node_count as u64 * 16)?;
-        let ray_counts = self.pool.take("pdacrt-ray-counts", level.node_count as u64 * 16)?;
-        let children = self.pool.take("pdacrt-children", child_count as u64 * CHILD_BYTES)?;
+        let tri_counts = self
+            .pool
+            .take("pdacrt-tri-counts", level.node_count as u64 * 16)?;
+        let ray_counts = self
+            .pool
+            .take("pdacrt-ray-counts", level.node_count as u64 * 16)?;
+        let children = self
+            .pool
+            .take("pdacrt-children", child_count as u64 * CHILD_BYTES)?;
         let channels = self.pool.take("pdacrt-channels", stride as u64 * 6 * 4)?;
         let offsets = self.pool.take("pdacrt-offsets", stride as u64 * 6 * 4)?;
-        let summary = gpu.create_buffer("pdacrt-level-totals", size_of::<LevelTotals>() as u64, MemoryKind::Readback)?;
+        let summary = gpu.create_buffer(
+            "pdacrt-level-totals",
+            size_of::<LevelTotals>() as u64,
+            MemoryKind::Readback,
+        )?;
         let (_, sort_scratch) = self.scratch.sort.as_ref().unwrap();
         let misc = self.scratch.misc.as_ref().unwrap();
 
@@ -521,8 +642,16 @@ impl PdacrtTracer {
         // Algorithm 2 lines 2–6: status codes.
         rec.dispatch_items(
             &self.kernels.filter_triangles,
-            &[(&self.triangles).into(), (&level.nodes).into(), (&level.tri_ids).into(), (&level.tri_keys).into()],
-            &FilterTrianglesPush { n: level.tri_total, eps: self.eps },
+            &[
+                (&self.triangles).into(),
+                (&level.nodes).into(),
+                (&level.tri_ids).into(),
+                (&level.tri_keys).into(),
+            ],
+            &FilterTrianglesPush {
+                n: level.tri_total,
+                eps: self.eps,
+            },
             level.tri_total as u64,
         )?;
         rec.dispatch_items(
@@ -548,12 +677,29 @@ impl PdacrtTracer {
         rec.barrier();
         let key_bits = 2 + bits_for(level.node_count);
         for (list_n, keys, ids, counts) in [
-            (level.tri_total, &level.tri_keys, &level.tri_ids, &tri_counts),
-            (level.ray_total, &level.ray_keys, &level.ray_ids, &ray_counts),
+            (
+                level.tri_total,
+                &level.tri_keys,
+                &level.tri_ids,
+                &tri_counts,
+            ),
+            (
+                level.ray_total,
+                &level.ray_keys,
+                &level.ray_ids,
+                &ray_counts,
+            ),
         ] {
             // Sort by status key (Figure 4), then count each (node, code) run
             // (Algorithm 2 lines 9–12).
-            self.sort.record(&mut rec, list_n, keys.into(), Some(ids.into()), 0..key_bits, sort_scratch)?;
+            self.sort.record(
+                &mut rec,
+                list_n,
+                keys.into(),
+                Some(ids.into()),
+                0..key_bits,
+                sort_scratch,
+            )?;
             self.reduce.record(
                 &mut rec,
                 list_n,
@@ -569,7 +715,12 @@ impl PdacrtTracer {
             )?;
             rec.dispatch_items(
                 &self.kernels.child_counts,
-                &[(&run_keys).into(), (&run_counts).into(), (&run_total).into(), counts.into()],
+                &[
+                    (&run_keys).into(),
+                    (&run_counts).into(),
+                    (&run_total).into(),
+                    counts.into(),
+                ],
                 &MaxRunsPush { max_runs: list_n },
                 (level.node_count * 4) as u64,
             )?;
@@ -612,14 +763,20 @@ impl PdacrtTracer {
         rec.dispatch(
             &self.kernels.level_summary,
             &[(&channels).into(), (&offsets).into(), (&summary).into()],
-            &SummaryPush { child_count, stride },
+            &SummaryPush {
+                child_count,
+                stride,
+            },
             [1, 1, 1],
         )?;
         rec.end_scope()?;
         let done = rec.submit(&[])?;
         gpu.wait(&done)?;
+        self.scratch.retired.clear();
         let totals = summary.read::<LevelTotals>()?[0];
-        for b in [run_keys, run_counts, run_total, tri_counts, ray_counts, channels] {
+        for b in [
+            run_keys, run_counts, run_total, tri_counts, ray_counts, channels,
+        ] {
             self.pool.give(b);
         }
         Ok((totals, children, offsets, stride))
@@ -681,13 +838,32 @@ impl PdacrtTracer {
         rec.dispatch_items(
             &self.kernels.iota,
             &[(&order).into(), (&sorted_t).into()],
-            &IotaPush { n: entries, base: 0, tag: 0 },
+            &IotaPush {
+                n: entries,
+                base: 0,
+                tag: 0,
+            },
             entries as u64,
         )?;
         rec.barrier();
-        self.sort.record(&mut rec, entries, (&keys).into(), Some((&order).into()), 0..bits_for(chunk_rays), sort_scratch)?;
+        self.sort.record(
+            &mut rec,
+            entries,
+            (&keys).into(),
+            Some((&order).into()),
+            0..bits_for(chunk_rays),
+            sort_scratch,
+        )?;
         for (src, out) in [(&entry_t, &sorted_t), (&entry_tri, &sorted_tri)] {
-            self.gather.record(&mut rec, entries, Direction::Gather, src.into(), (&order).into(), out.into(), misc)?;
+            self.gather.record(
+                &mut rec,
+                entries,
+                Direction::Gather,
+                src.into(),
+                (&order).into(),
+                out.into(),
+                misc,
+            )?;
         }
         self.reduce.record(
             &mut rec,
@@ -722,7 +898,10 @@ impl PdacrtTracer {
         rec.barrier();
         rec.end_scope()?;
         rec.submit(&[])?;
-        for b in [entry_t, entry_tri, keys, order, sorted_t, sorted_tri, run_rays, run_t, run_tri, run_total] {
+        for b in [
+            entry_t, entry_tri, keys, order, sorted_t, sorted_tri, run_rays, run_t, run_tri,
+            run_total,
+        ] {
             self.pool.give(b);
         }
         term.tris = 0;

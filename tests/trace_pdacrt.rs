@@ -1,0 +1,285 @@
+//! PDACRT against the brute-force CPU twin: random soups, the built-in scenes, the
+//! Stanford bunny, adversarial geometry and ray sets, and parameter independence.
+
+mod common;
+
+use glam::Vec3;
+use splitray::scene;
+use splitray::trace::{BruteForceTracer, GpuTriangle, Hit, PdacrtParams, PdacrtTracer, Query, Ray};
+use splitray::vk::Gpu;
+
+/// Small thresholds force deep hierarchies even on small inputs.
+fn deep() -> PdacrtParams {
+    PdacrtParams {
+        alpha: 4,
+        beta: 4,
+        eta: 1 << 12,
+        lambda: 3 << 10,
+        batch: 16,
+        intersect_workgroup: 8,
+        max_rays_per_chunk: 1 << 12,
+        ..PdacrtParams::default()
+    }
+}
+
+/// The GPU brute-force hits: the oracle (itself checked against the CPU twin in
+/// tests/trace_brute_force.rs). The GPU is the reference rather than the CPU because a
+/// ray that runs exactly along an edge shared by two triangles may hit one of them or
+/// slip between them depending on how the compiler fuses multiply-adds; both GPU tracers
+/// share the GLSL test, so they agree bit for bit.
+fn brute_force(gpu: &Gpu, triangles: &[GpuTriangle], rays: &[Ray]) -> Vec<Hit> {
+    let mut oracle = BruteForceTracer::new(gpu, triangles).unwrap();
+    common::trace_hits(gpu, &mut oracle, rays, Query::ClosestHit)
+}
+
+/// PDACRT equals brute force for closest hits, and occlusion agrees with it.
+fn check(gpu: &Gpu, triangles: &[GpuTriangle], rays: &[Ray], params: PdacrtParams, what: &str) {
+    let mut tracer = PdacrtTracer::with_params(gpu, triangles, params).unwrap();
+    let hits = common::trace_hits(gpu, &mut tracer, rays, Query::ClosestHit);
+    let expected = brute_force(gpu, triangles, rays);
+    common::assert_same_hits(&hits, &expected, what);
+    let occluded = common::trace_hits(gpu, &mut tracer, rays, Query::Occlusion);
+    for (i, (o, e)) in occluded.iter().zip(&expected).enumerate() {
+        assert_eq!(o.is_hit(), e.is_hit(), "{what}: occlusion of ray {i}");
+    }
+}
+
+#[test]
+fn random_soups_match_brute_force() {
+    let gpu = common::gpu();
+    for (tris, rays, seed) in [
+        (1usize, 7usize, 1u64),
+        (300, 5000, 2),
+        (2000, 20_000, 3),
+        (5000, 3001, 4),
+    ] {
+        let soup = common::triangle_soup(tris, seed);
+        let rays = common::random_rays(rays, seed + 50);
+        check(
+            &gpu,
+            &soup,
+            &rays,
+            deep(),
+            &format!("{tris} triangles, deep"),
+        );
+        check(
+            &gpu,
+            &soup,
+            &rays,
+            PdacrtParams::for_device(&gpu),
+            &format!("{tris} triangles, defaults"),
+        );
+    }
+    common::assert_clean(&gpu);
+}
+
+#[test]
+fn empty_batches_and_empty_scenes() {
+    let gpu = common::gpu();
+    let soup = common::triangle_soup(100, 9);
+    check(&gpu, &soup, &[], deep(), "no rays");
+    check(
+        &gpu,
+        &[],
+        &common::random_rays(50, 3),
+        deep(),
+        "no triangles",
+    );
+    common::assert_clean(&gpu);
+}
+
+fn camera_rays(scene: &scene::Scene, width: u32, height: u32) -> Vec<Ray> {
+    let frame = scene.camera.frame(width, height);
+    (0..height)
+        .flat_map(|y| (0..width).map(move |x| (x, y)))
+        .map(|(x, y)| {
+            Ray::new(
+                frame.origin,
+                frame.pixel_center_direction(x, y),
+                0.0,
+                f32::INFINITY,
+            )
+        })
+        .collect()
+}
+
+fn scene_triangles(scene: &scene::Scene) -> Vec<GpuTriangle> {
+    scene
+        .triangles
+        .iter()
+        .map(|t| GpuTriangle::new(t.p))
+        .collect()
+}
+
+#[test]
+fn builtin_scenes_match_including_cameras_inside_the_box() {
+    let gpu = common::gpu();
+    for name in ["cornell-box", "fixture"] {
+        let mut s = scene::load(name).unwrap();
+        let tris = scene_triangles(&s);
+        check(&gpu, &tris, &camera_rays(&s, 64, 48), deep(), name);
+        // From the centre of the scene box, looking at a corner.
+        let b = s.bounds();
+        s.camera.position = b.center();
+        s.camera.look_at = b.max;
+        check(
+            &gpu,
+            &tris,
+            &camera_rays(&s, 48, 48),
+            deep(),
+            &format!("{name} from inside"),
+        );
+    }
+    common::assert_clean(&gpu);
+}
+
+#[test]
+fn the_stanford_bunny_matches() {
+    let path = "../shared/meshes/bunny/bunny.obj";
+    if !std::path::Path::new(path).exists() {
+        eprintln!("skipped: {path} not found");
+        return;
+    }
+    let gpu = common::gpu();
+    let s = scene::load(path).unwrap();
+    let tris = scene_triangles(&s);
+    let mut rays = camera_rays(&s, 40, 40);
+    // Secondary-like rays: from points on the surface in random directions.
+    let u = common::uniforms(3000, 77);
+    for k in 0..1000 {
+        let t = &s.triangles[(k * 69) % s.triangles.len()];
+        let p = (t.p[0] + t.p[1] + t.p[2]) / 3.0;
+        let d = Vec3::new(u[3 * k] - 0.5, u[3 * k + 1] - 0.5, u[3 * k + 2] - 0.5).normalize();
+        rays.push(Ray::new(p, d, 1e-5, f32::INFINITY));
+    }
+    check(&gpu, &tris, &rays, PdacrtParams::for_device(&gpu), "bunny");
+    check(
+        &gpu,
+        &tris,
+        &rays,
+        PdacrtParams {
+            alpha: 64,
+            beta: 64,
+            ..PdacrtParams::for_device(&gpu)
+        },
+        "bunny α=β=64",
+    );
+    common::assert_clean(&gpu);
+}
+
+/// A 4×4×4 lattice of unit cells with flat axis-aligned triangles lying exactly in the
+/// planes the midpoint splits pick (x, y, z = 0, 1, 2, 3, 4 in a box of side 4), and
+/// rays parallel to those planes, starting on them, and running inside them.
+#[test]
+fn split_planes_flat_triangles_and_axis_parallel_rays() {
+    let gpu = common::gpu();
+    let mut tris = Vec::new();
+    for a in 0..=4 {
+        for b in 0..4 {
+            for c in 0..4 {
+                let (a, b, c) = (a as f32, b as f32, c as f32);
+                // A triangle in the plane x = a, and its rotations into y = a and z = a.
+                let q = [
+                    Vec3::new(a, b, c),
+                    Vec3::new(a, b + 1.0, c),
+                    Vec3::new(a, b, c + 1.0),
+                ];
+                tris.push(GpuTriangle::new(q));
+                tris.push(GpuTriangle::new(q.map(|p| Vec3::new(p.y, p.x, p.z))));
+                tris.push(GpuTriangle::new(q.map(|p| Vec3::new(p.z, p.y, p.x))));
+            }
+        }
+    }
+    // Zero-area triangles on the planes too.
+    tris.push(GpuTriangle::new([Vec3::splat(2.0); 3]));
+    tris.push(GpuTriangle::new([
+        Vec3::ZERO,
+        Vec3::splat(2.0),
+        Vec3::splat(4.0),
+    ]));
+    let mut rays = Vec::new();
+    let u = common::uniforms(6000, 5);
+    for k in 0..1000 {
+        let o = Vec3::new(u[6 * k], u[6 * k + 1], u[6 * k + 2]) * 4.0;
+        let axis = k % 3;
+        let mut d = Vec3::ZERO;
+        d[axis] = if k % 2 == 0 { 1.0 } else { -1.0 };
+        let mut origin = o;
+        match k % 4 {
+            0 => origin[(axis + 1) % 3] = 2.0, // inside the plane of a split
+            1 => origin[axis] = 2.0,           // starting on a split plane
+            2 => origin = Vec3::new(2.0, 2.0, 2.0) + 0.0 * o, // from the centre corner
+            _ => origin[(axis + 2) % 3] = (o[(axis + 2) % 3]).floor(), // along a lattice plane
+        }
+        rays.push(Ray::new(origin, d, 0.0, f32::INFINITY));
+        // And an oblique ray from outside the box.
+        let target = Vec3::new(u[6 * k + 3], u[6 * k + 4], u[6 * k + 5]) * 4.0;
+        let from = Vec3::new(-1.0, 5.0, -2.0);
+        rays.push(Ray::new(
+            from,
+            (target - from).normalize(),
+            0.0,
+            f32::INFINITY,
+        ));
+    }
+    check(&gpu, &tris, &rays, deep(), "lattice, deep");
+    check(
+        &gpu,
+        &tris,
+        &rays,
+        PdacrtParams {
+            alpha: 16,
+            beta: 16,
+            ..deep()
+        },
+        "lattice, α=β=16",
+    );
+    common::assert_clean(&gpu);
+}
+
+#[test]
+fn results_do_not_depend_on_the_parameters() {
+    let gpu = common::gpu();
+    let soup = common::triangle_soup(3000, 21);
+    let rays = common::random_rays(9000, 22);
+    let expected = brute_force(&gpu, &soup, &rays);
+    let variants = [
+        PdacrtParams::for_device(&gpu),
+        deep(),
+        PdacrtParams {
+            alpha: 1,
+            beta: 1,
+            max_depth: 12,
+            ..deep()
+        },
+        PdacrtParams {
+            eta: 64,
+            lambda: 64,
+            ..deep()
+        }, // flush every level, grow the buffer
+        PdacrtParams {
+            batch: 1,
+            intersect_workgroup: 1,
+            ..deep()
+        },
+        PdacrtParams {
+            batch: 300,
+            intersect_workgroup: 256,
+            ..PdacrtParams::for_device(&gpu)
+        },
+        PdacrtParams {
+            max_rays_per_chunk: 1000,
+            ..deep()
+        }, // chunks of non-power-of-two size
+        PdacrtParams {
+            alpha: 100_000,
+            ..deep()
+        }, // the root is terminal
+    ];
+    for (i, params) in variants.into_iter().enumerate() {
+        let mut tracer = PdacrtTracer::with_params(&gpu, &soup, params).unwrap();
+        let hits = common::trace_hits(&gpu, &mut tracer, &rays, Query::ClosestHit);
+        common::assert_same_hits(&hits, &expected, &format!("variant {i}: {params:?}"));
+    }
+    common::assert_clean(&gpu);
+}
