@@ -1,6 +1,7 @@
 //! Subcommands of the `splitray` binary. Errors surface as `anyhow` only here, at the
 //! edge; the library speaks in typed errors.
 
+mod bench;
 mod info;
 mod render;
 
@@ -27,12 +28,16 @@ pub enum Command {
     Render(render::RenderArgs),
     /// List the built-in scenes (usable as `splitray render NAME`).
     Scenes,
+    /// Measure: `bench primitives` (GPU sort/scan/... vs CPU) or `bench trace SCENE`
+    /// (tracers compared on a ray workload).
+    Bench(bench::BenchArgs),
 }
 
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Info(args) => info::run(&args),
         Command::Render(args) => render::run(&args),
+        Command::Bench(args) => bench::run(&args),
         Command::Scenes => {
             for (name, description) in splitray::scene::builtin_names() {
                 println!("{name:<14} {description}");

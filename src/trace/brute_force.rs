@@ -82,6 +82,13 @@ impl Tracer for BruteForceTracer {
         "brute-force"
     }
 
+    fn set_geometry(&mut self, triangles: &[GpuTriangle]) -> vk::Result<()> {
+        self.gpu.wait_idle()?;
+        self.triangles = self.gpu.upload("triangles", triangles)?;
+        self.triangle_count = triangles.len() as u32;
+        Ok(())
+    }
+
     fn trace(
         &mut self,
         rays: &Buffer,

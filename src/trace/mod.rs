@@ -32,8 +32,14 @@ pub enum Query {
 pub trait Tracer {
     fn name(&self) -> &'static str;
 
+    /// Replaces the triangles, as a dynamic scene does every frame: whatever the tracer
+    /// builds from them (an acceleration structure, or nothing at all for PDACRT) is
+    /// built again. Returns once the new geometry is in place.
+    fn set_geometry(&mut self, triangles: &[GpuTriangle]) -> vk::Result<()>;
+
     /// Traces `ray_count` rays from `rays` into `hits` (one [`Hit`] per ray). The work
-    /// starts after every point in `after` and the returned point marks it done.
+    /// starts after every point in `after` and the returned point marks it done; the
+    /// tracer and the buffers must outlive that point.
     fn trace(
         &mut self,
         rays: &Buffer,
@@ -42,6 +48,11 @@ pub trait Tracer {
         query: Query,
         after: &[&TimelinePoint],
     ) -> vk::Result<TimelinePoint>;
+
+    /// Per-level statistics of the last trace, for tracers that work in levels (PDACRT).
+    fn level_stats(&self) -> Option<&pdacrt::TraceStats> {
+        None
+    }
 }
 
 /// The tracers a user can pick.

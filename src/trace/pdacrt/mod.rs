@@ -190,6 +190,24 @@ pub struct PdacrtTracer {
     stats: TraceStats,
 }
 
+/// The box around the triangles (as the GPU reconstructs their vertices) and the padding
+/// of every box test: 1e-5 of the larger of the scene's extent and its distance from the
+/// origin, well above float rounding of coordinates that size.
+fn scene_box(triangles: &[GpuTriangle]) -> (Vec3, Vec3, f32) {
+    let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+    for t in triangles {
+        for p in [t.v0(), t.v0() + t.e1(), t.v0() + t.e2()] {
+            lo = lo.min(p);
+            hi = hi.max(p);
+        }
+    }
+    if triangles.is_empty() {
+        (lo, hi) = (Vec3::ZERO, Vec3::ZERO);
+    }
+    let extent = (hi - lo).max_element().max(lo.abs().max(hi.abs()).max_element()).max(1e-6);
+    (lo, hi, extent * 1e-5)
+}
+
 fn bits_for(count: u32) -> u32 {
     32 - count.saturating_sub(1).leading_zeros()
 }
@@ -206,20 +224,7 @@ impl PdacrtTracer {
     ) -> vk::Result<Self> {
         params.validate()?;
         let tuning = Tuning::for_device(gpu.info());
-        let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
-        for t in triangles {
-            for p in [t.v0(), t.v0() + t.e1(), t.v0() + t.e2()] {
-                lo = lo.min(p);
-                hi = hi.max(p);
-            }
-        }
-        if triangles.is_empty() {
-            (lo, hi) = (Vec3::ZERO, Vec3::ZERO);
-        }
-        let extent = (hi - lo)
-            .max_element()
-            .max(lo.abs().max(hi.abs()).max_element())
-            .max(1e-6);
+        let (lo, hi, eps) = scene_box(triangles);
         Ok(Self {
             gpu: gpu.clone(),
             params,
@@ -232,7 +237,7 @@ impl PdacrtTracer {
             triangle_count: triangles.len() as u32,
             scene_min: lo,
             scene_max: hi,
-            eps: extent * 1e-5,
+            eps,
             pool: BufferPool::new(gpu),
             scratch: Scratch::default(),
             stats: TraceStats::default(),
@@ -914,6 +919,20 @@ impl PdacrtTracer {
 impl Tracer for PdacrtTracer {
     fn name(&self) -> &'static str {
         "pdacrt"
+    }
+
+    fn level_stats(&self) -> Option<&TraceStats> {
+        Some(&self.stats)
+    }
+
+    /// PDACRT builds nothing: new geometry is an upload and a new scene box.
+    fn set_geometry(&mut self, triangles: &[GpuTriangle]) -> vk::Result<()> {
+        self.gpu.wait_idle()?;
+        let (lo, hi, eps) = scene_box(triangles);
+        self.triangles = self.gpu.upload("pdacrt-triangles", triangles)?;
+        self.triangle_count = triangles.len() as u32;
+        (self.scene_min, self.scene_max, self.eps) = (lo, hi, eps);
+        Ok(())
     }
 
     fn trace(

@@ -1,0 +1,327 @@
+//! `splitray bench trace`: build + trace time per frame for each tracer on one scene and
+//! workload, with Mrays/s, peak GPU memory and ratios between tracers, all measured in
+//! the same run. Every tracer's hits are checked against brute force on a sample of
+//! rays before anything is timed.
+
+use std::fmt;
+use std::io::Write as _;
+use std::path::Path;
+use std::time::Instant;
+
+use serde::Serialize;
+
+use super::workloads::{self, RayBatch, Workload};
+use crate::scene::Scene;
+use crate::trace::{cpu, BruteForceTracer, GpuTriangle, Hit, PdacrtTracer, Query, Ray, Tracer, TracerKind};
+use crate::vk::{self, Buffer, Gpu};
+
+pub type BenchResult<T> = std::result::Result<T, Box<dyn std::error::Error + Send + Sync>>;
+
+#[derive(Clone, Debug)]
+pub struct TraceBenchOptions {
+    pub width: u32,
+    pub height: u32,
+    pub workload: Workload,
+    pub tracers: Vec<TracerKind>,
+    /// Timed frames per tracer (at least 5), after one warm-up frame.
+    pub frames: usize,
+    /// Brute force traces at most this many ray–triangle tests per frame; beyond it, a
+    /// strided subset of the rays is traced and the time extrapolated (marked).
+    pub brute_force_budget: f64,
+    /// Rays per batch checked against brute force before timing.
+    pub verify_rays: usize,
+}
+
+impl Default for TraceBenchOptions {
+    fn default() -> Self {
+        Self {
+            width: 1024,
+            height: 1024,
+            workload: Workload::Primary,
+            tracers: vec![TracerKind::Pdacrt, TracerKind::BruteForce],
+            frames: 5,
+            brute_force_budget: 3e8,
+            verify_rays: 4096,
+        }
+    }
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct TracerRow {
+    pub tracer: String,
+    /// Median build + trace time of a frame, in ms (extrapolated when `subset` < 1).
+    pub frame_ms: f64,
+    pub min_ms: f64,
+    pub max_ms: f64,
+    pub mrays_per_s: f64,
+    /// Peak GPU memory during a frame, rays and hits included.
+    pub peak_gpu_bytes: u64,
+    /// Fraction of the rays actually traced (1 unless extrapolated).
+    pub subset: f64,
+    /// Hits checked against brute force before timing, and how many differed.
+    pub verified_rays: usize,
+    pub mismatches: usize,
+    /// Host round trips per frame (PDACRT's level loop), when the tracer counts them.
+    pub host_round_trips: Option<u32>,
+    pub levels: Option<usize>,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct TraceReport {
+    pub scene: String,
+    pub triangles: usize,
+    pub device: String,
+    pub width: u32,
+    pub height: u32,
+    pub workload: Workload,
+    pub batches: Vec<(String, usize)>,
+    pub rays: usize,
+    pub rows: Vec<TracerRow>,
+    /// PDACRT's per-level statistics of its last frame.
+    pub pdacrt_levels: Vec<crate::trace::pdacrt::LevelStats>,
+    pub date: String,
+}
+
+impl fmt::Display for TraceReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(
+            f,
+            "bench trace: {} ({} triangles), {}x{} {} workload, {} rays in {} batch(es), on {}",
+            self.scene,
+            self.triangles,
+            self.width,
+            self.height,
+            self.workload,
+            self.rays,
+            self.batches.len(),
+            self.device
+        )?;
+        writeln!(
+            f,
+            "{:<12} {:>11} {:>10} {:>10} {:>10} {:>11} {:>9}  {}",
+            "tracer", "frame ms", "min ms", "max ms", "Mrays/s", "peak MiB", "verified", "vs each"
+        )?;
+        for r in &self.rows {
+            let ratios: Vec<String> = self
+                .rows
+                .iter()
+                .filter(|o| o.tracer != r.tracer)
+                .map(|o| format!("{:.2}x {}", o.frame_ms / r.frame_ms, o.tracer))
+                .collect();
+            writeln!(
+                f,
+                "{:<12} {:>11.2} {:>10.2} {:>10.2} {:>10.2} {:>11.1} {:>9}  faster than: {}{}",
+                r.tracer,
+                r.frame_ms,
+                r.min_ms,
+                r.max_ms,
+                r.mrays_per_s,
+                r.peak_gpu_bytes as f64 / (1 << 20) as f64,
+                format!("{}/{}", r.verified_rays - r.mismatches, r.verified_rays),
+                ratios.join(", "),
+                if r.subset < 1.0 {
+                    format!("  [extrapolated from {:.2}% of the rays]", 100.0 * r.subset)
+                } else {
+                    String::new()
+                }
+            )?;
+            if let (Some(trips), Some(levels)) = (r.host_round_trips, r.levels) {
+                writeln!(f, "{:<12} {levels} levels, {trips} host round trips per frame", "")?;
+            }
+        }
+        Ok(())
+    }
+}
+
+struct GpuBatch {
+    rays: Buffer,
+    hits: Buffer,
+    count: u32,
+    query: Query,
+}
+
+fn strided(rays: &[Ray], count: usize) -> Vec<Ray> {
+    if rays.len() <= count {
+        return rays.to_vec();
+    }
+    let step = rays.len() as f64 / count as f64;
+    (0..count).map(|i| rays[(i as f64 * step) as usize]).collect()
+}
+
+fn trace_once(gpu: &Gpu, tracer: &mut dyn Tracer, rays: &[Ray], query: Query) -> vk::Result<Vec<Hit>> {
+    let ray_buf = gpu.upload("bench-rays", rays)?;
+    let hit_buf = gpu.create_buffer("bench-hits", (rays.len() * size_of::<Hit>()) as u64, vk::MemoryKind::Device)?;
+    let done = tracer.trace(&ray_buf, &hit_buf, rays.len() as u32, query, &[])?;
+    gpu.wait(&done)?;
+    hit_buf.read()
+}
+
+/// Runs the benchmark. `dump_hits`: write the primary hits (pixel order) there.
+pub fn run(gpu: &Gpu, scene: &Scene, opts: &TraceBenchOptions, dump_hits: Option<&Path>) -> BenchResult<TraceReport> {
+    let triangles: Vec<GpuTriangle> = scene.triangles.iter().map(|t| GpuTriangle::new(t.p)).collect();
+    let primary = workloads::primary_rays(scene, opts.width, opts.height);
+
+    // The workload's rays, from PDACRT's primary hits (checked below like every tracer).
+    let mut reference = PdacrtTracer::new(gpu, &triangles)?;
+    let primary_hits = trace_once(gpu, &mut reference, &primary, Query::ClosestHit)?;
+    if let Some(path) = dump_hits {
+        write_hits(path, &primary_hits)?;
+    }
+    let mut batches: Vec<RayBatch> = Vec::new();
+    if opts.workload == Workload::Primary {
+        batches.push(RayBatch { label: "primary".into(), rays: primary.clone(), query: Query::ClosestHit });
+    } else {
+        let mut trace = |rays: &[Ray]| trace_once(gpu, &mut reference, rays, Query::ClosestHit).expect("trace bounce");
+        batches = workloads::secondary_batches(opts.workload, scene, &triangles, &primary, &primary_hits, &mut trace);
+    }
+    drop(reference);
+    let total_rays: usize = batches.iter().map(|b| b.rays.len()).sum();
+
+    let gpu_batches: Vec<GpuBatch> = batches
+        .iter()
+        .map(|b| -> vk::Result<GpuBatch> {
+            Ok(GpuBatch {
+                rays: gpu.upload("bench-rays", &b.rays)?,
+                hits: gpu.create_buffer("bench-hits", (b.rays.len().max(1) * size_of::<Hit>()) as u64, vk::MemoryKind::Device)?,
+                count: b.rays.len() as u32,
+                query: b.query,
+            })
+        })
+        .collect::<vk::Result<_>>()?;
+
+    // Brute-force samples for verification (the oracle of every tracer).
+    let mut oracle = BruteForceTracer::new(gpu, &triangles)?;
+    let samples: Vec<(Vec<Ray>, Vec<Hit>, Query)> = batches
+        .iter()
+        .map(|b| -> vk::Result<_> {
+            let rays = strided(&b.rays, opts.verify_rays);
+            let hits = trace_once(gpu, &mut oracle, &rays, b.query)?;
+            Ok((rays, hits, b.query))
+        })
+        .collect::<vk::Result<_>>()?;
+    drop(oracle);
+
+    let mut rows = Vec::new();
+    let mut pdacrt_levels = Vec::new();
+    for &kind in &opts.tracers {
+        let mut tracer = kind.create(gpu, &triangles)?;
+        // Verify before timing.
+        let (mut verified, mut mismatches) = (0, 0);
+        for (rays, want, query) in &samples {
+            let got = trace_once(gpu, tracer.as_mut(), rays, *query)?;
+            verified += rays.len();
+            mismatches += got
+                .iter()
+                .zip(want)
+                .filter(|(g, w)| match query {
+                    Query::ClosestHit => !cpu::same_hit(g, w, 1e-5, true),
+                    Query::Occlusion => g.is_hit() != w.is_hit(),
+                })
+                .count();
+        }
+        if mismatches > 0 {
+            return Err(format!("{}: {mismatches} of {verified} sampled hits differ from brute force; not timing it", kind.name()).into());
+        }
+        // Brute force on a subset when the whole frame would take too long.
+        let tests = triangles.len() as f64 * total_rays as f64;
+        let subset = if kind == TracerKind::BruteForce && tests > opts.brute_force_budget {
+            opts.brute_force_budget / tests
+        } else {
+            1.0
+        };
+        let subset_batches: Vec<GpuBatch>;
+        let timed: &[GpuBatch] = if subset < 1.0 {
+            subset_batches = batches
+                .iter()
+                .map(|b| -> vk::Result<GpuBatch> {
+                    let rays = strided(&b.rays, ((b.rays.len() as f64 * subset).ceil() as usize).max(1));
+                    Ok(GpuBatch {
+                        rays: gpu.upload("bench-rays", &rays)?,
+                        hits: gpu.create_buffer("bench-hits", (rays.len() * size_of::<Hit>()) as u64, vk::MemoryKind::Device)?,
+                        count: rays.len() as u32,
+                        query: b.query,
+                    })
+                })
+                .collect::<vk::Result<_>>()?;
+            &subset_batches
+        } else {
+            &gpu_batches
+        };
+        let traced: usize = timed.iter().map(|b| b.count as usize).sum();
+        let scale = total_rays as f64 / traced.max(1) as f64;
+
+        let mut times = Vec::new();
+        let mut peak = 0;
+        for frame in 0..=opts.frames.max(5) {
+            gpu.wait_idle()?;
+            gpu.reset_peak_memory();
+            let start = Instant::now();
+            tracer.set_geometry(&triangles)?;
+            let mut last = None;
+            for b in timed {
+                last = Some(tracer.trace(&b.rays, &b.hits, b.count, b.query, &[])?);
+            }
+            if let Some(p) = last {
+                gpu.wait(&p)?;
+            }
+            let ms = start.elapsed().as_secs_f64() * 1e3;
+            let _ = gpu.take_profile();
+            if frame > 0 {
+                // Frame 0 warms up: LLVM compiles each kernel at its first dispatch.
+                times.push(ms * scale);
+                peak = peak.max(gpu.memory_bytes().1);
+            }
+            eprint!(".");
+            let _ = std::io::stderr().flush();
+        }
+        eprintln!();
+        times.sort_by(f64::total_cmp);
+        let median = times[times.len() / 2];
+        let stats = tracer.level_stats();
+        let (trips, levels) = (
+            stats.map(|s| s.host_round_trips),
+            stats.map(|s| s.levels.len()),
+        );
+        if let Some(stats) = stats {
+            pdacrt_levels = stats.levels.clone();
+        }
+        rows.push(TracerRow {
+            tracer: kind.name().into(),
+            frame_ms: median,
+            min_ms: times[0],
+            max_ms: *times.last().unwrap(),
+            mrays_per_s: total_rays as f64 / (median * 1e3),
+            peak_gpu_bytes: peak,
+            subset: 1.0 / scale,
+            verified_rays: verified,
+            mismatches,
+            host_round_trips: trips,
+            levels,
+        });
+    }
+    Ok(TraceReport {
+        scene: scene.name.clone(),
+        triangles: triangles.len(),
+        device: crate::render::device_description(gpu),
+        width: opts.width,
+        height: opts.height,
+        workload: opts.workload,
+        batches: batches.iter().map(|b| (b.label.clone(), b.rays.len())).collect(),
+        rays: total_rays,
+        rows,
+        pdacrt_levels,
+        date: super::today(),
+    })
+}
+
+/// Little-endian records of (u32 triangle index in file order or 0xFFFFFFFF, f32 t), in
+/// pixel order, row 0 first.
+fn write_hits(path: &Path, hits: &[Hit]) -> BenchResult<()> {
+    let mut bytes = Vec::with_capacity(hits.len() * 8);
+    for h in hits {
+        bytes.extend_from_slice(&h.triangle.to_le_bytes());
+        bytes.extend_from_slice(&h.t.to_le_bytes());
+    }
+    crate::film::atomic::write_bytes_atomically(path, &bytes)?;
+    Ok(())
+}

@@ -1,0 +1,156 @@
+//! `splitray bench`: measurements, never timed tests. Each verifies its results first.
+
+use std::path::PathBuf;
+
+use anyhow::Context;
+use clap::{Args, Subcommand};
+use splitray::bench::primitives::{self, PrimitivesBenchOptions};
+use splitray::bench::trace::{self, TraceBenchOptions};
+use splitray::bench::workloads::Workload;
+use splitray::trace::TracerKind;
+use splitray::vk::{Gpu, GpuDesc, InstanceDesc};
+
+#[derive(Debug, Args)]
+pub struct BenchArgs {
+    #[command(subcommand)]
+    what: BenchCommand,
+    /// Vulkan device by index or name substring (see `splitray info`).
+    #[arg(long, global = true)]
+    device: Option<String>,
+    /// Run with the validation layer (slower; for checking, not for figures).
+    #[arg(long, global = true)]
+    validation: bool,
+}
+
+#[derive(Debug, Subcommand)]
+enum BenchCommand {
+    /// Scan, radix sort, reduce-by-key, compaction and gather against CPU references.
+    Primitives {
+        /// Items for sort, reduce-by-key, compaction and gather.
+        #[arg(long, default_value_t = 1 << 22)]
+        n: usize,
+        /// Items for the scan and the copy it is compared with.
+        #[arg(long, default_value_t = 1 << 24)]
+        scan_n: usize,
+        /// Timed runs per primitive (at least 5).
+        #[arg(long, default_value_t = 5)]
+        runs: usize,
+        /// Also write the report as JSON.
+        #[arg(long, value_name = "OUT.json")]
+        json: Option<PathBuf>,
+    },
+    /// Build + trace time per frame of each tracer on a scene and ray workload.
+    Trace {
+        /// A built-in scene, a scene .toml or an .obj.
+        scene: String,
+        #[arg(long, default_value_t = 1024)]
+        width: u32,
+        #[arg(long, default_value_t = 1024)]
+        height: u32,
+        /// primary, shadow (one point light), reflection (one mirror bounce), ao (8 rays
+        /// per hit) or path (7 diffuse bounces).
+        #[arg(long, default_value = "primary")]
+        workload: Workload,
+        /// Comma-separated tracers to compare.
+        #[arg(long, value_delimiter = ',', default_value = "pdacrt,brute-force")]
+        tracers: Vec<TracerKind>,
+        /// Timed frames per tracer (at least 5, after a warm-up frame).
+        #[arg(long, default_value_t = 5)]
+        frames: usize,
+        /// Write the primary-ray hits in pixel order as little-endian (u32 triangle, f32 t).
+        #[arg(long, value_name = "FILE")]
+        dump_hits: Option<PathBuf>,
+        /// Print PDACRT's per-level statistics.
+        #[arg(long)]
+        levels: bool,
+        /// Also write the report as JSON.
+        #[arg(long, value_name = "OUT.json")]
+        json: Option<PathBuf>,
+    },
+}
+
+fn write_json<T: serde::Serialize>(path: &Option<PathBuf>, value: &T) -> anyhow::Result<()> {
+    if let Some(path) = path {
+        let bytes = serde_json::to_vec_pretty(value)?;
+        splitray::film::atomic::write_bytes_atomically(path, &bytes)
+            .with_context(|| format!("cannot write {}", path.display()))?;
+    }
+    Ok(())
+}
+
+pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
+    // Load inputs before opening the device, so bad input fails fast.
+    let scene = match &args.what {
+        BenchCommand::Trace { scene, .. } => Some(splitray::scene::load(scene)?),
+        BenchCommand::Primitives { .. } => None,
+    };
+    let gpu = Gpu::new(&GpuDesc {
+        instance: InstanceDesc {
+            validation: args.validation,
+            sync_validation: false,
+        },
+        device: args.device.clone(),
+        ..Default::default()
+    })?;
+    match &args.what {
+        BenchCommand::Primitives { n, scan_n, runs, json } => {
+            let report = primitives::run(
+                &gpu,
+                &PrimitivesBenchOptions {
+                    n: *n,
+                    scan_n: *scan_n,
+                    runs: *runs,
+                    tuning: None,
+                },
+            )
+            .map_err(|e| anyhow::anyhow!("{e}"))?;
+            print!("{report}");
+            write_json(json, &report)?;
+        }
+        BenchCommand::Trace {
+            width,
+            height,
+            workload,
+            tracers,
+            frames,
+            dump_hits,
+            levels,
+            json,
+            ..
+        } => {
+            let scene = scene.expect("loaded above");
+            let report = trace::run(
+                &gpu,
+                &scene,
+                &TraceBenchOptions {
+                    width: *width,
+                    height: *height,
+                    workload: *workload,
+                    tracers: tracers.clone(),
+                    frames: *frames,
+                    ..Default::default()
+                },
+                dump_hits.as_deref(),
+            )
+            .map_err(|e| anyhow::anyhow!("{e}"))?;
+            print!("{report}");
+            if *levels {
+                println!("PDACRT levels (last frame):");
+                println!("{:>5} {:>6} {:>8} {:>10} {:>10} {:>6} {:>9} {:>8}", "chunk", "level", "nodes", "triangles", "rays", "dup", "terminal", "ms");
+                for l in &report.pdacrt_levels {
+                    println!(
+                        "{:>5} {:>6} {:>8} {:>10} {:>10} {:>6.2} {:>9} {:>8.2}{}",
+                        l.chunk, l.level, l.nodes, l.triangles, l.rays, l.ray_duplication, l.terminal_nodes, l.ms,
+                        if l.flushed { "  flush" } else { "" }
+                    );
+                }
+            }
+            write_json(json, &report)?;
+        }
+    }
+    let messages = gpu.validation_messages();
+    if !messages.is_empty() {
+        anyhow::bail!("{} validation message(s) (see the log above)", messages.len());
+    }
+    Ok(())
+}
