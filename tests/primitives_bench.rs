@@ -59,3 +59,81 @@ fn bench_primitives_full() {
         std::fs::write(path, serde_json::to_string_pretty(&report).unwrap()).unwrap();
     }
 }
+
+/// Times the sort and scan under several tunings (the measurements behind
+/// `Tuning::for_device`):
+/// `cargo test --release --test primitives_bench -- --ignored --nocapture tuning_sweep`
+#[test]
+#[ignore = "measurement: run in release with --ignored --nocapture"]
+fn tuning_sweep() {
+    use splitray::bench::primitives::{time_scan, time_sort};
+    use splitray::primitives::Tuning;
+    let gpu = Gpu::new(&GpuDesc {
+        instance: InstanceDesc {
+            validation: false,
+            sync_validation: false,
+        },
+        device: None,
+        placement: StreamPlacement::Spread,
+    })
+    .unwrap();
+    let n: usize = std::env::var("SPLITRAY_SWEEP_N").map_or(1 << 20, |s| s.parse().unwrap());
+    let base = Tuning::for_device(gpu.info());
+    let sg = gpu.info().limits.subgroup_size;
+    println!(
+        "device {}, subgroup {sg}, default {}",
+        gpu.info().name,
+        base.describe()
+    );
+    let sorts: Vec<(u32, u32, u32, bool)> = vec![
+        (sg, 256, 8, false),
+        (sg, 256, 8, true),
+        (sg, 64, 8, false),
+        (sg, 1024, 8, false),
+        (2 * sg, 256, 8, false),
+        (sg, 256, 6, false),
+        (32, 16, 4, false),
+        (128, 8, 4, false),
+    ];
+    for (w, k, bits, rows) in sorts {
+        let t = Tuning {
+            sort_workgroup_size: w,
+            sort_keys_per_invocation: k,
+            radix_bits: bits,
+            sort_rows: rows,
+            ..base
+        }
+        .fit(gpu.info());
+        let ms = time_sort(&gpu, &t, n, 5).unwrap();
+        println!(
+            "sort {n}: {:>9.2} ms {:>7.1} Mkeys/s  {}",
+            ms,
+            n as f64 / ms / 1e3,
+            t.describe()
+        );
+    }
+    for (w, k, rows) in [
+        (sg, 64, true),
+        (sg, 256, true),
+        (sg, 1024, true),
+        (sg, 64, false),
+        (sg, 256, false),
+        (64, 16, false),
+    ] {
+        let t = Tuning {
+            workgroup_size: w,
+            items_per_invocation: k,
+            subgroup_rows: rows,
+            ..base
+        }
+        .fit(gpu.info());
+        let ms = time_scan(&gpu, &t, 4 * n, 5).unwrap();
+        println!(
+            "scan {}: {:>9.2} ms {:>7.1} Mkeys/s  {}",
+            4 * n,
+            ms,
+            4.0 * n as f64 / ms / 1e3,
+            t.describe()
+        );
+    }
+}

@@ -4,6 +4,9 @@
 // shared counters (no atomics); two barriers per tile. The histogram is written
 // digit-major (hist[digit * tiles + tile]) so one exclusive scan gives every
 // (digit, tile) its global offset.
+//! variant rows: ROWS=1
+// The `rows` variant assigns keys to invocations in coalesced rows instead (the
+// histogram does not depend on the assignment); it pairs with sort_scatter_rows.comp.
 #include "grid.glsl"
 #include "prim.glsl"
 layout(constant_id = 1) const uint KEYS = 64;
@@ -25,12 +28,23 @@ void main() {
     for (uint j = lid; j < RADIX * WORKGROUP_SIZE; j += WORKGROUP_SIZE) counts[j] = 0u;
     barrier();
     uint mask = (1u << pc.bits) - 1u;
+#ifdef ROWS
+    uint base = g * WORKGROUP_SIZE * KEYS + lid;
+    for (uint r = 0u; r < KEYS; ++r) {
+        uint i = base + r * WORKGROUP_SIZE;
+        if (i < n) {
+            uint d = (keys[i] >> pc.shift) & mask;
+            counts[d * WORKGROUP_SIZE + lid] += 1u;
+        }
+    }
+#else
     uint begin = min(g * WORKGROUP_SIZE * KEYS + lid * KEYS, n);
     uint end = min(begin + KEYS, n);
     for (uint i = begin; i < end; ++i) {
         uint d = (keys[i] >> pc.shift) & mask;
         counts[d * WORKGROUP_SIZE + lid] += 1u;
     }
+#endif
     barrier();
     for (uint d = lid; d < RADIX; d += WORKGROUP_SIZE) {
         uint s = 0u;

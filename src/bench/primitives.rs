@@ -168,6 +168,9 @@ fn time_gpu(
         let wall = t0.elapsed().as_secs_f64() * 1e3;
         gpu.wait_idle()?;
         let profile = gpu.take_profile();
+        if run == runs && std::env::var_os("SPLITRAY_BENCH_PROFILE").is_some() {
+            eprint!("{}", profile.table());
+        }
         let g: f64 = profile
             .records
             .iter()
@@ -579,4 +582,67 @@ pub fn run(gpu: &Gpu, opts: &PrimitivesBenchOptions) -> BenchResult<PrimitivesRe
         rows,
         targets,
     })
+}
+
+/// Median GPU ms of a full 32-bit key-value sort of `n` random keys with `tuning`
+/// (verified first): the measurement behind [`Tuning::for_device`]'s choices.
+pub fn time_sort(gpu: &Gpu, tuning: &Tuning, n: usize, runs: usize) -> BenchResult<f64> {
+    let n32 = u32::try_from(n)?;
+    let sort = RadixSort::new(gpu, tuning)?;
+    let keys = random_u32s(n, 1);
+    let values: Vec<u32> = (0..n as u32).collect();
+    let kbuf = gpu.upload("sweep-keys", &keys)?;
+    let vbuf = gpu.upload("sweep-values", &values)?;
+    let scratch = sort.alloc_scratch(gpu, n32)?;
+    let record = |rec: &mut Recorder| {
+        sort.record(
+            rec,
+            n32,
+            (&kbuf).into(),
+            Some((&vbuf).into()),
+            0..32,
+            &scratch,
+        )
+    };
+    let mut rec = gpu.recorder(StreamKind::Main)?;
+    record(&mut rec)?;
+    gpu.wait(&rec.submit(&[])?)?;
+    let (ck, cv) = cpu::sort_pairs(&keys, &values, 0..32);
+    check("sweep sort keys", &kbuf.read::<u32>()?, &ck)?;
+    check("sweep sort values", &vbuf.read::<u32>()?, &cv)?;
+    let restore = || -> BenchResult<()> {
+        kbuf.write(&keys)?;
+        vbuf.write(&values)?;
+        Ok(())
+    };
+    Ok(time_gpu(gpu, runs, restore, record)?.0)
+}
+
+/// Median GPU ms of an exclusive scan of `n` u32 with `tuning` (verified first).
+pub fn time_scan(gpu: &Gpu, tuning: &Tuning, n: usize, runs: usize) -> BenchResult<f64> {
+    let n32 = u32::try_from(n)?;
+    let scan = Scan::new(gpu, tuning)?;
+    let data: Vec<u32> = random_u32s(n, 2).iter().map(|x| x & 0xFF).collect();
+    let input = gpu.upload("sweep-scan-in", &data)?;
+    let output = device_buffer(gpu, "sweep-scan-out", n as u64 * 4)?;
+    let scratch = device_buffer(gpu, "sweep-scan-scratch", scan.scratch_bytes(n32))?;
+    let record = |rec: &mut Recorder| {
+        scan.record(
+            rec,
+            n32,
+            (&input).into(),
+            (&output).into(),
+            ScanKind::Exclusive,
+            &scratch,
+        )
+    };
+    let mut rec = gpu.recorder(StreamKind::Main)?;
+    record(&mut rec)?;
+    gpu.wait(&rec.submit(&[])?)?;
+    check(
+        "sweep scan",
+        &output.read::<u32>()?,
+        &cpu::exclusive_scan(&data),
+    )?;
+    Ok(time_gpu(gpu, runs, || Ok(()), record)?.0)
 }

@@ -57,10 +57,24 @@ impl RadixSort {
                 tuning.sort_shared_bytes()
             )));
         }
+        // The row variant needs the workgroup to be exactly one subgroup.
+        let rows =
+            tuning.sort_rows && tuning.sort_workgroup_size == gpu.info().limits.subgroup_size;
+        let (histogram, scatter) = if rows {
+            (
+                shaders::PRIMITIVES_SORT_HISTOGRAM__ROWS,
+                shaders::PRIMITIVES_SORT_SCATTER_ROWS,
+            )
+        } else {
+            (
+                shaders::PRIMITIVES_SORT_HISTOGRAM,
+                shaders::PRIMITIVES_SORT_SCATTER,
+            )
+        };
         Ok(Self {
             setup: Setup::new(gpu)?,
-            histogram: pipeline(gpu, shaders::PRIMITIVES_SORT_HISTOGRAM, 3, 12, &spec)?,
-            scatter: pipeline(gpu, shaders::PRIMITIVES_SORT_SCATTER, 6, 12, &spec)?,
+            histogram: pipeline(gpu, histogram, 3, 12, &spec)?,
+            scatter: pipeline(gpu, scatter, 6, 12, &spec)?,
             copy: pipeline(
                 gpu,
                 shaders::PRIMITIVES_COPY_PAIRS,

@@ -41,9 +41,23 @@ impl Scan {
                 0,
                 &[tuning.workgroup_size],
             )?,
-            downsweep: pipeline(gpu, shaders::PRIMITIVES_SCAN_DOWNSWEEP, 4, 4, &spec)?,
+            downsweep: pipeline(gpu, Self::downsweep_kernel(gpu, tuning), 4, 4, &spec)?,
             tuning: *tuning,
         })
+    }
+
+    /// The subgroup-row kernel where it is valid (see [`Tuning::subgroup_rows`]), else
+    /// per-invocation runs.
+    fn downsweep_kernel(gpu: &Gpu, tuning: &Tuning) -> crate::shaders::Kernel {
+        let info = gpu.info();
+        if tuning.subgroup_rows
+            && info.capabilities.subgroup_arithmetic
+            && tuning.workgroup_size == info.limits.subgroup_size
+        {
+            shaders::PRIMITIVES_SCAN_ROWS
+        } else {
+            shaders::PRIMITIVES_SCAN_DOWNSWEEP
+        }
     }
 
     fn tiles(&self, max_n: u32) -> u64 {

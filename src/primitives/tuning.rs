@@ -37,6 +37,15 @@ pub struct Tuning {
     pub sort_keys_per_invocation: u32,
     /// Digit width of one radix sort pass, in bits (1..=8).
     pub radix_bits: u32,
+    /// Scan rows of one subgroup with `subgroupInclusiveAdd` (coalesced, barrier-free)
+    /// instead of per-invocation runs. Used only where the device has subgroup
+    /// arithmetic and `workgroup_size` equals the subgroup size (checked again when the
+    /// pipelines are made).
+    pub subgroup_rows: bool,
+    /// Sort in coalesced rows of one subgroup (ranks within a row through shared
+    /// memory, ordered by subgroup barriers) instead of per-invocation runs. Used only
+    /// where `sort_workgroup_size` equals the subgroup size.
+    pub sort_rows: bool,
 }
 
 impl Tuning {
@@ -50,6 +59,8 @@ impl Tuning {
             sort_workgroup_size: w,
             sort_keys_per_invocation: 256,
             radix_bits: 8,
+            subgroup_rows: true,
+            sort_rows: false,
         }
     }
 
@@ -63,6 +74,8 @@ impl Tuning {
             sort_workgroup_size: w,
             sort_keys_per_invocation: 8,
             radix_bits: 4,
+            subgroup_rows: false,
+            sort_rows: false,
         }
     }
 
@@ -85,6 +98,9 @@ impl Tuning {
         self.radix_bits = self.radix_bits.clamp(1, 8);
         self.items_per_invocation = self.items_per_invocation.max(1);
         self.sort_keys_per_invocation = self.sort_keys_per_invocation.max(1);
+        self.subgroup_rows &= info.capabilities.subgroup_arithmetic
+            && self.workgroup_size == info.limits.subgroup_size;
+        self.sort_rows &= self.sort_workgroup_size == info.limits.subgroup_size;
         let shared = info.limits.max_compute_shared_memory_size as u64;
         while self.sort_shared_bytes() > shared {
             if self.radix_bits > 4 {
@@ -116,13 +132,23 @@ impl Tuning {
     /// One line for logs and benchmark output.
     pub fn describe(&self) -> String {
         format!(
-            "{} (workgroup {} x {} items; sort workgroup {} x {} keys, {}-bit digits)",
+            "{} (workgroup {} x {} items, {}; sort workgroup {} x {} keys, {}-bit digits, {})",
             self.variant,
             self.workgroup_size,
             self.items_per_invocation,
+            if self.subgroup_rows {
+                "subgroup-row scan"
+            } else {
+                "per-invocation-run scan"
+            },
             self.sort_workgroup_size,
             self.sort_keys_per_invocation,
-            self.radix_bits
+            self.radix_bits,
+            if self.sort_rows {
+                "subgroup-row sort"
+            } else {
+                "per-invocation-run sort"
+            }
         )
     }
 }
