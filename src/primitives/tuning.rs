@@ -66,7 +66,7 @@ impl Tuning {
 
     /// The variant for GPUs.
     pub fn gpu(subgroup_size: u32) -> Self {
-        let w = subgroup_size.max(128).min(1024);
+        let w = subgroup_size.clamp(128, 1024);
         Self {
             variant: "gpu-wide",
             workgroup_size: w,
