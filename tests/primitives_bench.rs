@@ -88,11 +88,9 @@ fn tuning_sweep() {
     let sorts: Vec<(u32, u32, u32, bool)> = vec![
         (sg, 256, 8, false),
         (sg, 256, 8, true),
-        (sg, 64, 8, false),
         (sg, 1024, 8, false),
         (2 * sg, 256, 8, false),
-        (sg, 256, 6, false),
-        (32, 16, 4, false),
+        (4 * sg, 128, 8, false),
         (128, 8, 4, false),
     ];
     for (w, k, bits, rows) in sorts {

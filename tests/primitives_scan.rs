@@ -101,6 +101,8 @@ fn scan_shapes_other_than_the_device_default() {
         (32, 8, false),
         (64, 64, false),
         (sg, 5, true),
+        (sg, 8, true),
+        (sg, 256, true),
         (sg, 64, false),
     ] {
         let tuning = Tuning {

@@ -33,7 +33,7 @@ impl Scan {
         let spec = [tuning.workgroup_size, tuning.items_per_invocation];
         Ok(Self {
             setup: Setup::new(gpu)?,
-            reduce: pipeline(gpu, shaders::PRIMITIVES_SCAN_REDUCE, 3, 4, &spec)?,
+            reduce: pipeline(gpu, Self::reduce_kernel(gpu, tuning), 3, 4, &spec)?,
             block_sums: pipeline(
                 gpu,
                 shaders::PRIMITIVES_SCAN_BLOCK_SUMS,
@@ -46,14 +46,26 @@ impl Scan {
         })
     }
 
-    /// The subgroup-row kernel where it is valid (see [`Tuning::subgroup_rows`]), else
-    /// per-invocation runs.
-    fn downsweep_kernel(gpu: &Gpu, tuning: &Tuning) -> crate::shaders::Kernel {
+    /// Whether the subgroup-row kernels are valid (see [`Tuning::subgroup_rows`]).
+    fn rows(gpu: &Gpu, tuning: &Tuning) -> bool {
         let info = gpu.info();
-        if tuning.subgroup_rows
+        tuning.subgroup_rows
             && info.capabilities.subgroup_arithmetic
             && tuning.workgroup_size == info.limits.subgroup_size
-        {
+            && tuning.items_per_invocation % 4 == 0
+    }
+
+    fn reduce_kernel(gpu: &Gpu, tuning: &Tuning) -> crate::shaders::Kernel {
+        if Self::rows(gpu, tuning) {
+            shaders::PRIMITIVES_SCAN_REDUCE__VEC4
+        } else {
+            shaders::PRIMITIVES_SCAN_REDUCE
+        }
+    }
+
+    /// The subgroup-row kernel where it is valid, else per-invocation runs.
+    fn downsweep_kernel(gpu: &Gpu, tuning: &Tuning) -> crate::shaders::Kernel {
+        if Self::rows(gpu, tuning) {
             shaders::PRIMITIVES_SCAN_ROWS
         } else {
             shaders::PRIMITIVES_SCAN_DOWNSWEEP

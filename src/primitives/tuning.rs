@@ -55,7 +55,7 @@ impl Tuning {
         Self {
             variant: "cpu-segments",
             workgroup_size: w,
-            items_per_invocation: 64,
+            items_per_invocation: 256,
             sort_workgroup_size: w,
             sort_keys_per_invocation: 256,
             radix_bits: 8,
@@ -99,7 +99,8 @@ impl Tuning {
         self.items_per_invocation = self.items_per_invocation.max(1);
         self.sort_keys_per_invocation = self.sort_keys_per_invocation.max(1);
         self.subgroup_rows &= info.capabilities.subgroup_arithmetic
-            && self.workgroup_size == info.limits.subgroup_size;
+            && self.workgroup_size == info.limits.subgroup_size
+            && self.items_per_invocation % 4 == 0;
         self.sort_rows &= self.sort_workgroup_size == info.limits.subgroup_size;
         let shared = info.limits.max_compute_shared_memory_size as u64;
         while self.sort_shared_bytes() > shared {
