@@ -87,10 +87,12 @@ fn tuning_sweep() {
     );
     let sorts: Vec<(u32, u32, u32, bool)> = vec![
         (sg, 256, 8, false),
+        (sg, 4096, 8, false),
+        (sg, 8192, 8, false),
+        (sg, 16384, 8, false),
+        (2 * sg, 4096, 8, false),
         (sg, 256, 8, true),
-        (sg, 1024, 8, false),
-        (2 * sg, 256, 8, false),
-        (4 * sg, 128, 8, false),
+        (sg, 4096, 6, false),
         (128, 8, 4, false),
     ];
     for (w, k, bits, rows) in sorts {
@@ -114,9 +116,8 @@ fn tuning_sweep() {
         (sg, 64, true),
         (sg, 256, true),
         (sg, 1024, true),
-        (sg, 64, false),
         (sg, 256, false),
-        (64, 16, false),
+        (128, 16, false),
     ] {
         let t = Tuning {
             workgroup_size: w,
