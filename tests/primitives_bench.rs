@@ -95,7 +95,8 @@ fn tuning_sweep() {
         (sg, 4096, 6, false),
         (128, 8, 4, false),
     ];
-    for (w, k, bits, rows) in sorts {
+    let only_scan = std::env::var_os("SPLITRAY_SWEEP_SCAN_ONLY").is_some();
+    for (w, k, bits, rows) in sorts.into_iter().filter(|_| !only_scan) {
         let t = Tuning {
             sort_workgroup_size: w,
             sort_keys_per_invocation: k,
@@ -113,10 +114,12 @@ fn tuning_sweep() {
         );
     }
     for (w, k, rows) in [
-        (sg, 64, true),
         (sg, 256, true),
-        (sg, 1024, true),
+        (sg, 64, false),
         (sg, 256, false),
+        (sg, 1024, false),
+        (sg, 4096, false),
+        (2 * sg, 256, false),
         (128, 16, false),
     ] {
         let t = Tuning {

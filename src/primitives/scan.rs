@@ -56,7 +56,7 @@ impl Scan {
     }
 
     fn reduce_kernel(gpu: &Gpu, tuning: &Tuning) -> crate::shaders::Kernel {
-        if Self::rows(gpu, tuning) {
+        if tuning.items_per_invocation % 4 == 0 {
             shaders::PRIMITIVES_SCAN_REDUCE__VEC4
         } else {
             shaders::PRIMITIVES_SCAN_REDUCE
@@ -67,6 +67,8 @@ impl Scan {
     fn downsweep_kernel(gpu: &Gpu, tuning: &Tuning) -> crate::shaders::Kernel {
         if Self::rows(gpu, tuning) {
             shaders::PRIMITIVES_SCAN_ROWS
+        } else if tuning.items_per_invocation % 4 == 0 {
+            shaders::PRIMITIVES_SCAN_DOWNSWEEP__VEC4
         } else {
             shaders::PRIMITIVES_SCAN_DOWNSWEEP
         }
