@@ -33,7 +33,7 @@ impl Scan {
         let spec = [tuning.workgroup_size, tuning.items_per_invocation];
         Ok(Self {
             setup: Setup::new(gpu)?,
-            reduce: pipeline(gpu, Self::reduce_kernel(gpu, tuning), 3, 4, &spec)?,
+            reduce: pipeline(gpu, Self::reduce_kernel(tuning), 3, 4, &spec)?,
             block_sums: pipeline(
                 gpu,
                 shaders::PRIMITIVES_SCAN_BLOCK_SUMS,
@@ -55,7 +55,8 @@ impl Scan {
             && tuning.items_per_invocation % 4 == 0
     }
 
-    fn reduce_kernel(gpu: &Gpu, tuning: &Tuning) -> crate::shaders::Kernel {
+    /// Tile sums read as uvec4s where the runs allow (the tile is the same either way).
+    fn reduce_kernel(tuning: &Tuning) -> crate::shaders::Kernel {
         if tuning.items_per_invocation % 4 == 0 {
             shaders::PRIMITIVES_SCAN_REDUCE__VEC4
         } else {
