@@ -86,13 +86,13 @@ fn tuning_sweep() {
         base.describe()
     );
     let sorts: Vec<(u32, u32, u32, bool)> = vec![
-        (sg, 256, 8, false),
         (sg, 4096, 8, false),
-        (sg, 8192, 8, false),
-        (sg, 16384, 8, false),
-        (2 * sg, 4096, 8, false),
+        (1, 8192, 8, false),
+        (1, 32768, 8, false),
+        (2, 16384, 8, false),
+        (4, 8192, 8, false),
+        (sg, 256, 8, false),
         (sg, 256, 8, true),
-        (sg, 4096, 6, false),
         (128, 8, 4, false),
     ];
     let only_scan = std::env::var_os("SPLITRAY_SWEEP_SCAN_ONLY").is_some();
@@ -113,6 +113,7 @@ fn tuning_sweep() {
             t.describe()
         );
     }
+    let only_sort = std::env::var_os("SPLITRAY_SWEEP_SORT_ONLY").is_some();
     for (w, k, rows) in [
         (sg, 256, true),
         (sg, 64, false),
@@ -121,7 +122,10 @@ fn tuning_sweep() {
         (sg, 4096, false),
         (2 * sg, 256, false),
         (128, 16, false),
-    ] {
+    ]
+    .into_iter()
+    .filter(|_| !only_sort)
+    {
         let t = Tuning {
             workgroup_size: w,
             items_per_invocation: k,
