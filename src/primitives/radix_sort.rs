@@ -202,6 +202,7 @@ impl RadixSort {
         let cap = count.capacity();
         let passes = self.passes(bits.start, bits.end);
         if passes == 0 {
+            rec.barrier();
             return Ok(());
         }
         let misc = &scratch.misc;
