@@ -86,12 +86,11 @@ fn tuning_sweep() {
         base.describe()
     );
     let sorts: Vec<(u32, u32, u32, bool)> = vec![
-        (sg, 4096, 8, false),
-        (1, 8192, 8, false),
-        (1, 32768, 8, false),
-        (2, 16384, 8, false),
-        (4, 8192, 8, false),
         (sg, 256, 8, false),
+        (sg, 1024, 8, false),
+        (sg, 4096, 8, false),
+        (sg, 16384, 8, false),
+        (2 * sg, 2048, 8, false),
         (sg, 256, 8, true),
         (128, 8, 4, false),
     ];

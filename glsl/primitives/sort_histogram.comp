@@ -19,6 +19,9 @@ layout(std430, set = 0, binding = 0) readonly buffer Hdr { uint hdr[]; };
 layout(std430, set = 0, binding = 1) readonly buffer Keys { uint keys[]; };
 layout(std430, set = 0, binding = 1) readonly buffer Keys4 { uvec4 keys4[]; };
 layout(std430, set = 0, binding = 2) writeonly buffer Hist { uint hist[]; };
+// flags bit 1: also store the per-invocation counts (lane_counts[tile][digit][lane]) so
+// the scatter need not count again.
+layout(std430, set = 0, binding = 3) writeonly buffer LaneCounts { uint lane_counts[]; };
 layout(push_constant) uniform Push { uint shift; uint bits; uint flags; } pc;
 
 shared uint counts[RADIX * WORKGROUP_SIZE];
@@ -60,9 +63,14 @@ void main() {
     }
 #endif
     barrier();
+    bool store = (pc.flags & 2u) != 0u;
     for (uint d = lid; d < RADIX; d += WORKGROUP_SIZE) {
         uint s = 0u;
-        for (uint w = 0u; w < WORKGROUP_SIZE; ++w) s += counts[d * WORKGROUP_SIZE + w];
+        for (uint w = 0u; w < WORKGROUP_SIZE; ++w) {
+            uint c = counts[d * WORKGROUP_SIZE + w];
+            if (store) lane_counts[(g * RADIX + d) * WORKGROUP_SIZE + w] = c;
+            s += c;
+        }
         hist[d * tiles + g] = s;
     }
 }

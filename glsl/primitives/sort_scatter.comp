@@ -20,6 +20,8 @@ layout(std430, set = 0, binding = 2) readonly buffer ValsIn4 { uvec4 vals_in4[];
 layout(std430, set = 0, binding = 3) readonly buffer Hist { uint hist[]; };
 layout(std430, set = 0, binding = 4) writeonly buffer KeysOut { uint keys_out[]; };
 layout(std430, set = 0, binding = 5) writeonly buffer ValsOut { uint vals_out[]; };
+// Written by the histogram pass when flags bit 1 is set: then no recount here.
+layout(std430, set = 0, binding = 6) readonly buffer LaneCounts { uint lane_counts[]; };
 layout(push_constant) uniform Push { uint shift; uint bits; uint flags; } pc; // bit 0: values
 
 shared uint counts[RADIX * WORKGROUP_SIZE];
@@ -30,12 +32,20 @@ void main() {
     if (g >= tiles) return;
     uint n = hdr[HDR_N];
     uint lid = gl_LocalInvocationID.x;
-    for (uint j = lid; j < RADIX * WORKGROUP_SIZE; j += WORKGROUP_SIZE) counts[j] = 0u;
-    barrier();
+    bool stored = (pc.flags & 2u) != 0u;
     uint mask = (1u << pc.bits) - 1u;
     uint begin = min(g * WORKGROUP_SIZE * KEYS + lid * KEYS, n);
     uint end = min(begin + KEYS, n);
     uint i = begin;
+    if (stored) {
+        for (uint j = lid; j < RADIX * WORKGROUP_SIZE; j += WORKGROUP_SIZE) {
+            counts[j] = lane_counts[g * RADIX * WORKGROUP_SIZE + j];
+        }
+        i = end; // nothing to recount
+    } else {
+        for (uint j = lid; j < RADIX * WORKGROUP_SIZE; j += WORKGROUP_SIZE) counts[j] = 0u;
+    }
+    barrier();
 #ifdef VEC4
     for (; i + 4u <= end; i += 4u) {
         uvec4 k = keys_in4[i / 4u];

@@ -18,6 +18,7 @@ layout(std430, set = 0, binding = 2) readonly buffer ValsIn { uint vals_in[]; };
 layout(std430, set = 0, binding = 3) readonly buffer Hist { uint hist[]; };
 layout(std430, set = 0, binding = 4) writeonly buffer KeysOut { uint keys_out[]; };
 layout(std430, set = 0, binding = 5) writeonly buffer ValsOut { uint vals_out[]; };
+layout(std430, set = 0, binding = 6) readonly buffer LaneCounts { uint lane_counts[]; }; // unused here
 layout(push_constant) uniform Push { uint shift; uint bits; uint flags; } pc; // bit 0: values
 
 shared uint cnt[RADIX];

@@ -8,16 +8,18 @@
 //!
 //! - **CPU devices (lavapipe/llvmpipe)** — variant `cpu-segments`: a workgroup is one
 //!   SIMD subgroup (`workgroup_size = subgroup_size`, queried, never assumed), each
-//!   invocation owns long runs (256 scan items, 4096 sort keys) read as `uvec4`s, the scan
+//!   invocation owns long runs (256 scan items, 16384 sort keys) read as `uvec4`s, the scan
 //!   runs in coalesced subgroup rows (`subgroupInclusiveAdd`, where the device has
 //!   subgroup arithmetic), and the sort uses 8-bit digits (4 passes for 32-bit keys).
 //!   Measured on lavapipe (Mesa 25, `tuning_sweep` in `tests/primitives_bench.rs`): every
 //!   per-lane buffer or shared-memory access costs about as much as a scalar access, so
 //!   fewer, wider accesses win; the subgroup-row sort (ranks through shared memory and
 //!   subgroup barriers) was 2-3x slower than per-invocation runs and is off; wider
-//!   workgroups and 4- or 6-bit digits were slower too; 4096 keys per invocation beat
-//!   256 by 1.5-3.5x (the per-tile work — clearing, summing and scanning 256 × 8
-//!   shared counters — is amortised over 32768 keys instead of 2048).
+//!   workgroups and 4- or 6-bit digits were slower too; long runs win (4M keys: 16384
+//!   keys per invocation 178 ms, 4096 232 ms, 1024 199 ms, 256 355 ms — the per-tile
+//!   work of clearing, summing and scanning 256 × 8 shared counters is amortised, and
+//!   the histogram of digits by tile that must be scanned shrinks). With 4M keys that
+//!   is still 32 workgroups, enough for lavapipe's threads.
 //! - **GPUs** — variant `gpu-wide`: 128-invocation workgroups (at least one subgroup),
 //!   short runs (8 to 16 items) for occupancy, and 4-bit digits so the per-invocation
 //!   counter table (`2^bits × workgroup_size` words) stays small in shared memory.
@@ -63,7 +65,7 @@ impl Tuning {
             workgroup_size: w,
             items_per_invocation: 256,
             sort_workgroup_size: w,
-            sort_keys_per_invocation: 4096,
+            sort_keys_per_invocation: 16384,
             radix_bits: 8,
             subgroup_rows: true,
             sort_rows: false,
