@@ -115,12 +115,12 @@ fn tuning_sweep() {
     let only_sort = std::env::var_os("SPLITRAY_SWEEP_SORT_ONLY").is_some();
     for (w, k, rows) in [
         (sg, 256, true),
-        (sg, 64, false),
         (sg, 256, false),
-        (sg, 1024, false),
-        (sg, 4096, false),
-        (2 * sg, 256, false),
-        (128, 16, false),
+        (sg, 255, false),
+        (1, 256, false),
+        (1, 1024, false),
+        (1, 4096, false),
+        (2, 1024, false),
     ]
     .into_iter()
     .filter(|_| !only_sort)
