@@ -7,13 +7,32 @@ use splitray::primitives::compact::Kept;
 use splitray::primitives::gather::Direction;
 use splitray::primitives::reduce_by_key::{Reduction, RunOutputs};
 use splitray::primitives::{cpu, Compact, Gather, RadixSort, ReduceByKey, Scan, ScanKind, Tuning};
-use splitray::vk::{MemoryKind, StreamKind, StreamPlacement};
+use splitray::vk::{Gpu, MemoryKind, StreamKind, StreamPlacement};
 
 #[test]
 fn primitives_are_hazard_free_under_synchronization_validation() {
     let gpu = common::gpu_with(StreamPlacement::Spread, true);
     let tuning = Tuning::for_device(gpu.info());
-    let n = 5000usize;
+    println!("variant: {}", tuning.describe());
+    chain(&gpu, &tuning, 5000);
+    common::assert_clean(&gpu);
+}
+
+/// The variant meant for discrete GPUs, run here too so that it is at least correct
+/// (and hazard-free) wherever the tests run.
+#[test]
+fn gpu_variant_is_correct_and_hazard_free() {
+    let gpu = common::gpu_with(StreamPlacement::Spread, true);
+    let tuning = Tuning::gpu(gpu.info().limits.subgroup_size).fit(gpu.info());
+    println!("variant: {}", tuning.describe());
+    for n in [1, 5000, 70_001] {
+        chain(&gpu, &tuning, n);
+    }
+    common::assert_clean(&gpu);
+}
+
+fn chain(gpu: &Gpu, tuning: &Tuning, n: usize) {
+    let tuning = *tuning;
     let keys = common::random_u32s(n, 1);
     let values: Vec<u32> = (0..n as u32).collect();
     let kb = gpu.upload("keys", &keys).unwrap();
@@ -21,12 +40,12 @@ fn primitives_are_hazard_free_under_synchronization_validation() {
     let count = gpu.upload("count", &[n as u32]).unwrap();
     let dev = |name: &str, bytes: u64| gpu.create_buffer(name, bytes, MemoryKind::Device).unwrap();
 
-    let sort = RadixSort::new(&gpu, &tuning).unwrap();
-    let scan = Scan::new(&gpu, &tuning).unwrap();
-    let rbk = ReduceByKey::new(&gpu, &tuning).unwrap();
-    let compact = Compact::new(&gpu, &tuning).unwrap();
-    let gather = Gather::new(&gpu, &tuning).unwrap();
-    let sort_scratch = sort.alloc_scratch(&gpu, n as u32).unwrap();
+    let sort = RadixSort::new(gpu, &tuning).unwrap();
+    let scan = Scan::new(gpu, &tuning).unwrap();
+    let rbk = ReduceByKey::new(gpu, &tuning).unwrap();
+    let compact = Compact::new(gpu, &tuning).unwrap();
+    let gather = Gather::new(gpu, &tuning).unwrap();
+    let sort_scratch = sort.alloc_scratch(gpu, n as u32).unwrap();
     let scan_out = dev("scan-out", n as u64 * 4);
     let scan_scratch = dev("scan-scratch", scan.scratch_bytes(n as u32));
     let (ok, oa, ob, oc) = (
@@ -83,12 +102,13 @@ fn primitives_are_hazard_free_under_synchronization_validation() {
         &rbk_scratch,
     )
     .unwrap();
-    rec.copy(&oa, 0, &flags, 0, 8 * 4);
+    let m = n.min(8);
+    rec.copy(&oa, 0, &flags, 0, m as u64 * 4);
     rec.barrier();
     compact
         .record(
             &mut rec,
-            8,
+            m as u32,
             (&flags).into(),
             Kept::Indices,
             (&kept).into(),
@@ -117,10 +137,9 @@ fn primitives_are_hazard_free_under_synchronization_validation() {
     let runs = oc.read::<u32>().unwrap()[0] as usize;
     assert_eq!(&ok.read::<u32>().unwrap()[..runs], &rk[..]);
     assert_eq!(&oa.read::<u32>().unwrap()[..runs], &rc[..]);
-    let counts8: Vec<u32> = oa.read::<u32>().unwrap()[..8].to_vec();
+    let counts8: Vec<u32> = oa.read::<u32>().unwrap()[..m].to_vec();
     let expect = cpu::compact_indices(&counts8);
     assert_eq!(kept_count.read::<u32>().unwrap()[0] as usize, expect.len());
     assert_eq!(&kept.read::<u32>().unwrap()[..expect.len()], &expect[..]);
     assert_eq!(gathered.read::<u32>().unwrap(), cpu::gather(&ck, &cv));
-    common::assert_clean(&gpu);
 }
