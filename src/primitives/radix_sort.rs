@@ -78,6 +78,13 @@ impl RadixSort {
                 shaders::PRIMITIVES_SORT_SCATTER,
             )
         };
+        log::info!(
+            "radix sort on {}: {} — kernels {} + {}",
+            gpu.info().name,
+            tuning.describe(),
+            histogram.name,
+            scatter.name
+        );
         Ok(Self {
             setup: Setup::new(gpu)?,
             histogram: pipeline(gpu, histogram, 4, 12, &spec)?,

@@ -31,6 +31,13 @@ pub struct Scan {
 impl Scan {
     pub fn new(gpu: &Gpu, tuning: &Tuning) -> Result<Self> {
         let spec = [tuning.workgroup_size, tuning.items_per_invocation];
+        log::debug!(
+            "scan on {}: {} — kernels {} + {}",
+            gpu.info().name,
+            tuning.describe(),
+            Self::reduce_kernel(tuning).name,
+            Self::downsweep_kernel(gpu, tuning).name
+        );
         Ok(Self {
             setup: Setup::new(gpu)?,
             reduce: pipeline(gpu, Self::reduce_kernel(tuning), 3, 4, &spec)?,
