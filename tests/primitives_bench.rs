@@ -59,3 +59,86 @@ fn bench_primitives_full() {
         std::fs::write(path, serde_json::to_string_pretty(&report).unwrap()).unwrap();
     }
 }
+
+/// Times the sort and scan under several tunings (the measurements behind
+/// `Tuning::for_device`):
+/// `cargo test --release --test primitives_bench -- --ignored --nocapture tuning_sweep`
+#[test]
+#[ignore = "measurement: run in release with --ignored --nocapture"]
+fn tuning_sweep() {
+    use splitray::bench::primitives::{time_scan, time_sort};
+    use splitray::primitives::Tuning;
+    let gpu = Gpu::new(&GpuDesc {
+        instance: InstanceDesc {
+            validation: false,
+            sync_validation: false,
+        },
+        device: None,
+        placement: StreamPlacement::Spread,
+    })
+    .unwrap();
+    let n: usize = std::env::var("SPLITRAY_SWEEP_N").map_or(1 << 20, |s| s.parse().unwrap());
+    let base = Tuning::for_device(gpu.info());
+    let sg = gpu.info().limits.subgroup_size;
+    println!(
+        "device {}, subgroup {sg}, default {}",
+        gpu.info().name,
+        base.describe()
+    );
+    let sorts: Vec<(u32, u32, u32, bool)> = vec![
+        (sg, 256, 8, false),
+        (sg, 1024, 8, false),
+        (sg, 4096, 8, false),
+        (sg, 16384, 8, false),
+        (2 * sg, 2048, 8, false),
+        (sg, 256, 8, true),
+        (128, 8, 4, false),
+    ];
+    let only_scan = std::env::var_os("SPLITRAY_SWEEP_SCAN_ONLY").is_some();
+    for (w, k, bits, rows) in sorts.into_iter().filter(|_| !only_scan) {
+        let t = Tuning {
+            sort_workgroup_size: w,
+            sort_keys_per_invocation: k,
+            radix_bits: bits,
+            sort_rows: rows,
+            ..base
+        }
+        .fit(gpu.info());
+        let ms = time_sort(&gpu, &t, n, 5).unwrap();
+        println!(
+            "sort {n}: {:>9.2} ms {:>7.1} Mkeys/s  {}",
+            ms,
+            n as f64 / ms / 1e3,
+            t.describe()
+        );
+    }
+    let only_sort = std::env::var_os("SPLITRAY_SWEEP_SORT_ONLY").is_some();
+    for (w, k, rows) in [
+        (sg, 256, true),
+        (sg, 256, false),
+        (sg, 255, false),
+        (1, 256, false),
+        (1, 1024, false),
+        (1, 4096, false),
+        (2, 1024, false),
+    ]
+    .into_iter()
+    .filter(|_| !only_sort)
+    {
+        let t = Tuning {
+            workgroup_size: w,
+            items_per_invocation: k,
+            subgroup_rows: rows,
+            ..base
+        }
+        .fit(gpu.info());
+        let ms = time_scan(&gpu, &t, 4 * n, 5).unwrap();
+        println!(
+            "scan {}: {:>9.2} ms {:>7.1} Mkeys/s  {}",
+            4 * n,
+            ms,
+            4.0 * n as f64 / ms / 1e3,
+            t.describe()
+        );
+    }
+}

@@ -94,10 +94,21 @@ fn scan_adversarial_inputs_and_in_place() {
 fn scan_shapes_other_than_the_device_default() {
     // Small and large tiles: one workgroup, many, and tile sums longer than a workgroup.
     let gpu = common::gpu();
-    for (w, k) in [(1, 1), (4, 3), (32, 8), (64, 64)] {
+    let sg = gpu.info().limits.subgroup_size;
+    for (w, k, rows) in [
+        (1, 1, false),
+        (4, 3, false),
+        (32, 8, false),
+        (64, 64, false),
+        (sg, 5, true),
+        (sg, 8, true),
+        (sg, 256, true),
+        (sg, 64, false),
+    ] {
         let tuning = Tuning {
             workgroup_size: w,
             items_per_invocation: k,
+            subgroup_rows: rows,
             ..Tuning::for_device(gpu.info())
         };
         let scan = Scan::new(&gpu, &tuning).unwrap();
@@ -107,7 +118,7 @@ fn scan_shapes_other_than_the_device_default() {
             assert_eq!(
                 run_scan(&gpu, &scan, &data, kind, false),
                 expected(&data, kind),
-                "w {w} k {k} n {n}"
+                "w {w} k {k} rows {rows} n {n}"
             );
         }
     }

@@ -160,11 +160,20 @@ fn sort_bit_ranges() {
 fn sort_keys_only_and_other_tunings() {
     let gpu = common::gpu();
     let base = Tuning::for_device(gpu.info());
-    for (w, k, bits) in [(1, 1, 8), (8, 3, 4), (32, 16, 6), (64, 8, 5)] {
+    let sg = gpu.info().limits.subgroup_size;
+    for (w, k, bits, rows) in [
+        (1, 1, 8, false),
+        (8, 3, 4, false),
+        (32, 16, 6, false),
+        (64, 8, 5, false),
+        (sg, 7, 8, true),
+        (sg, 256, 8, false),
+    ] {
         let tuning = Tuning {
             sort_workgroup_size: w,
             sort_keys_per_invocation: k,
             radix_bits: bits,
+            sort_rows: rows,
             ..base
         }
         .fit(gpu.info());

@@ -2,13 +2,17 @@
 // Scan, pass 3: each invocation owns ITEMS contiguous inputs of the tile; it sums them,
 // the workgroup scans the per-invocation sums (two barriers), and each invocation then
 // writes its run starting from the tile's offset. In place (in == out) is allowed.
+//! variant vec4: VEC4=1
+// The vec4 variant (ITEMS a multiple of 4) reads and writes each run as uvec4s.
 #include "grid.glsl"
 #include "prim.glsl"
 layout(constant_id = 1) const uint ITEMS = 16;
 layout(std430, set = 0, binding = 0) readonly buffer Hdr { uint hdr[]; };
 layout(std430, set = 0, binding = 1) buffer In { uint data[]; };
+layout(std430, set = 0, binding = 1) buffer In4 { uvec4 data4[]; };
 layout(std430, set = 0, binding = 2) readonly buffer Sums { uint sums[]; };
 layout(std430, set = 0, binding = 3) buffer Out { uint outv[]; };
+layout(std430, set = 0, binding = 3) buffer Out4 { uvec4 outv4[]; };
 layout(push_constant) uniform Push { uint flags; } pc; // bit 0: scan (x != 0); bit 1: inclusive
 
 shared uint part[WORKGROUP_SIZE];
@@ -23,7 +27,15 @@ void main() {
     bool pred = (pc.flags & 1u) != 0u;
     bool inclusive = (pc.flags & 2u) != 0u;
     uint s = 0u;
-    for (uint i = begin; i < end; ++i) {
+    uint i = begin;
+#ifdef VEC4
+    for (; i + 4u <= end; i += 4u) {
+        uvec4 v = data4[i / 4u];
+        if (pred) v = uvec4(notEqual(v, uvec4(0u)));
+        s += v.x + v.y + v.z + v.w;
+    }
+#endif
+    for (; i < end; ++i) {
         uint v = data[i];
         s += pred ? uint(v != 0u) : v;
     }
@@ -39,7 +51,24 @@ void main() {
     }
     barrier();
     uint run = part[lid];
-    for (uint i = begin; i < end; ++i) {
+    i = begin;
+#ifdef VEC4
+    for (; i + 4u <= end; i += 4u) {
+        uvec4 v = data4[i / 4u];
+        if (pred) v = uvec4(notEqual(v, uvec4(0u)));
+        uvec4 o;
+        o.x = run + (inclusive ? v.x : 0u);
+        run += v.x;
+        o.y = run + (inclusive ? v.y : 0u);
+        run += v.y;
+        o.z = run + (inclusive ? v.z : 0u);
+        run += v.z;
+        o.w = run + (inclusive ? v.w : 0u);
+        run += v.w;
+        outv4[i / 4u] = o;
+    }
+#endif
+    for (; i < end; ++i) {
         uint v = data[i];
         v = pred ? uint(v != 0u) : v;
         if (inclusive) {

@@ -168,6 +168,9 @@ fn time_gpu(
         let wall = t0.elapsed().as_secs_f64() * 1e3;
         gpu.wait_idle()?;
         let profile = gpu.take_profile();
+        if run == runs && std::env::var_os("SPLITRAY_BENCH_PROFILE").is_some() {
+            eprint!("{}", profile.table());
+        }
         let g: f64 = profile
             .records
             .iter()
@@ -180,6 +183,21 @@ fn time_gpu(
         }
     }
     Ok((median(gpu_ms), median(wall_ms)))
+}
+
+/// As [`time_gpu`], the minimum GPU time instead of the median.
+fn time_gpu_min(
+    gpu: &Gpu,
+    runs: usize,
+    before: impl FnMut() -> BenchResult<()>,
+    record: impl Fn(&mut Recorder) -> crate::vk::Result<()>,
+) -> BenchResult<f64> {
+    let mut best = f64::INFINITY;
+    let mut before = before;
+    for _ in 0..runs {
+        best = best.min(time_gpu(gpu, 1, &mut before, &record)?.0);
+    }
+    Ok(best)
 }
 
 fn check<T: PartialEq + fmt::Debug>(what: &str, gpu: &[T], cpu: &[T]) -> BenchResult<()> {
@@ -404,7 +422,7 @@ pub fn run(gpu: &Gpu, opts: &PrimitivesBenchOptions) -> BenchResult<PrimitivesRe
     let mut k = 0u32;
     while rkeys.len() < n {
         let len = (lens[rkeys.len()] % 16 + 1) as usize;
-        rkeys.extend(std::iter::repeat_n(k, len.min(n - rkeys.len())));
+        rkeys.extend(std::iter::repeat(k).take(len.min(n - rkeys.len())));
         k += 1;
     }
     let rvals = random_u32s(n, 4);
@@ -579,4 +597,69 @@ pub fn run(gpu: &Gpu, opts: &PrimitivesBenchOptions) -> BenchResult<PrimitivesRe
         rows,
         targets,
     })
+}
+
+/// Minimum over `runs` of the GPU ms (less sensitive than the median to other load on a
+/// shared machine) of a full 32-bit key-value sort of `n` random keys with `tuning`
+/// (verified first): the measurement behind [`Tuning::for_device`]'s choices.
+pub fn time_sort(gpu: &Gpu, tuning: &Tuning, n: usize, runs: usize) -> BenchResult<f64> {
+    let n32 = u32::try_from(n)?;
+    let sort = RadixSort::new(gpu, tuning)?;
+    let keys = random_u32s(n, 1);
+    let values: Vec<u32> = (0..n as u32).collect();
+    let kbuf = gpu.upload("sweep-keys", &keys)?;
+    let vbuf = gpu.upload("sweep-values", &values)?;
+    let scratch = sort.alloc_scratch(gpu, n32)?;
+    let record = |rec: &mut Recorder| {
+        sort.record(
+            rec,
+            n32,
+            (&kbuf).into(),
+            Some((&vbuf).into()),
+            0..32,
+            &scratch,
+        )
+    };
+    let mut rec = gpu.recorder(StreamKind::Main)?;
+    record(&mut rec)?;
+    gpu.wait(&rec.submit(&[])?)?;
+    let (ck, cv) = cpu::sort_pairs(&keys, &values, 0..32);
+    check("sweep sort keys", &kbuf.read::<u32>()?, &ck)?;
+    check("sweep sort values", &vbuf.read::<u32>()?, &cv)?;
+    let restore = || -> BenchResult<()> {
+        kbuf.write(&keys)?;
+        vbuf.write(&values)?;
+        Ok(())
+    };
+    time_gpu_min(gpu, runs, restore, record)
+}
+
+/// Minimum GPU ms over `runs` of an exclusive scan of `n` u32 with `tuning` (verified
+/// first).
+pub fn time_scan(gpu: &Gpu, tuning: &Tuning, n: usize, runs: usize) -> BenchResult<f64> {
+    let n32 = u32::try_from(n)?;
+    let scan = Scan::new(gpu, tuning)?;
+    let data: Vec<u32> = random_u32s(n, 2).iter().map(|x| x & 0xFF).collect();
+    let input = gpu.upload("sweep-scan-in", &data)?;
+    let output = device_buffer(gpu, "sweep-scan-out", n as u64 * 4)?;
+    let scratch = device_buffer(gpu, "sweep-scan-scratch", scan.scratch_bytes(n32))?;
+    let record = |rec: &mut Recorder| {
+        scan.record(
+            rec,
+            n32,
+            (&input).into(),
+            (&output).into(),
+            ScanKind::Exclusive,
+            &scratch,
+        )
+    };
+    let mut rec = gpu.recorder(StreamKind::Main)?;
+    record(&mut rec)?;
+    gpu.wait(&rec.submit(&[])?)?;
+    check(
+        "sweep scan",
+        &output.read::<u32>()?,
+        &cpu::exclusive_scan(&data),
+    )?;
+    time_gpu_min(gpu, runs, || Ok(()), record)
 }

@@ -41,6 +41,7 @@ pub struct RadixSort {
     copy: ComputePipeline,
     scan: Scan,
     tuning: Tuning,
+    rows: bool,
 }
 
 impl RadixSort {
@@ -57,10 +58,38 @@ impl RadixSort {
                 tuning.sort_shared_bytes()
             )));
         }
+        // The row variant needs the workgroup to be exactly one subgroup.
+        let rows =
+            tuning.sort_rows && tuning.sort_workgroup_size == gpu.info().limits.subgroup_size;
+        let (histogram, scatter) = if rows {
+            (
+                shaders::PRIMITIVES_SORT_HISTOGRAM__ROWS,
+                shaders::PRIMITIVES_SORT_SCATTER_ROWS,
+            )
+        } else if tuning.sort_keys_per_invocation % 4 == 0 {
+            // Runs read as uvec4s (a quarter of the per-lane accesses).
+            (
+                shaders::PRIMITIVES_SORT_HISTOGRAM__VEC4,
+                shaders::PRIMITIVES_SORT_SCATTER__VEC4,
+            )
+        } else {
+            (
+                shaders::PRIMITIVES_SORT_HISTOGRAM,
+                shaders::PRIMITIVES_SORT_SCATTER,
+            )
+        };
+        log::info!(
+            "radix sort on {}: {} — kernels {} + {}",
+            gpu.info().name,
+            tuning.describe(),
+            histogram.name,
+            scatter.name
+        );
         Ok(Self {
             setup: Setup::new(gpu)?,
-            histogram: pipeline(gpu, shaders::PRIMITIVES_SORT_HISTOGRAM, 3, 12, &spec)?,
-            scatter: pipeline(gpu, shaders::PRIMITIVES_SORT_SCATTER, 6, 12, &spec)?,
+            histogram: pipeline(gpu, histogram, 4, 12, &spec)?,
+            scatter: pipeline(gpu, scatter, 7, 12, &spec)?,
+            rows,
             copy: pipeline(
                 gpu,
                 shaders::PRIMITIVES_COPY_PAIRS,
@@ -91,17 +120,33 @@ impl RadixSort {
         (self.tiles(max_n) * self.radix() as u64) as u32
     }
 
-    /// (histogram offset, inner scan offset) inside the misc scratch.
-    fn layout(&self, max_n: u32) -> (u64, u64) {
+    /// Whether the histogram pass stores its per-invocation counts for the scatter
+    /// (instead of the scatter counting again): where that table (radix × workgroup
+    /// words per tile) is at most a quarter of the tile's keys.
+    fn stores_lane_counts(&self) -> bool {
+        !self.rows && self.radix() * 4 <= self.tuning.sort_keys_per_invocation
+    }
+
+    fn lane_counts_len(&self, max_n: u32) -> u64 {
+        if self.stores_lane_counts() {
+            self.tiles(max_n) * self.radix() as u64 * self.tuning.sort_workgroup_size as u64
+        } else {
+            0
+        }
+    }
+
+    /// (histogram, per-invocation counts, inner scan) offsets inside the misc scratch.
+    fn layout(&self, max_n: u32) -> (u64, u64, u64) {
         let hist = HEADER_BYTES;
-        let scan = hist + region(self.hist_len(max_n) as u64 * 4);
-        (hist, scan)
+        let lanes = hist + region(self.hist_len(max_n) as u64 * 4);
+        let scan = lanes + region(self.lane_counts_len(max_n) * 4);
+        (hist, lanes, scan)
     }
 
     /// Bytes of the misc scratch for up to `max_n` keys (the ping-pong pair needs
     /// `4 * max_n` bytes each on top).
     pub fn scratch_bytes(&self, max_n: u32) -> u64 {
-        let (_, scan) = self.layout(max_n);
+        let (_, _, scan) = self.layout(max_n);
         scan + self.scan.scratch_bytes(self.hist_len(max_n))
     }
 
@@ -182,6 +227,7 @@ impl RadixSort {
         let cap = count.capacity();
         let passes = self.passes(bits.start, bits.end);
         if passes == 0 {
+            rec.barrier();
             return Ok(());
         }
         let misc = &scratch.misc;
@@ -189,9 +235,11 @@ impl RadixSort {
         for b in [&scratch.keys, &scratch.values] {
             check_scratch("radix sort", b, 0, cap as u64 * 4)?;
         }
-        let (hist_off, scan_off) = self.layout(cap);
+        let (hist_off, lanes_off, scan_off) = self.layout(cap);
         let header = misc.slice(0, HEADER_BYTES);
         let hist = misc.slice(hist_off, region(self.hist_len(cap) as u64 * 4));
+        let lanes = misc.slice(lanes_off, region(self.lane_counts_len(cap) * 4));
+        let stored = if self.stores_lane_counts() { 2 } else { 0 };
         self.setup.record(
             rec,
             count,
@@ -221,11 +269,11 @@ impl RadixSort {
             let push = PassPush {
                 shift,
                 bits: (bits.end - shift).min(self.tuning.radix_bits),
-                flags: with_values,
+                flags: with_values | stored,
             };
             rec.dispatch_indirect(
                 &self.histogram,
-                &[header, src.0, hist],
+                &[header, src.0, hist, lanes],
                 &push,
                 misc,
                 args_offset(1),
@@ -243,7 +291,7 @@ impl RadixSort {
             )?;
             rec.dispatch_indirect(
                 &self.scatter,
-                &[header, src.0, src.1, hist, dst.0, dst.1],
+                &[header, src.0, src.1, hist, dst.0, dst.1, lanes],
                 &push,
                 misc,
                 args_offset(1),

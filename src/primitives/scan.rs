@@ -31,9 +31,16 @@ pub struct Scan {
 impl Scan {
     pub fn new(gpu: &Gpu, tuning: &Tuning) -> Result<Self> {
         let spec = [tuning.workgroup_size, tuning.items_per_invocation];
+        log::debug!(
+            "scan on {}: {} — kernels {} + {}",
+            gpu.info().name,
+            tuning.describe(),
+            Self::reduce_kernel(tuning).name,
+            Self::downsweep_kernel(gpu, tuning).name
+        );
         Ok(Self {
             setup: Setup::new(gpu)?,
-            reduce: pipeline(gpu, shaders::PRIMITIVES_SCAN_REDUCE, 3, 4, &spec)?,
+            reduce: pipeline(gpu, Self::reduce_kernel(tuning), 3, 4, &spec)?,
             block_sums: pipeline(
                 gpu,
                 shaders::PRIMITIVES_SCAN_BLOCK_SUMS,
@@ -41,9 +48,38 @@ impl Scan {
                 0,
                 &[tuning.workgroup_size],
             )?,
-            downsweep: pipeline(gpu, shaders::PRIMITIVES_SCAN_DOWNSWEEP, 4, 4, &spec)?,
+            downsweep: pipeline(gpu, Self::downsweep_kernel(gpu, tuning), 4, 4, &spec)?,
             tuning: *tuning,
         })
+    }
+
+    /// Whether the subgroup-row kernels are valid (see [`Tuning::subgroup_rows`]).
+    fn rows(gpu: &Gpu, tuning: &Tuning) -> bool {
+        let info = gpu.info();
+        tuning.subgroup_rows
+            && info.capabilities.subgroup_arithmetic
+            && tuning.workgroup_size == info.limits.subgroup_size
+            && tuning.items_per_invocation % 4 == 0
+    }
+
+    /// Tile sums read as uvec4s where the runs allow (the tile is the same either way).
+    fn reduce_kernel(tuning: &Tuning) -> crate::shaders::Kernel {
+        if tuning.items_per_invocation % 4 == 0 {
+            shaders::PRIMITIVES_SCAN_REDUCE__VEC4
+        } else {
+            shaders::PRIMITIVES_SCAN_REDUCE
+        }
+    }
+
+    /// The subgroup-row kernel where it is valid, else per-invocation runs.
+    fn downsweep_kernel(gpu: &Gpu, tuning: &Tuning) -> crate::shaders::Kernel {
+        if Self::rows(gpu, tuning) {
+            shaders::PRIMITIVES_SCAN_ROWS
+        } else if tuning.items_per_invocation % 4 == 0 {
+            shaders::PRIMITIVES_SCAN_DOWNSWEEP__VEC4
+        } else {
+            shaders::PRIMITIVES_SCAN_DOWNSWEEP
+        }
     }
 
     fn tiles(&self, max_n: u32) -> u64 {

@@ -8,10 +8,18 @@
 //!
 //! - **CPU devices (lavapipe/llvmpipe)** — variant `cpu-segments`: a workgroup is one
 //!   SIMD subgroup (`workgroup_size = subgroup_size`, queried, never assumed), each
-//!   invocation owns long runs (64 scan items, 256 sort keys), and the sort uses 8-bit
-//!   digits (4 passes for 32-bit keys). Measured on lavapipe: workgroup barriers between
-//!   several subgroups cost a coroutine switch each, so one-subgroup workgroups with
-//!   long sequential runs win.
+//!   invocation owns long runs (256 scan items, 16384 sort keys) read as `uvec4`s, the scan
+//!   runs in coalesced subgroup rows (`subgroupInclusiveAdd`, where the device has
+//!   subgroup arithmetic), and the sort uses 8-bit digits (4 passes for 32-bit keys).
+//!   Measured on lavapipe (Mesa 25, `tuning_sweep` in `tests/primitives_bench.rs`): every
+//!   per-lane buffer or shared-memory access costs about as much as a scalar access, so
+//!   fewer, wider accesses win; the subgroup-row sort (ranks through shared memory and
+//!   subgroup barriers) was 2-3x slower than per-invocation runs and is off; wider
+//!   workgroups and 4- or 6-bit digits were slower too; long runs win (4M keys: 16384
+//!   keys per invocation 178 ms, 4096 232 ms, 1024 199 ms, 256 355 ms — the per-tile
+//!   work of clearing, summing and scanning 256 × 8 shared counters is amortised, and
+//!   the histogram of digits by tile that must be scanned shrinks). With 4M keys that
+//!   is still 32 workgroups, enough for lavapipe's threads.
 //! - **GPUs** — variant `gpu-wide`: 128-invocation workgroups (at least one subgroup),
 //!   short runs (8 to 16 items) for occupancy, and 4-bit digits so the per-invocation
 //!   counter table (`2^bits × workgroup_size` words) stays small in shared memory.
@@ -37,6 +45,15 @@ pub struct Tuning {
     pub sort_keys_per_invocation: u32,
     /// Digit width of one radix sort pass, in bits (1..=8).
     pub radix_bits: u32,
+    /// Scan rows of one subgroup with `subgroupInclusiveAdd` (coalesced, barrier-free)
+    /// instead of per-invocation runs. Used only where the device has subgroup
+    /// arithmetic and `workgroup_size` equals the subgroup size (checked again when the
+    /// pipelines are made).
+    pub subgroup_rows: bool,
+    /// Sort in coalesced rows of one subgroup (ranks within a row through shared
+    /// memory, ordered by subgroup barriers) instead of per-invocation runs. Used only
+    /// where `sort_workgroup_size` equals the subgroup size.
+    pub sort_rows: bool,
 }
 
 impl Tuning {
@@ -46,16 +63,18 @@ impl Tuning {
         Self {
             variant: "cpu-segments",
             workgroup_size: w,
-            items_per_invocation: 64,
+            items_per_invocation: 256,
             sort_workgroup_size: w,
-            sort_keys_per_invocation: 256,
+            sort_keys_per_invocation: 16384,
             radix_bits: 8,
+            subgroup_rows: true,
+            sort_rows: false,
         }
     }
 
     /// The variant for GPUs.
     pub fn gpu(subgroup_size: u32) -> Self {
-        let w = subgroup_size.max(128).min(1024);
+        let w = subgroup_size.clamp(128, 1024);
         Self {
             variant: "gpu-wide",
             workgroup_size: w,
@@ -63,6 +82,8 @@ impl Tuning {
             sort_workgroup_size: w,
             sort_keys_per_invocation: 8,
             radix_bits: 4,
+            subgroup_rows: false,
+            sort_rows: false,
         }
     }
 
@@ -85,6 +106,10 @@ impl Tuning {
         self.radix_bits = self.radix_bits.clamp(1, 8);
         self.items_per_invocation = self.items_per_invocation.max(1);
         self.sort_keys_per_invocation = self.sort_keys_per_invocation.max(1);
+        self.subgroup_rows &= info.capabilities.subgroup_arithmetic
+            && self.workgroup_size == info.limits.subgroup_size
+            && self.items_per_invocation % 4 == 0;
+        self.sort_rows &= self.sort_workgroup_size == info.limits.subgroup_size;
         let shared = info.limits.max_compute_shared_memory_size as u64;
         while self.sort_shared_bytes() > shared {
             if self.radix_bits > 4 {
@@ -116,13 +141,23 @@ impl Tuning {
     /// One line for logs and benchmark output.
     pub fn describe(&self) -> String {
         format!(
-            "{} (workgroup {} x {} items; sort workgroup {} x {} keys, {}-bit digits)",
+            "{} (workgroup {} x {} items, {}; sort workgroup {} x {} keys, {}-bit digits, {})",
             self.variant,
             self.workgroup_size,
             self.items_per_invocation,
+            if self.subgroup_rows {
+                "subgroup-row scan"
+            } else {
+                "per-invocation-run scan"
+            },
             self.sort_workgroup_size,
             self.sort_keys_per_invocation,
-            self.radix_bits
+            self.radix_bits,
+            if self.sort_rows {
+                "subgroup-row sort"
+            } else {
+                "per-invocation-run sort"
+            }
         )
     }
 }
