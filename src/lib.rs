@@ -4,11 +4,13 @@
 //! - [`vk`]: the only place with `unsafe` and raw `ash` — instance, device, streams,
 //!   buffers, pipelines, command recording, profiling.
 //! - [`shaders`]: SPIR-V compiled from `glsl/` at build time.
+//! - [`bsdf`]: BSDFs and layered materials, with GLSL twins in `glsl/common/bsdf.glsl`.
 //! - [`scene`], [`film`]: scene input and image output (CPU only).
 //! - [`trace`]: the `Tracer` interface and its implementations.
 //! - [`integrator`]: what is computed along the rays.
 //! - [`render`]: ties a scene, a tracer and an integrator into a film.
 
+pub mod bsdf;
 pub mod film;
 pub mod integrator;
 pub mod render;
