@@ -329,12 +329,17 @@ bool mf_dielectric_half(float eta, vec3 wo, vec3 wi, out vec3 wm, out float etap
     return true;
 }
 
+// F at m for the pair, from the optically thinner side (see src/bsdf/microfacet.rs).
+float mf_fresnel_pair(float eta, vec3 wo, vec3 wi, vec3 wm, float etap) {
+    return etap < 1.0 ? fresnel_dielectric(dot(wi, wm), eta) : fresnel_dielectric(dot(wo, wm), eta);
+}
+
 vec3 mf_dielectric_eval(vec3 tint, uint dist, float a, float eta, vec3 wo, vec3 wi, uint mode) {
     vec3 wm;
     float etap;
     bool refl;
     if (!mf_dielectric_half(eta, wo, wi, wm, etap, refl)) return vec3(0.0);
-    float f = fresnel_dielectric(dot(wo, wm), eta);
+    float f = mf_fresnel_pair(eta, wo, wi, wm, etap);
     float dg = mf_d(dist, a, wm) * mf_g(dist, a, wo, wi);
     if (refl) return tint * (dg * f / abs(4.0 * wi.z * wo.z));
     float denom = dot(wi, wm) + dot(wo, wm) / etap;
@@ -349,7 +354,7 @@ float mf_dielectric_pdf(uint dist, float a, float eta, vec3 wo, vec3 wi) {
     float etap;
     bool refl;
     if (!mf_dielectric_half(eta, wo, wi, wm, etap, refl)) return 0.0;
-    float r = fresnel_dielectric(dot(wo, wm), eta);
+    float r = mf_fresnel_pair(eta, wo, wi, wm, etap);
     float pm = mf_pdf_m(dist, a, wm);
     if (refl) return pm / (4.0 * abs(dot(wo, wm))) * r;
     float denom = dot(wi, wm) + dot(wo, wm) / etap;

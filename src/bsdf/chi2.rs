@@ -13,7 +13,7 @@ pub struct Chi2Settings {
     pub theta_res: usize,
     /// Bins over φ ∈ [0, 2π).
     pub phi_res: usize,
-    /// Composite-Simpson intervals per bin and dimension (even).
+    /// Initial quadrature cells per bin and dimension (refined adaptively).
     pub subdivisions: usize,
     /// Bins expecting fewer samples are pooled.
     pub min_expected: f64,
@@ -24,7 +24,7 @@ impl Default for Chi2Settings {
         Self {
             theta_res: 10,
             phi_res: 20,
-            subdivisions: 16,
+            subdivisions: 4,
             min_expected: 5.0,
         }
     }
@@ -62,43 +62,77 @@ pub fn histogram(dirs: impl IntoIterator<Item = Option<Vec3>>, s: &Chi2Settings)
     h
 }
 
-/// `n_samples` × ∫_bin pdf dω for every bin (composite Simpson in θ and φ).
+/// `n_samples` × ∫_bin pdf dω for every bin, by adaptive cubature in (θ, φ): each bin
+/// starts as `subdivisions`² cells; a cell's 3×3-point Gauss–Legendre estimate is
+/// compared with the sum over its four quadrants, which are refined recursively until
+/// the two agree to 1e-9 of the sphere's measure (or 12 levels deep). Nodes are interior,
+/// so a pdf that jumps at a bin edge, such as at the horizon, is integrated on the
+/// correct side, and narrow near-specular lobes are resolved.
 pub fn expected_frequencies(
     pdf: &dyn Fn(Vec3) -> f64,
     n_samples: usize,
     s: &Chi2Settings,
 ) -> Vec<f64> {
-    let m = s.subdivisions.max(2) & !1;
+    let m = s.subdivisions.max(1);
     let dt = PI / s.theta_res as f64;
     let dp = 2.0 * PI / s.phi_res as f64;
-    let simpson = |i: usize| -> f64 {
-        if i == 0 || i == m {
-            1.0
-        } else if i % 2 == 1 {
-            4.0
-        } else {
-            2.0
-        }
-    };
     let mut out = Vec::with_capacity(s.theta_res * s.phi_res);
     for ti in 0..s.theta_res {
         for pi in 0..s.phi_res {
             let (ht, hp) = (dt / m as f64, dp / m as f64);
             let mut sum = 0.0;
-            for a in 0..=m {
-                let theta = ti as f64 * dt + a as f64 * ht;
-                let (st, ct) = theta.sin_cos();
-                for b in 0..=m {
-                    let phi = pi as f64 * dp + b as f64 * hp;
-                    let (sp, cp) = phi.sin_cos();
-                    let w = Vec3::new((st * cp) as f32, (st * sp) as f32, ct as f32);
-                    sum += simpson(a) * simpson(b) * pdf(w) * st;
+            for a in 0..m {
+                for b in 0..m {
+                    let t0 = ti as f64 * dt + a as f64 * ht;
+                    let p0 = pi as f64 * dp + b as f64 * hp;
+                    let whole = cell(pdf, t0, t0 + ht, p0, p0 + hp);
+                    sum += adaptive(pdf, [t0, t0 + ht, p0, p0 + hp], whole, 0);
                 }
             }
-            out.push(sum * ht * hp / 9.0 * n_samples as f64);
+            out.push(sum * n_samples as f64);
         }
     }
     out
+}
+
+/// 3×3 Gauss–Legendre estimate of ∫∫ pdf sinθ dθ dφ over one cell.
+fn cell(pdf: &dyn Fn(Vec3) -> f64, t0: f64, t1: f64, p0: f64, p1: f64) -> f64 {
+    let g = (3.0f64 / 5.0).sqrt();
+    const W: [f64; 3] = [5.0 / 9.0, 8.0 / 9.0, 5.0 / 9.0];
+    let x = [-g, 0.0, g];
+    let (tm, th) = (0.5 * (t0 + t1), 0.5 * (t1 - t0));
+    let (pm, ph) = (0.5 * (p0 + p1), 0.5 * (p1 - p0));
+    let mut sum = 0.0;
+    for i in 0..3 {
+        let (st, ct) = (tm + th * x[i]).sin_cos();
+        for j in 0..3 {
+            let (sp, cp) = (pm + ph * x[j]).sin_cos();
+            let w = Vec3::new((st * cp) as f32, (st * sp) as f32, ct as f32);
+            sum += W[i] * W[j] * pdf(w) * st;
+        }
+    }
+    sum * th * ph
+}
+
+fn adaptive(pdf: &dyn Fn(Vec3) -> f64, c: [f64; 4], whole: f64, depth: u32) -> f64 {
+    let [t0, t1, p0, p1] = c;
+    let (tm, pm) = (0.5 * (t0 + t1), 0.5 * (p0 + p1));
+    let quads = [
+        [t0, tm, p0, pm],
+        [t0, tm, pm, p1],
+        [tm, t1, p0, pm],
+        [tm, t1, pm, p1],
+    ];
+    let parts = quads.map(|q| cell(pdf, q[0], q[1], q[2], q[3]));
+    let split: f64 = parts.iter().sum();
+    if depth >= 12 || (split - whole).abs() <= 1e-9 {
+        return split;
+    }
+    quads
+        .iter()
+        .zip(parts)
+        .map(|(q, part)| adaptive(pdf, *q, part, depth + 1))
+        .sum()
 }
 
 /// Pearson's test of `observed` against `expected` (pbrt-v3's pooling rule).

@@ -252,7 +252,17 @@ fn dielectric_half(eta: f32, wo: Vec3, wi: Vec3) -> Option<(Vec3, f32, bool)> {
     Some((wm, etap, reflect))
 }
 
-#[allow(clippy::too_many_arguments)]
+/// F at the microfacet m for the pair: evaluated from the side of the optically
+/// thinner medium (the same value in exact arithmetic, but near total internal
+/// reflection 1 − F seen from the denser side cancels badly in f32).
+fn fresnel_pair(eta: f32, wo: Vec3, wi: Vec3, wm: Vec3, etap: f32) -> f32 {
+    if etap < 1.0 {
+        fresnel_dielectric(wi.dot(wm), eta)
+    } else {
+        fresnel_dielectric(wo.dot(wm), eta)
+    }
+}
+
 pub fn dielectric_eval(
     tint: Vec3,
     dist: Distribution,
@@ -265,7 +275,7 @@ pub fn dielectric_eval(
     let Some((wm, etap, reflect)) = dielectric_half(eta, wo, wi) else {
         return Vec3::ZERO;
     };
-    let f = fresnel_dielectric(wo.dot(wm), eta);
+    let f = fresnel_pair(eta, wo, wi, wm, etap);
     let dg = d(dist, a, wm) * g(dist, a, wo, wi);
     if reflect {
         return tint * (dg * f / (4.0 * wi.z * wo.z).abs());
@@ -283,7 +293,7 @@ pub fn dielectric_pdf(dist: Distribution, a: f32, eta: f32, wo: Vec3, wi: Vec3) 
     let Some((wm, etap, reflect)) = dielectric_half(eta, wo, wi) else {
         return 0.0;
     };
-    let r = fresnel_dielectric(wo.dot(wm), eta);
+    let r = fresnel_pair(eta, wo, wi, wm, etap);
     let pm = pdf_m(dist, a, wm);
     if reflect {
         return pm / (4.0 * wo.dot(wm).abs()) * r;
