@@ -207,9 +207,17 @@ vec3 oren_nayar_eval(vec3 albedo, float sigma, vec3 wo, vec3 wi) {
 
 // ---- microfacet distributions (src/bsdf/microfacet.rs) ------------------------------
 
+// tan^2 as (x^2 + y^2) / z^2: no cancellation near the pole, invariant to normalization
+// rounding (src/bsdf/microfacet.rs).
 float mf_tan2_theta(vec3 w) {
-    float cos2 = w.z * w.z;
-    return max(1.0 - cos2, 0.0) / cos2;
+    return (w.x * w.x + w.y * w.y) / (w.z * w.z);
+}
+
+// ln cos^2 = ln(1 - sin^2), by its series for small sin^2.
+float mf_ln_cos2_theta(vec3 w) {
+    float s2 = w.x * w.x + w.y * w.y;
+    if (s2 < 0.01) return -s2 * (1.0 + s2 * (0.5 + s2 * (1.0 / 3.0 + s2 * (0.25 + s2 * 0.2))));
+    return log(max(1.0 - s2, 1e-30));
 }
 
 // Walter 2007's Blinn-Phong exponent -> Beckmann alpha.
@@ -217,7 +225,7 @@ float blinn_phong_alpha(float n) { return sqrt(2.0 / (n + 2.0)); }
 
 float mf_d(uint dist, float a, vec3 m) {
     if (m.z <= 0.0) return 0.0;
-    if (dist == DIST_BLINN_PHONG) return (a + 2.0) * (0.5 / BSDF_PI) * pow(m.z, a);
+    if (dist == DIST_BLINN_PHONG) return (a + 2.0) * (0.5 / BSDF_PI) * exp(0.5 * a * mf_ln_cos2_theta(m));
     float cos2 = m.z * m.z;
     float tan2 = mf_tan2_theta(m);
     if (isinf(tan2)) return 0.0;
@@ -252,19 +260,21 @@ float mf_g(uint dist, float a, vec3 wo, vec3 wi) {
     return 1.0 / (1.0 + mf_lambda(dist, a, wo) + mf_lambda(dist, a, wi));
 }
 
-// m ~ D(m) cos(theta_m) on the +z hemisphere.
+// m ~ D(m) cos(theta_m) on the +z hemisphere; sin^2 without cancellation.
 vec3 mf_sample_m(uint dist, float a, float u1, float u2) {
-    float cos_theta;
+    float sin_theta, cos_theta;
     if (dist == DIST_BLINN_PHONG) {
-        cos_theta = pow(u1, 1.0 / (a + 2.0));
-    } else if (dist == DIST_BECKMANN) {
-        float tan2 = -(a * a) * log(1.0 - u1);
-        cos_theta = 1.0 / sqrt(1.0 + tan2);
+        float l = 2.0 * log(u1) / (a + 2.0);
+        float sin2 = l > -0.01
+            ? -l * (1.0 + l * (0.5 + l * (1.0 / 6.0 + l * (1.0 / 24.0 + l * (1.0 / 120.0)))))
+            : 1.0 - exp(l);
+        sin_theta = sqrt(max(sin2, 0.0));
+        cos_theta = sqrt(max(1.0 - sin2, 0.0));
     } else {
-        float tan2 = a * a * u1 / (1.0 - u1);
+        float tan2 = dist == DIST_BECKMANN ? -(a * a) * log(1.0 - u1) : a * a * u1 / (1.0 - u1);
         cos_theta = 1.0 / sqrt(1.0 + tan2);
+        sin_theta = sqrt(tan2) * cos_theta;
     }
-    float sin_theta = sqrt(max(1.0 - cos_theta * cos_theta, 0.0));
     float phi = 2.0 * BSDF_PI * u2;
     return vec3(sin_theta * cos(phi), sin_theta * sin(phi), cos_theta);
 }

@@ -55,9 +55,20 @@ pub fn blinn_phong_exponent(alpha: f32) -> f32 {
     2.0 / (alpha * alpha) - 2.0
 }
 
+/// tan²θ as (x² + y²)/z²: no cancellation near the pole, and invariant to the rounding
+/// of a normalization (important for peaked lobes, where D amplifies input error).
 fn tan2_theta(w: Vec3) -> f32 {
-    let cos2 = w.z * w.z;
-    (1.0 - cos2).max(0.0) / cos2
+    (w.x * w.x + w.y * w.y) / (w.z * w.z)
+}
+
+/// ln cos²θ = ln(1 − sin²θ), by its series for small sin²θ (f32 has no log1p).
+fn ln_cos2_theta(w: Vec3) -> f32 {
+    let s2 = w.x * w.x + w.y * w.y;
+    if s2 < 0.01 {
+        -s2 * (1.0 + s2 * (0.5 + s2 * (1.0 / 3.0 + s2 * (0.25 + s2 * 0.2))))
+    } else {
+        (1.0 - s2).max(1e-30).ln()
+    }
 }
 
 /// D(m), for m in the +z hemisphere (0 below).
@@ -66,7 +77,8 @@ pub fn d(dist: Distribution, a: f32, m: Vec3) -> f32 {
         return 0.0;
     }
     match dist {
-        Distribution::BlinnPhong => (a + 2.0) * (0.5 / PI) * m.z.powf(a),
+        // cosⁿθ = exp(n/2 · ln cos²θ), accurate for large n near the peak.
+        Distribution::BlinnPhong => (a + 2.0) * (0.5 / PI) * (0.5 * a * ln_cos2_theta(m)).exp(),
         Distribution::Beckmann => {
             let cos2 = m.z * m.z;
             let tan2 = tan2_theta(m);
@@ -133,20 +145,30 @@ pub fn g(dist: Distribution, a: f32, wo: Vec3, wi: Vec3) -> f32 {
     1.0 / (1.0 + lambda(dist, a, wo) + lambda(dist, a, wi))
 }
 
-/// Samples m in the +z hemisphere with density D(m) cos θm.
+/// Samples m in the +z hemisphere with density D(m) cos θm. sin²θm is computed without
+/// cancellation (m near the pole matters for peaked lobes).
 pub fn sample_m(dist: Distribution, a: f32, u1: f32, u2: f32) -> Vec3 {
-    let cos_theta = match dist {
-        Distribution::BlinnPhong => u1.powf(1.0 / (a + 2.0)),
-        Distribution::Beckmann => {
-            let tan2 = -(a * a) * (1.0 - u1).ln();
-            1.0 / (1.0 + tan2).sqrt()
+    let (sin_theta, cos_theta) = match dist {
+        Distribution::BlinnPhong => {
+            // cos^(n+2) θ = u1, so ln cos²θ = l and sin²θ = −expm1(l).
+            let l = 2.0 * u1.ln() / (a + 2.0);
+            let sin2 = if l > -0.01 {
+                -l * (1.0 + l * (0.5 + l * (1.0 / 6.0 + l * (1.0 / 24.0 + l * (1.0 / 120.0)))))
+            } else {
+                1.0 - l.exp()
+            };
+            (sin2.max(0.0).sqrt(), (1.0 - sin2).max(0.0).sqrt())
         }
-        Distribution::Ggx => {
-            let tan2 = a * a * u1 / (1.0 - u1);
-            1.0 / (1.0 + tan2).sqrt()
+        Distribution::Beckmann | Distribution::Ggx => {
+            let tan2 = if dist == Distribution::Beckmann {
+                -(a * a) * (1.0 - u1).ln()
+            } else {
+                a * a * u1 / (1.0 - u1)
+            };
+            let cos_theta = 1.0 / (1.0 + tan2).sqrt();
+            (tan2.sqrt() * cos_theta, cos_theta)
         }
     };
-    let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
     let phi = 2.0 * PI * u2;
     Vec3::new(sin_theta * phi.cos(), sin_theta * phi.sin(), cos_theta)
 }
