@@ -273,8 +273,16 @@ fn sample_returns_eval_and_pdf() {
                 }
                 let f = c.params.eval(c.wo, s.wi, mode);
                 let pdf = c.params.pdf(c.wo, s.wi, mode);
-                assert!(s.pdf > 0.0 && (s.pdf - pdf).abs() <= 1e-5 * pdf, "{}", c.name);
-                assert!((s.f - f).abs().max_element() <= 1e-5 * f.max_element(), "{}", c.name);
+                assert!(
+                    s.pdf > 0.0 && (s.pdf - pdf).abs() <= 1e-5 * pdf,
+                    "{}",
+                    c.name
+                );
+                assert!(
+                    (s.f - f).abs().max_element() <= 1e-5 * f.max_element(),
+                    "{}",
+                    c.name
+                );
             }
         }
     }
@@ -367,15 +375,24 @@ fn rough_dielectric_obeys_generalized_reciprocity() {
                     let a = fr / (n_o * n_o);
                     let b = br / (n_i * n_i);
                     // The half vector is rebuilt from (wo, wi) in f32; the transmission
-                    // denominator (wi·m + wo·m/η')² cancels near its pole, so allow 1e-3.
-                    assert!(close(a, b, 1e-3), "{dist:?} α {alpha} η {eta} {wo} {wi}: {a} vs {b}");
-                    assert!(close(fi, br, 1e-3), "adjoint {dist:?} {wo} {wi}: {fi} vs {br}");
+                    // denominator (wi·m + wo·m/η')² cancels near its pole: allow 5e-4.
+                    assert!(
+                        close(a, b, 5e-4),
+                        "{dist:?} α {alpha} η {eta} {wo} {wi}: {a} vs {b}"
+                    );
+                    assert!(
+                        close(fi, br, 5e-4),
+                        "adjoint {dist:?} {wo} {wi}: {fi} vs {br}"
+                    );
                     if a > 1e-3 {
                         worst = worst.max((a - b).abs() / a.max(b));
                         nonzero += 1;
                     }
                 }
-                assert!(nonzero > 300, "{dist:?} α {alpha} η {eta}: too few nonzero pairs");
+                assert!(
+                    nonzero > 300,
+                    "{dist:?} α {alpha} η {eta}: too few nonzero pairs"
+                );
             }
         }
     }
@@ -447,7 +464,10 @@ fn white_furnace() {
         let r = splitray::bsdf::specular::fresnel_dielectric(c, eta) as f64;
         let (a, se) = albedo(&p, wo, rad, n, seed);
         let want = r + (1.0 - r) / (eta as f64 * eta as f64);
-        assert!((a - want).abs() < 4.0 * se + 1e-4, "radiance dielectric {a} vs {want}");
+        assert!(
+            (a - want).abs() < 4.0 * se + 1e-4,
+            "radiance dielectric {a} vs {want}"
+        );
         // Lossy or approximate models: ≤ 1 (within 4 standard errors).
         let mut lossy: Vec<(String, BsdfParams)> = vec![];
         for sigma in [0.2f32, 0.5, 1.0] {
@@ -531,7 +551,9 @@ fn white_furnace() {
         }
         .params();
         let (a, se) = albedo(&p, wo_at(c), imp, n, 10);
-        report.push(format!("microfacet BlinnPhong α 0.8 (n 1.125) cos {c}: {a:.4}"));
+        report.push(format!(
+            "microfacet BlinnPhong α 0.8 (n 1.125) cos {c}: {a:.4}"
+        ));
         let bound = if c < 0.1 { 1.35 } else { 1.0 };
         if a > bound + 4.0 * se + 1e-4 {
             failures.push(format!("blinn-phong n 1.125 cos {c}: albedo {a} ± {se}"));

@@ -213,11 +213,11 @@ float mf_tan2_theta(vec3 w) {
     return (w.x * w.x + w.y * w.y) / (w.z * w.z);
 }
 
-// ln cos^2 = ln(1 - sin^2), by its series for small sin^2.
+// ln cos^2: ln(1 - sin^2) by its series near the pole, ln z^2 elsewhere.
 float mf_ln_cos2_theta(vec3 w) {
     float s2 = w.x * w.x + w.y * w.y;
     if (s2 < 0.01) return -s2 * (1.0 + s2 * (0.5 + s2 * (1.0 / 3.0 + s2 * (0.25 + s2 * 0.2))));
-    return log(max(1.0 - s2, 1e-30));
+    return log(max(w.z * w.z, 1e-30));
 }
 
 // Walter 2007's Blinn-Phong exponent -> Beckmann alpha.

@@ -155,9 +155,7 @@ pub fn chi2_test(
                     observed[i]
                 ));
             }
-        } else if expected[i] < min_expected
-            || (pooled_exp > 0.0 && pooled_exp < min_expected)
-        {
+        } else if expected[i] < min_expected || (pooled_exp > 0.0 && pooled_exp < min_expected) {
             pooled_exp += expected[i];
             pooled_obs += observed[i];
             pooled += 1;
@@ -280,7 +278,12 @@ mod tests {
         use crate::bsdf::sampling::uniform_sphere;
         let s = Chi2Settings::default();
         let n = 100_000;
-        let u = |i: usize| ((i as f32 + 0.5) / n as f32, ((i * 7919) % n) as f32 / n as f32);
+        let u = |i: usize| {
+            (
+                (i as f32 + 0.5) / n as f32,
+                ((i * 7919) % n) as f32 / n as f32,
+            )
+        };
         // Stratified-ish (golden) sequence would be too good; use a hash.
         let dirs = (0..n).map(|i| {
             let h = (i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15);

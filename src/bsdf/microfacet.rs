@@ -61,13 +61,14 @@ fn tan2_theta(w: Vec3) -> f32 {
     (w.x * w.x + w.y * w.y) / (w.z * w.z)
 }
 
-/// ln cos²θ = ln(1 − sin²θ), by its series for small sin²θ (f32 has no log1p).
+/// ln cos²θ: ln(1 − sin²θ) by its series near the pole (f32 has no log1p), ln z²
+/// elsewhere (1 − sin²θ would cancel near the horizon).
 fn ln_cos2_theta(w: Vec3) -> f32 {
     let s2 = w.x * w.x + w.y * w.y;
     if s2 < 0.01 {
         -s2 * (1.0 + s2 * (0.5 + s2 * (1.0 / 3.0 + s2 * (0.25 + s2 * 0.2))))
     } else {
-        (1.0 - s2).max(1e-30).ln()
+        (w.z * w.z).max(1e-30).ln()
     }
 }
 
@@ -181,7 +182,10 @@ pub fn pdf_m(dist: Distribution, a: f32, m: Vec3) -> f32 {
 /// Flips `wo`, `wi` to the +z side when `wo` is below (two-sided reflection).
 fn upper(wo: Vec3, wi: Vec3) -> (Vec3, Vec3) {
     if wo.z < 0.0 {
-        (wo * Vec3::new(1.0, 1.0, -1.0), wi * Vec3::new(1.0, 1.0, -1.0))
+        (
+            wo * Vec3::new(1.0, 1.0, -1.0),
+            wi * Vec3::new(1.0, 1.0, -1.0),
+        )
     } else {
         (wo, wi)
     }
