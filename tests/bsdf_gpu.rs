@@ -587,3 +587,83 @@ fn gpu_samples_pass_chi2() {
     );
     common::assert_clean(&gpu);
 }
+
+#[test]
+fn gpu_frame_and_shading_correction_match_cpu() {
+    use splitray::bsdf::{shading_normal_correction, Frame};
+    let gpu = common::gpu();
+    let n = 4096usize;
+    let r = uniforms(n * 8, 55);
+    let mut queries: Vec<[f32; 4]> = vec![];
+    for i in 0..n {
+        let c = &r[i * 8..];
+        let ns = uniform_sphere(c[0], c[1]);
+        // a geometric normal within ~35° of the shading normal
+        let ng = (ns + 0.6 * uniform_sphere(c[2], c[3])).normalize();
+        let wo = uniform_sphere(c[4], c[5]);
+        let wi = uniform_sphere(c[6], c[7]);
+        for v in [wo, wi, ns, ng] {
+            queries.push([v.x, v.y, v.z, 0.0]);
+        }
+    }
+    // Exact poles, where the branchless frame switches sign.
+    for k in 0..2 {
+        let z = if k == 0 { 1.0 } else { -1.0 };
+        queries.extend([
+            [0.3, 0.4, 0.866, 0.0],
+            [0.0, 0.6, 0.8, 0.0],
+            [0.0, 0.0, z, 0.0],
+            [0.0, 0.0, z, 0.0],
+        ]);
+    }
+    let total = queries.len() / 4;
+    let pipeline = ComputePipeline::new(
+        &gpu,
+        &PipelineDesc {
+            kernel: shaders::BSDF_FRAME_TEST,
+            bindings: 2,
+            push_constant_bytes: 4,
+            spec: &[64],
+        },
+    )
+    .unwrap();
+    let qb = gpu.upload("queries", &queries).unwrap();
+    let rb = gpu.zeroed::<[f32; 4]>("results", total * 4).unwrap();
+    let mut rec = gpu.recorder(StreamKind::Main).unwrap();
+    rec.dispatch_items(
+        &pipeline,
+        &[(&qb).into(), (&rb).into()],
+        &(total as u32),
+        total as u64,
+    )
+    .unwrap();
+    gpu.wait(&rec.submit(&[]).unwrap()).unwrap();
+    let out = rb.read::<[f32; 4]>().unwrap();
+    let v = |a: [f32; 4]| Vec3::new(a[0], a[1], a[2]);
+    for i in 0..total {
+        let [wo, wi, ns, ng] = [0, 1, 2, 3].map(|k| v(queries[4 * i + k]));
+        let f = Frame::from_normal(ns);
+        let o = &out[4 * i..4 * i + 4];
+        assert!(
+            (v(o[0]) - f.s).abs().max_element() < 1e-5,
+            "s of {ns}: {:?} vs {}",
+            o[0],
+            f.s
+        );
+        assert!((v(o[1]) - f.t).abs().max_element() < 1e-5, "t of {ns}");
+        assert!(
+            (v(o[2]) - f.to_local(wo)).abs().max_element() < 1e-5,
+            "to_local"
+        );
+        assert!((v(o[3]) - wo).abs().max_element() < 1e-5, "round trip");
+        let rad = shading_normal_correction(wo, wi, ns, ng, TransportMode::Radiance);
+        let imp = shading_normal_correction(wo, wi, ns, ng, TransportMode::Importance);
+        assert_eq!(o[0][3], rad);
+        assert!(
+            agree(o[1][3], imp),
+            "correction {wo} {wi} {ns} {ng}: {} vs {imp}",
+            o[1][3]
+        );
+    }
+    common::assert_clean(&gpu);
+}

@@ -278,18 +278,16 @@ mod tests {
         use crate::bsdf::sampling::uniform_sphere;
         let s = Chi2Settings::default();
         let n = 100_000;
-        let u = |i: usize| {
-            (
-                (i as f32 + 0.5) / n as f32,
-                ((i * 7919) % n) as f32 / n as f32,
-            )
-        };
-        // Stratified-ish (golden) sequence would be too good; use a hash.
-        let dirs = (0..n).map(|i| {
-            let h = (i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+        // Hashed (not stratified) uniforms, so the statistic behaves as for i.i.d.
+        let mut state = 0u64;
+        let dirs = (0..n).map(|_| {
+            state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+            let mut h = state;
+            h = (h ^ (h >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+            h = (h ^ (h >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+            h ^= h >> 31;
             let a = ((h >> 40) as f32) / (1u64 << 24) as f32;
             let b = (((h >> 16) & 0xFF_FFFF) as f32) / (1u64 << 24) as f32;
-            let _ = u(i);
             Some(uniform_sphere(a, b))
         });
         let obs = histogram(dirs, &s);
