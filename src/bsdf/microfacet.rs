@@ -9,7 +9,9 @@
 //!   (erfc(a) … ) with a = 1/(α tanθ): Λ = e^(−a²)/(2a√π) − erfc(a)/2, with erfc from
 //!   Abramowitz–Stegun 7.1.26 (|error| ≤ 1.5e-7), the same polynomial in GLSL (which has
 //!   no erf). Blinn–Phong has no closed-form Λ; it uses Beckmann's Λ with Walter's
-//!   mapping α = √(2 / (n + 2)).
+//!   mapping α = √(2 / (n + 2)). That Λ is not D's own, so for very low exponents the
+//!   lobe is under-shadowed and can gain energy at grazing incidence (white-furnace
+//!   albedo 1.27 at n = 1.125, θo = 87°; ≤ 1 for n ≥ 20; `tests/bsdf_chi2.rs`).
 //! - **Sampling**: m ~ D(m)|cos θm| (not visible normals); samples whose microfacet faces
 //!   away from `wo` are rejected (the pdf then integrates to less than 1, consistently).
 //! - **Fresnel**: microfacet reflection uses Schlick with F0 = the layer's rgb (a tinted
