@@ -5,6 +5,7 @@
 //!   buffers, pipelines, command recording, profiling.
 //! - [`shaders`]: SPIR-V compiled from `glsl/` at build time.
 //! - [`primitives`]: GPU scan, radix sort, reduce-by-key, compaction, gather/scatter.
+//! - [`bsdf`]: BSDFs and layered materials, with GLSL twins in `glsl/common/bsdf.glsl`.
 //! - [`scene`], [`film`]: scene input and image output (CPU only).
 //! - [`trace`]: the `Tracer` interface and its implementations.
 //! - [`integrator`]: what is computed along the rays.
@@ -12,6 +13,7 @@
 //! - [`bench`]: the measurements behind `splitray bench`.
 
 pub mod bench;
+pub mod bsdf;
 pub mod film;
 pub mod integrator;
 pub mod primitives;
