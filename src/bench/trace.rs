@@ -12,7 +12,9 @@ use serde::Serialize;
 
 use super::workloads::{self, RayBatch, Workload};
 use crate::scene::Scene;
-use crate::trace::{cpu, BruteForceTracer, GpuTriangle, Hit, PdacrtTracer, Query, Ray, Tracer, TracerKind};
+use crate::trace::{
+    cpu, BruteForceTracer, GpuTriangle, Hit, PdacrtTracer, Query, Ray, Tracer, TracerKind,
+};
 use crate::vk::{self, Buffer, Gpu};
 
 pub type BenchResult<T> = std::result::Result<T, Box<dyn std::error::Error + Send + Sync>>;
@@ -30,6 +32,8 @@ pub struct TraceBenchOptions {
     pub brute_force_budget: f64,
     /// Rays per batch checked against brute force before timing.
     pub verify_rays: usize,
+    /// PDACRT parameters instead of the device defaults.
+    pub pdacrt: Option<crate::trace::PdacrtParams>,
 }
 
 impl Default for TraceBenchOptions {
@@ -42,6 +46,7 @@ impl Default for TraceBenchOptions {
             frames: 5,
             brute_force_budget: 3e8,
             verify_rays: 4096,
+            pdacrt: None,
         }
     }
 }
@@ -126,7 +131,11 @@ impl fmt::Display for TraceReport {
                 }
             )?;
             if let (Some(trips), Some(levels)) = (r.host_round_trips, r.levels) {
-                writeln!(f, "{:<12} {levels} levels, {trips} host round trips per frame", "")?;
+                writeln!(
+                    f,
+                    "{:<12} {levels} levels, {trips} host round trips per frame",
+                    ""
+                )?;
             }
         }
         Ok(())
@@ -145,20 +154,40 @@ fn strided(rays: &[Ray], count: usize) -> Vec<Ray> {
         return rays.to_vec();
     }
     let step = rays.len() as f64 / count as f64;
-    (0..count).map(|i| rays[(i as f64 * step) as usize]).collect()
+    (0..count)
+        .map(|i| rays[(i as f64 * step) as usize])
+        .collect()
 }
 
-fn trace_once(gpu: &Gpu, tracer: &mut dyn Tracer, rays: &[Ray], query: Query) -> vk::Result<Vec<Hit>> {
+fn trace_once(
+    gpu: &Gpu,
+    tracer: &mut dyn Tracer,
+    rays: &[Ray],
+    query: Query,
+) -> vk::Result<Vec<Hit>> {
     let ray_buf = gpu.upload("bench-rays", rays)?;
-    let hit_buf = gpu.create_buffer("bench-hits", (rays.len() * size_of::<Hit>()) as u64, vk::MemoryKind::Device)?;
+    let hit_buf = gpu.create_buffer(
+        "bench-hits",
+        (rays.len() * size_of::<Hit>()) as u64,
+        vk::MemoryKind::Device,
+    )?;
     let done = tracer.trace(&ray_buf, &hit_buf, rays.len() as u32, query, &[])?;
     gpu.wait(&done)?;
     hit_buf.read()
 }
 
 /// Runs the benchmark. `dump_hits`: write the primary hits (pixel order) there.
-pub fn run(gpu: &Gpu, scene: &Scene, opts: &TraceBenchOptions, dump_hits: Option<&Path>) -> BenchResult<TraceReport> {
-    let triangles: Vec<GpuTriangle> = scene.triangles.iter().map(|t| GpuTriangle::new(t.p)).collect();
+pub fn run(
+    gpu: &Gpu,
+    scene: &Scene,
+    opts: &TraceBenchOptions,
+    dump_hits: Option<&Path>,
+) -> BenchResult<TraceReport> {
+    let triangles: Vec<GpuTriangle> = scene
+        .triangles
+        .iter()
+        .map(|t| GpuTriangle::new(t.p))
+        .collect();
     let primary = workloads::primary_rays(scene, opts.width, opts.height);
 
     // The workload's rays, from PDACRT's primary hits (checked below like every tracer).
@@ -169,10 +198,23 @@ pub fn run(gpu: &Gpu, scene: &Scene, opts: &TraceBenchOptions, dump_hits: Option
     }
     let mut batches: Vec<RayBatch> = Vec::new();
     if opts.workload == Workload::Primary {
-        batches.push(RayBatch { label: "primary".into(), rays: primary.clone(), query: Query::ClosestHit });
+        batches.push(RayBatch {
+            label: "primary".into(),
+            rays: primary.clone(),
+            query: Query::ClosestHit,
+        });
     } else {
-        let mut trace = |rays: &[Ray]| trace_once(gpu, &mut reference, rays, Query::ClosestHit).expect("trace bounce");
-        batches = workloads::secondary_batches(opts.workload, scene, &triangles, &primary, &primary_hits, &mut trace);
+        let mut trace = |rays: &[Ray]| {
+            trace_once(gpu, &mut reference, rays, Query::ClosestHit).expect("trace bounce")
+        };
+        batches = workloads::secondary_batches(
+            opts.workload,
+            scene,
+            &triangles,
+            &primary,
+            &primary_hits,
+            &mut trace,
+        );
     }
     drop(reference);
     let total_rays: usize = batches.iter().map(|b| b.rays.len()).sum();
@@ -182,7 +224,11 @@ pub fn run(gpu: &Gpu, scene: &Scene, opts: &TraceBenchOptions, dump_hits: Option
         .map(|b| -> vk::Result<GpuBatch> {
             Ok(GpuBatch {
                 rays: gpu.upload("bench-rays", &b.rays)?,
-                hits: gpu.create_buffer("bench-hits", (b.rays.len().max(1) * size_of::<Hit>()) as u64, vk::MemoryKind::Device)?,
+                hits: gpu.create_buffer(
+                    "bench-hits",
+                    (b.rays.len().max(1) * size_of::<Hit>()) as u64,
+                    vk::MemoryKind::Device,
+                )?,
                 count: b.rays.len() as u32,
                 query: b.query,
             })
@@ -204,7 +250,12 @@ pub fn run(gpu: &Gpu, scene: &Scene, opts: &TraceBenchOptions, dump_hits: Option
     let mut rows = Vec::new();
     let mut pdacrt_levels = Vec::new();
     for &kind in &opts.tracers {
-        let mut tracer = kind.create(gpu, &triangles)?;
+        let mut tracer: Box<dyn Tracer> = match (kind, opts.pdacrt) {
+            (TracerKind::Pdacrt, Some(params)) => {
+                Box::new(PdacrtTracer::with_params(gpu, &triangles, params)?)
+            }
+            _ => kind.create(gpu, &triangles)?,
+        };
         // Verify before timing.
         let (mut verified, mut mismatches) = (0, 0);
         for (rays, want, query) in &samples {
@@ -234,10 +285,17 @@ pub fn run(gpu: &Gpu, scene: &Scene, opts: &TraceBenchOptions, dump_hits: Option
             subset_batches = batches
                 .iter()
                 .map(|b| -> vk::Result<GpuBatch> {
-                    let rays = strided(&b.rays, ((b.rays.len() as f64 * subset).ceil() as usize).max(1));
+                    let rays = strided(
+                        &b.rays,
+                        ((b.rays.len() as f64 * subset).ceil() as usize).max(1),
+                    );
                     Ok(GpuBatch {
                         rays: gpu.upload("bench-rays", &rays)?,
-                        hits: gpu.create_buffer("bench-hits", (rays.len() * size_of::<Hit>()) as u64, vk::MemoryKind::Device)?,
+                        hits: gpu.create_buffer(
+                            "bench-hits",
+                            (rays.len() * size_of::<Hit>()) as u64,
+                            vk::MemoryKind::Device,
+                        )?,
                         count: rays.len() as u32,
                         query: b.query,
                     })
@@ -306,7 +364,10 @@ pub fn run(gpu: &Gpu, scene: &Scene, opts: &TraceBenchOptions, dump_hits: Option
         width: opts.width,
         height: opts.height,
         workload: opts.workload,
-        batches: batches.iter().map(|b| (b.label.clone(), b.rays.len())).collect(),
+        batches: batches
+            .iter()
+            .map(|b| (b.label.clone(), b.rays.len()))
+            .collect(),
         rays: total_rays,
         rows,
         pdacrt_levels,

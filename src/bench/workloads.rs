@@ -22,7 +22,13 @@ pub enum Workload {
 }
 
 impl Workload {
-    pub const ALL: [Workload; 5] = [Self::Primary, Self::Shadow, Self::Reflection, Self::Ao, Self::Path];
+    pub const ALL: [Workload; 5] = [
+        Self::Primary,
+        Self::Shadow,
+        Self::Reflection,
+        Self::Ao,
+        Self::Path,
+    ];
 
     pub fn name(self) -> &'static str {
         match self {
@@ -47,7 +53,11 @@ impl FromStr for Workload {
         Self::ALL
             .into_iter()
             .find(|w| w.name() == s)
-            .ok_or_else(|| format!("unknown workload '{s}' (choose one of: primary, shadow, reflection, ao, path)"))
+            .ok_or_else(|| {
+                format!(
+                    "unknown workload '{s}' (choose one of: primary, shadow, reflection, ao, path)"
+                )
+            })
     }
 }
 
@@ -68,7 +78,14 @@ pub fn primary_rays(scene: &Scene, width: u32, height: u32) -> Vec<Ray> {
     let frame = scene.camera.frame(width, height);
     (0..height)
         .flat_map(|y| (0..width).map(move |x| (x, y)))
-        .map(|(x, y)| Ray::new(frame.origin, frame.pixel_center_direction(x, y), 0.0, f32::INFINITY))
+        .map(|(x, y)| {
+            Ray::new(
+                frame.origin,
+                frame.pixel_center_direction(x, y),
+                0.0,
+                f32::INFINITY,
+            )
+        })
         .collect()
 }
 
@@ -90,7 +107,12 @@ struct SurfacePoint {
     incoming: Vec3,
 }
 
-fn surface_points(rays: &[Ray], hits: &[Hit], triangles: &[GpuTriangle], eps: f32) -> Vec<(usize, SurfacePoint)> {
+fn surface_points(
+    rays: &[Ray],
+    hits: &[Hit],
+    triangles: &[GpuTriangle],
+    eps: f32,
+) -> Vec<(usize, SurfacePoint)> {
     rays.iter()
         .zip(hits)
         .enumerate()
@@ -117,10 +139,14 @@ fn cosine_direction(n: Vec3, u1: f32, u2: f32) -> Vec3 {
 /// The point light of the shadow workload: the scene's first, else one above and in
 /// front of the scene box.
 pub fn shadow_light(scene: &Scene) -> Vec3 {
-    scene.point_lights.first().map(|l| l.position).unwrap_or_else(|| {
-        let b = scene.bounds();
-        b.center() + Vec3::new(0.3, 1.2, 0.5) * b.radius()
-    })
+    scene
+        .point_lights
+        .first()
+        .map(|l| l.position)
+        .unwrap_or_else(|| {
+            let b = scene.bounds();
+            b.center() + Vec3::new(0.3, 1.2, 0.5) * b.radius()
+        })
 }
 
 /// Secondary batches derived from the primary hits. `trace` casts a batch of
@@ -148,14 +174,29 @@ pub fn secondary_batches(
                     Ray::new(s.p, to / dist, 0.0, dist * (1.0 - 1e-4))
                 })
                 .collect();
-            vec![RayBatch { label: "shadow".into(), rays, query: Query::Occlusion }]
+            vec![RayBatch {
+                label: "shadow".into(),
+                rays,
+                query: Query::Occlusion,
+            }]
         }
         Workload::Reflection => {
             let rays = points
                 .iter()
-                .map(|(_, s)| Ray::new(s.p, s.incoming - 2.0 * s.incoming.dot(s.n) * s.n, 0.0, f32::INFINITY))
+                .map(|(_, s)| {
+                    Ray::new(
+                        s.p,
+                        s.incoming - 2.0 * s.incoming.dot(s.n) * s.n,
+                        0.0,
+                        f32::INFINITY,
+                    )
+                })
                 .collect();
-            vec![RayBatch { label: "reflection".into(), rays, query: Query::ClosestHit }]
+            vec![RayBatch {
+                label: "reflection".into(),
+                rays,
+                query: Query::ClosestHit,
+            }]
         }
         Workload::Ao => {
             let reach = 0.25 * radius;
@@ -163,12 +204,20 @@ pub fn secondary_batches(
                 .iter()
                 .flat_map(|(i, s)| {
                     (0..AO_RAYS).map(move |k| {
-                        let d = cosine_direction(s.n, random01(*i as u32, 2 * k as u32, 1), random01(*i as u32, 2 * k as u32 + 1, 1));
+                        let d = cosine_direction(
+                            s.n,
+                            random01(*i as u32, 2 * k as u32, 1),
+                            random01(*i as u32, 2 * k as u32 + 1, 1),
+                        );
                         Ray::new(s.p, d, 0.0, reach)
                     })
                 })
                 .collect();
-            vec![RayBatch { label: "ao".into(), rays, query: Query::Occlusion }]
+            vec![RayBatch {
+                label: "ao".into(),
+                rays,
+                query: Query::Occlusion,
+            }]
         }
         Workload::Path => {
             let mut batches = Vec::new();
@@ -190,7 +239,11 @@ pub fn secondary_batches(
                 }
                 let hits = trace(&rays);
                 let next = surface_points(&rays, &hits, triangles, eps);
-                batches.push(RayBatch { label: format!("bounce {bounce}"), rays, query: Query::ClosestHit });
+                batches.push(RayBatch {
+                    label: format!("bounce {bounce}"),
+                    rays,
+                    query: Query::ClosestHit,
+                });
                 current = next;
             }
             batches

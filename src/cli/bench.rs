@@ -7,7 +7,7 @@ use clap::{Args, Subcommand};
 use splitray::bench::primitives::{self, PrimitivesBenchOptions};
 use splitray::bench::trace::{self, TraceBenchOptions};
 use splitray::bench::workloads::Workload;
-use splitray::trace::TracerKind;
+use splitray::trace::{PdacrtParams, TracerKind};
 use splitray::vk::{Gpu, GpuDesc, InstanceDesc};
 
 #[derive(Debug, Args)]
@@ -63,6 +63,27 @@ enum BenchCommand {
         /// Print PDACRT's per-level statistics.
         #[arg(long)]
         levels: bool,
+        /// PDACRT α: nodes with fewer triangles are terminal (default 256).
+        #[arg(long)]
+        alpha: Option<u32>,
+        /// PDACRT β: nodes with fewer rays are terminal (default 256).
+        #[arg(long)]
+        beta: Option<u32>,
+        /// PDACRT η: terminal-node buffer capacity in ids.
+        #[arg(long)]
+        eta: Option<u32>,
+        /// PDACRT λ: flush threshold in ids (≤ η).
+        #[arg(long)]
+        lambda: Option<u32>,
+        /// PDACRT T: triangles per shared-memory batch in the segmented intersection.
+        #[arg(long)]
+        batch: Option<u32>,
+        /// PDACRT N: workgroup size of the segmented intersection.
+        #[arg(long)]
+        intersect_workgroup: Option<u32>,
+        /// PDACRT: rays per chunk of the level loop.
+        #[arg(long)]
+        chunk: Option<u32>,
         /// Also write the report as JSON.
         #[arg(long, value_name = "OUT.json")]
         json: Option<PathBuf>,
@@ -93,7 +114,12 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         ..Default::default()
     })?;
     match &args.what {
-        BenchCommand::Primitives { n, scan_n, runs, json } => {
+        BenchCommand::Primitives {
+            n,
+            scan_n,
+            runs,
+            json,
+        } => {
             let report = primitives::run(
                 &gpu,
                 &PrimitivesBenchOptions {
@@ -116,9 +142,24 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             dump_hits,
             levels,
             json,
+            alpha,
+            beta,
+            eta,
+            lambda,
+            batch,
+            intersect_workgroup,
+            chunk,
             ..
         } => {
             let scene = scene.expect("loaded above");
+            let mut params = PdacrtParams::for_device(&gpu);
+            params.alpha = alpha.unwrap_or(params.alpha);
+            params.beta = beta.unwrap_or(params.beta);
+            params.eta = eta.unwrap_or(params.eta);
+            params.lambda = lambda.unwrap_or(params.lambda.min(params.eta));
+            params.batch = batch.unwrap_or(params.batch);
+            params.intersect_workgroup = intersect_workgroup.unwrap_or(params.intersect_workgroup);
+            params.max_rays_per_chunk = chunk.unwrap_or(params.max_rays_per_chunk);
             let report = trace::run(
                 &gpu,
                 &scene,
@@ -128,6 +169,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
                     workload: *workload,
                     tracers: tracers.clone(),
                     frames: *frames,
+                    pdacrt: Some(params),
                     ..Default::default()
                 },
                 dump_hits.as_deref(),
@@ -136,11 +178,21 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             print!("{report}");
             if *levels {
                 println!("PDACRT levels (last frame):");
-                println!("{:>5} {:>6} {:>8} {:>10} {:>10} {:>6} {:>9} {:>8}", "chunk", "level", "nodes", "triangles", "rays", "dup", "terminal", "ms");
+                println!(
+                    "{:>5} {:>6} {:>8} {:>10} {:>10} {:>6} {:>9} {:>8}",
+                    "chunk", "level", "nodes", "triangles", "rays", "dup", "terminal", "ms"
+                );
                 for l in &report.pdacrt_levels {
                     println!(
                         "{:>5} {:>6} {:>8} {:>10} {:>10} {:>6.2} {:>9} {:>8.2}{}",
-                        l.chunk, l.level, l.nodes, l.triangles, l.rays, l.ray_duplication, l.terminal_nodes, l.ms,
+                        l.chunk,
+                        l.level,
+                        l.nodes,
+                        l.triangles,
+                        l.rays,
+                        l.ray_duplication,
+                        l.terminal_nodes,
+                        l.ms,
                         if l.flushed { "  flush" } else { "" }
                     );
                 }
@@ -150,7 +202,10 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     }
     let messages = gpu.validation_messages();
     if !messages.is_empty() {
-        anyhow::bail!("{} validation message(s) (see the log above)", messages.len());
+        anyhow::bail!(
+            "{} validation message(s) (see the log above)",
+            messages.len()
+        );
     }
     Ok(())
 }

@@ -204,7 +204,10 @@ fn scene_box(triangles: &[GpuTriangle]) -> (Vec3, Vec3, f32) {
     if triangles.is_empty() {
         (lo, hi) = (Vec3::ZERO, Vec3::ZERO);
     }
-    let extent = (hi - lo).max_element().max(lo.abs().max(hi.abs()).max_element()).max(1e-6);
+    let extent = (hi - lo)
+        .max_element()
+        .max(lo.abs().max(hi.abs()).max_element())
+        .max(1e-6);
     (lo, hi, extent * 1e-5)
 }
 
