@@ -7,12 +7,16 @@
 
 pub mod brute_force;
 pub mod cpu;
+pub mod cpu_dacrt;
+pub mod ray_query;
 pub mod types;
 
 use std::fmt;
 use std::str::FromStr;
 
 pub use brute_force::BruteForceTracer;
+pub use cpu_dacrt::{CpuDacrtTracer, DacrtParams};
+pub use ray_query::RayQueryTracer;
 pub use types::{GpuTriangle, Hit, Ray, MISS};
 
 use crate::vk::{self, Buffer, Gpu, TimelinePoint};
@@ -48,17 +52,31 @@ pub trait Tracer {
 pub enum TracerKind {
     #[default]
     BruteForce,
+    CpuDacrt,
+    RayQuery,
 }
 
 impl TracerKind {
-    pub const ALL: &'static [(TracerKind, &'static str)] = &[(
-        TracerKind::BruteForce,
-        "every ray against every triangle on the GPU: the correctness oracle",
-    )];
+    pub const ALL: &'static [(TracerKind, &'static str)] = &[
+        (
+            TracerKind::BruteForce,
+            "every ray against every triangle on the GPU: the correctness oracle",
+        ),
+        (
+            TracerKind::CpuDacrt,
+            "serial divide-and-conquer ray tracing on one CPU thread (Mora 2011): the baseline",
+        ),
+        (
+            TracerKind::RayQuery,
+            "the driver's BLAS/TLAS traced with VK_KHR_ray_query (where the device offers it)",
+        ),
+    ];
 
     pub fn name(self) -> &'static str {
         match self {
             Self::BruteForce => "brute-force",
+            Self::CpuDacrt => "cpu-dacrt",
+            Self::RayQuery => "ray-query",
         }
     }
 
@@ -66,6 +84,8 @@ impl TracerKind {
     pub fn create(self, gpu: &Gpu, triangles: &[GpuTriangle]) -> vk::Result<Box<dyn Tracer>> {
         match self {
             Self::BruteForce => Ok(Box::new(BruteForceTracer::new(gpu, triangles)?)),
+            Self::CpuDacrt => Ok(Box::new(CpuDacrtTracer::new(gpu, triangles))),
+            Self::RayQuery => Ok(Box::new(RayQueryTracer::new(gpu, triangles)?)),
         }
     }
 }
