@@ -51,3 +51,91 @@ pub fn random_u32s(n: usize, seed: u64) -> Vec<u32> {
         })
         .collect()
 }
+
+/// Uniform floats in [0, 1) from [`random_u32s`].
+pub fn uniforms(n: usize, seed: u64) -> Vec<f32> {
+    random_u32s(n, seed)
+        .into_iter()
+        .map(|x| (x >> 8) as f32 / (1u32 << 24) as f32)
+        .collect()
+}
+
+/// A soup of `n` triangles in the unit cube, of mixed sizes, a few of them degenerate
+/// (every 97th a point, the next a collinear sliver).
+pub fn triangle_soup(n: usize, seed: u64) -> Vec<splitray::trace::GpuTriangle> {
+    use glam::Vec3;
+    let r = uniforms(n * 10, seed);
+    (0..n)
+        .map(|i| {
+            let c = &r[i * 10..];
+            let centre = Vec3::new(c[0], c[1], c[2]);
+            let size = 0.02 + 0.3 * c[9];
+            let a = centre + size * (Vec3::new(c[3], c[4], c[5]) - 0.5);
+            let b = centre + size * (Vec3::new(c[6], c[7], c[8]) - 0.5);
+            let tri = match i % 97 {
+                0 => [centre, centre, centre],                 // a point
+                1 => [centre, a, centre + 2.0 * (a - centre)], // collinear
+                _ => [centre, a, b],
+            };
+            splitray::trace::GpuTriangle::new(tri)
+        })
+        .collect()
+}
+
+/// `n` unit rays from around the unit cube towards points inside it; every fifth has a
+/// short tmax (0.3).
+pub fn random_rays(n: usize, seed: u64) -> Vec<splitray::trace::Ray> {
+    use glam::Vec3;
+    let r = uniforms(n * 6, seed);
+    (0..n)
+        .map(|i| {
+            let c = &r[i * 6..];
+            let origin = Vec3::new(c[0], c[1], c[2]) * 1.4 - 0.2;
+            let target = Vec3::new(c[3], c[4], c[5]);
+            let dir = (target - origin).try_normalize().unwrap_or(Vec3::X);
+            splitray::trace::Ray::new(
+                origin,
+                dir,
+                0.0,
+                if i % 5 == 0 { 0.3 } else { f32::INFINITY },
+            )
+        })
+        .collect()
+}
+
+/// Primary rays through the pixel centres of a `width` × `height` image of `camera`.
+pub fn camera_rays(
+    camera: &splitray::scene::Camera,
+    width: u32,
+    height: u32,
+) -> Vec<splitray::trace::Ray> {
+    let frame = camera.frame(width, height);
+    (0..height)
+        .flat_map(|y| (0..width).map(move |x| (x, y)))
+        .map(|(x, y)| {
+            splitray::trace::Ray::new(
+                frame.origin,
+                frame.pixel_center_direction(x, y),
+                0.0,
+                f32::INFINITY,
+            )
+        })
+        .collect()
+}
+
+/// Uploads `rays`, traces them with `tracer` and reads the hits back.
+pub fn trace_on_gpu(
+    gpu: &Gpu,
+    tracer: &mut dyn splitray::trace::Tracer,
+    rays: &[splitray::trace::Ray],
+    query: splitray::trace::Query,
+) -> Vec<splitray::trace::Hit> {
+    use splitray::trace::Hit;
+    let ray_buf = gpu.upload("rays", rays).unwrap();
+    let hit_buf = gpu.zeroed::<Hit>("hits", rays.len()).unwrap();
+    let done = tracer
+        .trace(&ray_buf, &hit_buf, rays.len() as u32, query, &[])
+        .unwrap();
+    gpu.wait(&done).unwrap();
+    hit_buf.read::<Hit>().unwrap()
+}
