@@ -85,15 +85,22 @@ fn assert_dacrt_exact(rays: &[Ray], tris: &[GpuTriangle], params: &DacrtParams, 
     }
 }
 
-/// Ray-query hits against brute force: same t (1e-5 relative), a different triangle
-/// only at the same t. Returns how many rays hit.
-fn assert_close(hits: &[Hit], expected: &[Hit], what: &str) -> usize {
+/// Ray-query hits against brute force: both miss, or both hit with t equal within 1e-5
+/// relative (`cpu::same_hit`, which also accepts a different triangle at the same t) —
+/// or within an absolute 4e-6 × `scale` (the scene's size): the driver computes t its own
+/// way, so for hits very near the origin (t ≪ the coordinates) t differs by a few ulps
+/// of the coordinates, which is far more than 1e-5 of t. Returns how many rays hit.
+fn assert_close(hits: &[Hit], expected: &[Hit], scale: f32, what: &str) -> usize {
     assert_eq!(hits.len(), expected.len());
+    let close = |h: &Hit, e: &Hit| {
+        cpu::same_hit(h, e, 1e-5, true)
+            || (h.is_hit() && e.is_hit() && (h.t - e.t).abs() <= 4e-6 * scale)
+    };
     let bad: Vec<_> = hits
         .iter()
         .zip(expected)
         .enumerate()
-        .filter(|(_, (h, e))| !cpu::same_hit(h, e, 1e-5, true))
+        .filter(|(_, (h, e))| !close(h, e))
         .take(5)
         .collect();
     assert!(
@@ -438,7 +445,7 @@ fn ray_query_matches_brute_force_on_random_soups() {
         let mut tracer = RayQueryTracer::new(&gpu, &soup).unwrap();
         let expected = cpu::closest_hits(&rays, &soup);
         let hits = common::trace_on_gpu(&gpu, &mut tracer, &rays, Query::ClosestHit);
-        let n = assert_close(&hits, &expected, &format!("{triangles} triangles"));
+        let n = assert_close(&hits, &expected, 1.0, &format!("{triangles} triangles"));
         if !rays.is_empty() && triangles > 100 {
             assert!(n > rays.len() / 10, "too few hits to be a test");
         }
@@ -466,6 +473,7 @@ fn ray_query_rebuilds_for_a_moving_scene() {
         assert_close(
             &hits,
             &cpu::closest_hits(&rays, &soup),
+            1.0,
             &format!("frame {frame}"),
         );
     }
@@ -480,7 +488,13 @@ fn ray_query_matches_brute_force_in_the_cornell_box() {
     let rays = common::camera_rays(&scene.camera, 96, 96);
     let mut tracer = RayQueryTracer::new(&gpu, &tris).unwrap();
     let hits = common::trace_on_gpu(&gpu, &mut tracer, &rays, Query::ClosestHit);
-    let n = assert_close(&hits, &cpu::closest_hits(&rays, &tris), "cornell box");
+    let scale = scene.bounds().extent().max_element();
+    let n = assert_close(
+        &hits,
+        &cpu::closest_hits(&rays, &tris),
+        scale,
+        "cornell box",
+    );
     assert!(n > rays.len() / 2);
     common::assert_clean(&gpu);
 }
@@ -559,7 +573,8 @@ fn bunny_512_throughput_and_agreement() {
         let hits = hit_buf.read::<Hit>().unwrap();
         match query {
             Query::ClosestHit => {
-                assert_close(&hits, &dacrt_hits, "bunny ray-query vs cpu-dacrt");
+                let scale = scene.bounds().extent().max_element();
+                assert_close(&hits, &dacrt_hits, scale, "bunny ray-query vs cpu-dacrt");
             }
             Query::Occlusion => {
                 for (i, (h, d)) in hits.iter().zip(&dacrt_hits).enumerate() {
