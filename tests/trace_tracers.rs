@@ -591,3 +591,31 @@ fn bunny_512_throughput_and_agreement() {
     drop(rq);
     common::assert_clean(&gpu);
 }
+
+/// Times cpu-dacrt on the bunny at 512×512 for a grid of thresholds (run with
+/// `--ignored --nocapture`); the defaults come from this sweep.
+#[test]
+#[ignore]
+fn bunny_dacrt_threshold_sweep() {
+    let Some(scene) = bunny() else { return };
+    let tris = gpu_triangles(&scene);
+    let rays = common::camera_rays(&scene.camera, 512, 512);
+    for alpha in [2u32, 4, 8, 16, 32, 64, 256] {
+        for beta in [2u32, 4, 8, 16, 32, 256] {
+            let params = DacrtParams {
+                leaf_triangles: alpha,
+                leaf_rays: beta,
+                ..DacrtParams::default()
+            };
+            let start = Instant::now();
+            let (_, stats) = cpu_dacrt::trace(&rays, &tris, Query::ClosestHit, &params);
+            let t = start.elapsed().as_secs_f64();
+            eprintln!(
+                "alpha {alpha:3} beta {beta:3}: {t:.3} s {:.3} Mrays/s, {} tests, {} nodes",
+                rays.len() as f64 / t / 1e6,
+                stats.ray_triangle_tests,
+                stats.nodes
+            );
+        }
+    }
+}

@@ -25,9 +25,11 @@
 //! - SubdivideSpace (line 5) splits at the midpoint of the box's largest extent, as PDACRT
 //!   does, so the two tracers build the same implicit k-d tree.
 //! - rLimit/pLimit are [`DacrtParams::leaf_rays`] (β) and [`DacrtParams::leaf_triangles`]
-//!   (α). PDACRT uses α = β = 256 to fill GPU blocks; a serial CPU traversal wants small
-//!   leaves, and the defaults (α = 8, β = 8) were the fastest of the values measured on
-//!   the bunny (see the report in tests/trace_tracers.rs). Boxes that can no longer be
+//!   (α). PDACRT uses α = β = 256 to fill GPU blocks; neither the thesis nor this crate
+//!   has Mora's exact values, and a serial CPU traversal wants small leaves: on the bunny
+//!   at 512×512 (`bunny_dacrt_threshold_sweep` in tests/trace_tracers.rs) throughput is
+//!   flat within noise for α in 8..64 and β in 4..32, and drops by a third at 256/256;
+//!   the defaults α = 16, β = 8 sit in the middle of that plateau. Boxes that can no longer be
 //!   split, and nodes deeper than [`DacrtParams::max_depth`], are also intersected
 //!   naively, so many triangles sharing one point cannot recurse forever.
 //! - Ray filtering (line 7) clips each ray's live segment [tmin, min(tmax, closest t so
@@ -69,7 +71,7 @@ pub struct DacrtParams {
 impl Default for DacrtParams {
     fn default() -> Self {
         Self {
-            leaf_triangles: 8,
+            leaf_triangles: 16,
             leaf_rays: 8,
             max_depth: 48,
         }
