@@ -88,21 +88,6 @@ fn empty_batches_and_empty_scenes() {
     common::assert_clean(&gpu);
 }
 
-fn camera_rays(scene: &scene::Scene, width: u32, height: u32) -> Vec<Ray> {
-    let frame = scene.camera.frame(width, height);
-    (0..height)
-        .flat_map(|y| (0..width).map(move |x| (x, y)))
-        .map(|(x, y)| {
-            Ray::new(
-                frame.origin,
-                frame.pixel_center_direction(x, y),
-                0.0,
-                f32::INFINITY,
-            )
-        })
-        .collect()
-}
-
 fn scene_triangles(scene: &scene::Scene) -> Vec<GpuTriangle> {
     scene
         .triangles
@@ -117,7 +102,13 @@ fn builtin_scenes_match_including_cameras_inside_the_box() {
     for name in ["cornell-box", "fixture"] {
         let mut s = scene::load(name).unwrap();
         let tris = scene_triangles(&s);
-        check(&gpu, &tris, &camera_rays(&s, 64, 48), deep(), name);
+        check(
+            &gpu,
+            &tris,
+            &common::camera_rays(&s.camera, 64, 48),
+            deep(),
+            name,
+        );
         // From the centre of the scene box, looking at a corner.
         let b = s.bounds();
         s.camera.position = b.center();
@@ -125,7 +116,7 @@ fn builtin_scenes_match_including_cameras_inside_the_box() {
         check(
             &gpu,
             &tris,
-            &camera_rays(&s, 48, 48),
+            &common::camera_rays(&s.camera, 48, 48),
             deep(),
             &format!("{name} from inside"),
         );
@@ -143,7 +134,7 @@ fn the_stanford_bunny_matches() {
     let gpu = common::gpu();
     let s = scene::load(path).unwrap();
     let tris = scene_triangles(&s);
-    let mut rays = camera_rays(&s, 40, 40);
+    let mut rays = common::camera_rays(&s.camera, 40, 40);
     // Secondary-like rays: from points on the surface in random directions.
     let u = common::uniforms(3000, 77);
     for k in 0..1000 {

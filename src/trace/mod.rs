@@ -7,14 +7,18 @@
 
 pub mod brute_force;
 pub mod cpu;
+pub mod cpu_dacrt;
 pub mod pdacrt;
+pub mod ray_query;
 pub mod types;
 
 use std::fmt;
 use std::str::FromStr;
 
 pub use brute_force::BruteForceTracer;
+pub use cpu_dacrt::{CpuDacrtTracer, DacrtParams};
 pub use pdacrt::{PdacrtParams, PdacrtTracer};
+pub use ray_query::RayQueryTracer;
 pub use types::{GpuTriangle, Hit, Ray, MISS};
 
 use crate::vk::{self, Buffer, Gpu, TimelinePoint};
@@ -62,6 +66,8 @@ pub enum TracerKind {
     #[default]
     Pdacrt,
     BruteForce,
+    CpuDacrt,
+    RayQuery,
 }
 
 impl TracerKind {
@@ -74,12 +80,22 @@ impl TracerKind {
             TracerKind::BruteForce,
             "every ray against every triangle on the GPU: the correctness oracle",
         ),
+        (
+            TracerKind::CpuDacrt,
+            "serial divide-and-conquer ray tracing on one CPU thread (Mora 2011): the baseline",
+        ),
+        (
+            TracerKind::RayQuery,
+            "the driver's BLAS/TLAS traced with VK_KHR_ray_query (where the device offers it)",
+        ),
     ];
 
     pub fn name(self) -> &'static str {
         match self {
             Self::Pdacrt => "pdacrt",
             Self::BruteForce => "brute-force",
+            Self::CpuDacrt => "cpu-dacrt",
+            Self::RayQuery => "ray-query",
         }
     }
 
@@ -88,6 +104,8 @@ impl TracerKind {
         match self {
             Self::Pdacrt => Ok(Box::new(PdacrtTracer::new(gpu, triangles)?)),
             Self::BruteForce => Ok(Box::new(BruteForceTracer::new(gpu, triangles)?)),
+            Self::CpuDacrt => Ok(Box::new(CpuDacrtTracer::new(gpu, triangles))),
+            Self::RayQuery => Ok(Box::new(RayQueryTracer::new(gpu, triangles)?)),
         }
     }
 }

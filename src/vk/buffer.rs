@@ -23,6 +23,41 @@ pub enum MemoryKind {
     Readback,
 }
 
+/// Extra uses of a buffer beyond the storage/transfer/indirect ones every buffer has.
+/// All need a device opened with ray queries ([`Gpu::ray_query`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct BufferUsage {
+    /// SHADER_DEVICE_ADDRESS: the buffer has a device address.
+    pub device_address: bool,
+    /// ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY: vertices or instances of a build.
+    pub accel_build_input: bool,
+    /// ACCELERATION_STRUCTURE_STORAGE: backs an acceleration structure.
+    pub accel_storage: bool,
+}
+
+impl BufferUsage {
+    /// Vertices or instances read by an acceleration-structure build.
+    pub const ACCEL_BUILD_INPUT: Self = Self {
+        device_address: true,
+        accel_build_input: true,
+        accel_storage: false,
+    };
+
+    fn flags(self) -> vk::BufferUsageFlags {
+        let mut f = vk::BufferUsageFlags::empty();
+        if self.device_address {
+            f |= vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS;
+        }
+        if self.accel_build_input {
+            f |= vk::BufferUsageFlags::ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_KHR;
+        }
+        if self.accel_storage {
+            f |= vk::BufferUsageFlags::ACCELERATION_STRUCTURE_STORAGE_KHR;
+        }
+        f
+    }
+}
+
 /// A buffer and its memory. Dropping it frees both: the caller must make sure the GPU
 /// is done with it (wait on the timeline point of the last submission using it).
 pub struct Buffer {
@@ -65,6 +100,23 @@ impl Gpu {
 
     /// Allocates a buffer of `size` bytes (contents undefined).
     pub fn create_buffer(&self, name: &str, size: u64, kind: MemoryKind) -> Result<Buffer> {
+        self.create_buffer_with(name, size, kind, BufferUsage::default())
+    }
+
+    /// Allocates a buffer with extra `usage` (device address, acceleration structures).
+    pub fn create_buffer_with(
+        &self,
+        name: &str,
+        size: u64,
+        kind: MemoryKind,
+        usage: BufferUsage,
+    ) -> Result<Buffer> {
+        if usage != BufferUsage::default() && !self.ray_query() {
+            return Err(VkError::Usage(format!(
+                "buffer '{name}' needs {usage:?}, which this device was not opened with \
+                 (it needs VK_KHR_acceleration_structure and bufferDeviceAddress)"
+            )));
+        }
         let limit = self.0.info.limits.max_storage_buffer_range;
         if size > limit {
             return Err(VkError::BufferTooLarge {
@@ -85,7 +137,8 @@ impl Gpu {
             vk::BufferUsageFlags::STORAGE_BUFFER
                 | vk::BufferUsageFlags::TRANSFER_SRC
                 | vk::BufferUsageFlags::TRANSFER_DST
-                | vk::BufferUsageFlags::INDIRECT_BUFFER,
+                | vk::BufferUsageFlags::INDIRECT_BUFFER
+                | usage.flags(),
         );
         // Streams on several queue families share buffers without ownership transfers.
         info = if families.len() > 1 {
@@ -173,6 +226,15 @@ impl Buffer {
     /// Number of whole `T` elements the buffer holds.
     pub fn element_count<T>(&self) -> usize {
         self.size as usize / size_of::<T>()
+    }
+
+    /// The buffer's device address (it must have been created with
+    /// [`BufferUsage::device_address`]).
+    pub(crate) fn device_address(&self) -> vk::DeviceAddress {
+        let info = vk::BufferDeviceAddressInfo::default().buffer(self.raw);
+        // SAFETY: valid buffer of this device, created with SHADER_DEVICE_ADDRESS usage
+        // (callers in this module tree only ask for buffers they created so).
+        unsafe { self.gpu.0.raw.get_buffer_device_address(&info) }
     }
 
     pub fn slice(&self, offset: u64, size: u64) -> BufferSlice<'_> {

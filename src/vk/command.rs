@@ -2,6 +2,7 @@
 
 use ash::vk;
 
+use super::accel::AccelerationStructure;
 use super::buffer::{Buffer, BufferSlice};
 use super::device::{Gpu, InFlight, QUERIES_PER_POOL};
 use super::error::{CallContext, Result, VkError};
@@ -87,6 +88,11 @@ impl Recorder {
 
     fn device(&self) -> &ash::Device {
         &self.gpu.0.raw
+    }
+
+    /// The command buffer being recorded (for sibling modules such as `accel`).
+    pub(crate) fn raw_cmd(&self) -> vk::CommandBuffer {
+        self.cmd
     }
 
     /// Allocates the next timestamp query and writes it.
@@ -184,6 +190,28 @@ impl Recorder {
         bindings: &[BufferSlice<'_>],
         push: &[u8],
     ) -> Result<()> {
+        self.bind_with(pipeline, bindings, None, push)
+    }
+
+    fn bind_with(
+        &mut self,
+        pipeline: &ComputePipeline,
+        bindings: &[BufferSlice<'_>],
+        tlas: Option<&AccelerationStructure>,
+        push: &[u8],
+    ) -> Result<()> {
+        if pipeline.tlas_binding != tlas.is_some() {
+            return Err(VkError::Usage(format!(
+                "kernel '{}' {} an acceleration structure, {} given",
+                pipeline.name(),
+                if pipeline.tlas_binding {
+                    "takes"
+                } else {
+                    "takes no"
+                },
+                if tlas.is_some() { "one" } else { "none" }
+            )));
+        }
         if bindings.len() as u32 != pipeline.bindings {
             return Err(VkError::Usage(format!(
                 "kernel '{}' takes {} buffers, {} given",
@@ -215,7 +243,7 @@ impl Recorder {
                     .range(range)]
             })
             .collect();
-        let writes: Vec<_> = infos
+        let mut writes: Vec<_> = infos
             .iter()
             .enumerate()
             .map(|(i, info)| {
@@ -225,6 +253,18 @@ impl Recorder {
                     .buffer_info(info)
             })
             .collect();
+        let tlas_handles = tlas.map(|t| [t.raw]);
+        let mut tlas_write = vk::WriteDescriptorSetAccelerationStructureKHR::default();
+        if let Some(handles) = &tlas_handles {
+            tlas_write = tlas_write.acceleration_structures(handles);
+            writes.push(
+                vk::WriteDescriptorSet::default()
+                    .dst_binding(pipeline.bindings)
+                    .descriptor_type(vk::DescriptorType::ACCELERATION_STRUCTURE_KHR)
+                    .descriptor_count(1)
+                    .push_next(&mut tlas_write),
+            );
+        }
         // SAFETY: recording; the pipeline and buffers are alive; counts were checked.
         unsafe {
             let d = self.device();
@@ -272,6 +312,31 @@ impl Recorder {
         }
         self.begin_scope(pipeline.name())?;
         // SAFETY: recording with a bound compute pipeline and pushed descriptors.
+        unsafe {
+            self.device()
+                .cmd_dispatch(self.cmd, groups[0], groups[1], groups[2])
+        };
+        self.end_scope()
+    }
+
+    /// Dispatches enough workgroups for `n` items of a kernel made with
+    /// [`ComputePipeline::with_acceleration_structure`], binding `tlas` after the buffers.
+    pub fn dispatch_with_tlas<P: bytemuck::Pod>(
+        &mut self,
+        pipeline: &ComputePipeline,
+        bindings: &[BufferSlice<'_>],
+        tlas: &AccelerationStructure,
+        push: &P,
+        n: u64,
+    ) -> Result<()> {
+        let groups = grid_for(&self.gpu, n, pipeline.workgroup_size());
+        self.bind_with(pipeline, bindings, Some(tlas), bytemuck::bytes_of(push))?;
+        if groups.contains(&0) {
+            return Ok(());
+        }
+        self.begin_scope(pipeline.name())?;
+        // SAFETY: recording with a bound compute pipeline and pushed descriptors; the
+        // acceleration structure is alive (borrowed) and built earlier on the timeline.
         unsafe {
             self.device()
                 .cmd_dispatch(self.cmd, groups[0], groups[1], groups[2])
@@ -336,7 +401,7 @@ impl Recorder {
         self.memory_barrier(barrier);
     }
 
-    fn memory_barrier(&mut self, barrier: vk::MemoryBarrier2<'_>) {
+    pub(crate) fn memory_barrier(&mut self, barrier: vk::MemoryBarrier2<'_>) {
         let barriers = [barrier];
         let dep = vk::DependencyInfo::default().memory_barriers(&barriers);
         // SAFETY: recording.

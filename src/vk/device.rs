@@ -41,6 +41,13 @@ impl MemoryCounters {
     }
 }
 
+/// VK_KHR_acceleration_structure entry points and limits, when enabled.
+pub(crate) struct AccelSupport {
+    pub(crate) loader: khr::acceleration_structure::Device,
+    /// minAccelerationStructureScratchOffsetAlignment.
+    pub(crate) scratch_alignment: u64,
+}
+
 /// A submitted command buffer that may still run.
 pub(crate) struct InFlight {
     pub(crate) value: u64,
@@ -72,6 +79,8 @@ pub(crate) struct GpuInner {
     pub(crate) info: PhysicalDeviceInfo,
     pub(crate) raw: ash::Device,
     pub(crate) push_descriptor: khr::push_descriptor::Device,
+    /// Present when the device was opened with ray queries (see [`Gpu::ray_query`]).
+    pub(crate) accel: Option<AccelSupport>,
     pub(crate) debug_utils: Option<ext::debug_utils::Device>,
     pub(crate) allocator: ManuallyDrop<Mutex<Allocator>>,
     pub(crate) memory: MemoryCounters,
@@ -121,16 +130,36 @@ impl Gpu {
                     .queue_priorities(&priorities[..count as usize])
             })
             .collect();
-        let extensions = [khr::push_descriptor::NAME.as_ptr()];
-        let mut f12 = vk::PhysicalDeviceVulkan12Features::default().timeline_semaphore(true);
+        // Ray queries (and what they need) are enabled only where the device offers
+        // them all; elsewhere the device is opened exactly as without them.
+        let ray_query = info.capabilities.ray_query;
+        let mut extensions = vec![khr::push_descriptor::NAME.as_ptr()];
+        if ray_query {
+            extensions.extend([
+                khr::acceleration_structure::NAME.as_ptr(),
+                khr::ray_query::NAME.as_ptr(),
+                khr::deferred_host_operations::NAME.as_ptr(),
+            ]);
+        }
+        let mut f12 = vk::PhysicalDeviceVulkan12Features::default()
+            .timeline_semaphore(true)
+            .buffer_device_address(ray_query);
         let mut f13 = vk::PhysicalDeviceVulkan13Features::default()
             .synchronization2(true)
             .maintenance4(true);
-        let create_info = vk::DeviceCreateInfo::default()
+        let mut accel_features = vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default()
+            .acceleration_structure(true);
+        let mut rq_features = vk::PhysicalDeviceRayQueryFeaturesKHR::default().ray_query(true);
+        let mut create_info = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queue_infos)
             .enabled_extension_names(&extensions)
             .push_next(&mut f12)
             .push_next(&mut f13);
+        if ray_query {
+            create_info = create_info
+                .push_next(&mut accel_features)
+                .push_next(&mut rq_features);
+        }
         // SAFETY: the physical device came from this instance; the create info lives here.
         let raw = unsafe { instance.raw.create_device(info.raw, &create_info, None) }
             .call("vkCreateDevice")?;
@@ -140,7 +169,7 @@ impl Gpu {
             device: raw.clone(),
             physical_device: info.raw,
             debug_settings: Default::default(),
-            buffer_device_address: false,
+            buffer_device_address: ray_query,
             allocation_sizes: Default::default(),
         })
         .map_err(|source| VkError::Alloc {
@@ -186,6 +215,22 @@ impl Gpu {
         }
 
         let push_descriptor = khr::push_descriptor::Device::new(&instance.raw, &raw);
+        let accel = ray_query.then(|| {
+            let mut as_props = vk::PhysicalDeviceAccelerationStructurePropertiesKHR::default();
+            let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut as_props);
+            // SAFETY: valid physical device that offers VK_KHR_acceleration_structure.
+            unsafe {
+                instance
+                    .raw
+                    .get_physical_device_properties2(info.raw, &mut props2)
+            };
+            AccelSupport {
+                loader: khr::acceleration_structure::Device::new(&instance.raw, &raw),
+                scratch_alignment: (as_props.min_acceleration_structure_scratch_offset_alignment
+                    as u64)
+                    .max(1),
+            }
+        });
         let debug_utils = instance
             .has_debug_utils()
             .then(|| ext::debug_utils::Device::new(&instance.raw, &raw));
@@ -194,6 +239,7 @@ impl Gpu {
             info,
             raw,
             push_descriptor,
+            accel,
             debug_utils,
             allocator: ManuallyDrop::new(Mutex::new(allocator)),
             memory: MemoryCounters::default(),
@@ -210,6 +256,12 @@ impl Gpu {
 
     pub fn info(&self) -> &PhysicalDeviceInfo {
         &self.0.info
+    }
+
+    /// Whether the device was opened with ray queries and acceleration structures
+    /// (VK_KHR_ray_query, VK_KHR_acceleration_structure, bufferDeviceAddress).
+    pub fn ray_query(&self) -> bool {
+        self.0.accel.is_some()
     }
 
     pub fn stream_mapping(&self) -> &StreamMapping {

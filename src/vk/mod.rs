@@ -2,8 +2,10 @@
 //!
 //! Above it, the engine speaks in safe types: [`Gpu`] (device, allocator, streams),
 //! [`Buffer`], [`ComputePipeline`], [`Recorder`] (command recording) and
-//! [`TimelinePoint`] (cross-stream order), plus the [`ProfileLog`] of GPU times.
+//! [`TimelinePoint`] (cross-stream order), plus the [`ProfileLog`] of GPU times, and,
+//! where the device offers ray queries, [`AccelerationStructure`].
 
+mod accel;
 mod buffer;
 mod command;
 mod device;
@@ -15,7 +17,8 @@ mod profiler;
 mod stream;
 mod validation;
 
-pub use buffer::{Buffer, BufferSlice, MemoryKind};
+pub use accel::{AccelerationStructure, VERTEX_STRIDE};
+pub use buffer::{Buffer, BufferSlice, BufferUsage, MemoryKind};
 pub use command::{grid_for, Recorder};
 pub use device::{Gpu, GpuDesc};
 pub use error::{Result, VkError};

@@ -41,6 +41,9 @@ pub struct CapabilityInfo {
     pub maintenance4: bool,
     pub buffer_device_address: bool,
     pub push_descriptor: bool,
+    /// VK_KHR_ray_query + VK_KHR_acceleration_structure + VK_KHR_deferred_host_operations
+    /// with the rayQuery, accelerationStructure and bufferDeviceAddress features: when
+    /// true, the device is opened with all of them enabled.
     pub ray_query: bool,
     pub subgroup_arithmetic: bool,
     pub shader_int64: bool,
@@ -139,6 +142,21 @@ pub fn enumerate(instance: &Instance) -> Result<Vec<PhysicalDeviceInfo>> {
         };
         let p = props2.properties;
         let f10 = features2.features;
+        // Ray queries need three extensions and three features; the feature structures of
+        // the two KHR extensions are only chained where the extensions exist.
+        let ray_query_exts = has_extension(&exts, khr::ray_query::NAME)
+            && has_extension(&exts, khr::acceleration_structure::NAME)
+            && has_extension(&exts, khr::deferred_host_operations::NAME);
+        let ray_query = ray_query_exts && f12.buffer_device_address == vk::TRUE && {
+            let mut accel = vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default();
+            let mut rq = vk::PhysicalDeviceRayQueryFeaturesKHR::default();
+            let mut features2 = vk::PhysicalDeviceFeatures2::default()
+                .push_next(&mut accel)
+                .push_next(&mut rq);
+            // SAFETY: valid physical device; the extensions of both structures exist.
+            unsafe { raw_instance.get_physical_device_features2(pd, &mut features2) };
+            accel.acceleration_structure == vk::TRUE && rq.ray_query == vk::TRUE
+        };
         let (device_type, type_rank) = match p.device_type {
             vk::PhysicalDeviceType::DISCRETE_GPU => ("discrete", 0),
             vk::PhysicalDeviceType::INTEGRATED_GPU => ("integrated", 1),
@@ -192,8 +210,7 @@ pub fn enumerate(instance: &Instance) -> Result<Vec<PhysicalDeviceInfo>> {
                 maintenance4: f13.maintenance4 == vk::TRUE,
                 buffer_device_address: f12.buffer_device_address == vk::TRUE,
                 push_descriptor: has_extension(&exts, khr::push_descriptor::NAME),
-                ray_query: has_extension(&exts, khr::ray_query::NAME)
-                    && has_extension(&exts, khr::acceleration_structure::NAME),
+                ray_query,
                 subgroup_arithmetic: props11
                     .subgroup_supported_operations
                     .contains(vk::SubgroupFeatureFlags::ARITHMETIC),

@@ -30,6 +30,8 @@ pub struct ComputePipeline {
     pub(crate) layout: vk::PipelineLayout,
     set_layout: vk::DescriptorSetLayout,
     pub(crate) bindings: u32,
+    /// Whether an acceleration structure follows the storage buffers.
+    pub(crate) tlas_binding: bool,
     pub(crate) push_constant_bytes: u32,
     name: &'static str,
     /// Workgroup size along x (specialization constant 0).
@@ -46,6 +48,26 @@ impl std::fmt::Debug for ComputePipeline {
 
 impl ComputePipeline {
     pub fn new(gpu: &Gpu, desc: &PipelineDesc<'_>) -> Result<Self> {
+        Self::create(gpu, desc, false)
+    }
+
+    /// A kernel that also reads an acceleration structure (a TLAS, for ray queries) at
+    /// set 0, binding `desc.bindings` — right after its storage buffers. Dispatch it with
+    /// [`Recorder::dispatch_with_tlas`](super::Recorder::dispatch_with_tlas). Needs a
+    /// device opened with ray queries.
+    pub fn with_acceleration_structure(gpu: &Gpu, desc: &PipelineDesc<'_>) -> Result<Self> {
+        if !gpu.ray_query() {
+            return Err(VkError::Usage(format!(
+                "kernel '{}' uses ray queries, which device '{}' does not offer \
+                 (it needs VK_KHR_ray_query and VK_KHR_acceleration_structure)",
+                desc.kernel.name,
+                gpu.info().name
+            )));
+        }
+        Self::create(gpu, desc, true)
+    }
+
+    fn create(gpu: &Gpu, desc: &PipelineDesc<'_>, tlas_binding: bool) -> Result<Self> {
         let device = &gpu.0.raw;
         let words = ash::util::read_spv(&mut std::io::Cursor::new(desc.kernel.spirv))
             .map_err(|_| VkError::BadSpirv(desc.kernel.name))?;
@@ -56,7 +78,7 @@ impl ComputePipeline {
                 desc.kernel.name, desc.push_constant_bytes
             )));
         }
-        let bindings: Vec<_> = (0..desc.bindings)
+        let mut bindings: Vec<_> = (0..desc.bindings)
             .map(|b| {
                 vk::DescriptorSetLayoutBinding::default()
                     .binding(b)
@@ -65,6 +87,15 @@ impl ComputePipeline {
                     .stage_flags(vk::ShaderStageFlags::COMPUTE)
             })
             .collect();
+        if tlas_binding {
+            bindings.push(
+                vk::DescriptorSetLayoutBinding::default()
+                    .binding(desc.bindings)
+                    .descriptor_type(vk::DescriptorType::ACCELERATION_STRUCTURE_KHR)
+                    .descriptor_count(1)
+                    .stage_flags(vk::ShaderStageFlags::COMPUTE),
+            );
+        }
         let set_info = vk::DescriptorSetLayoutCreateInfo::default()
             .flags(vk::DescriptorSetLayoutCreateFlags::PUSH_DESCRIPTOR_KHR)
             .bindings(&bindings);
@@ -148,6 +179,7 @@ impl ComputePipeline {
                 layout,
                 set_layout,
                 bindings: desc.bindings,
+                tlas_binding,
                 push_constant_bytes: desc.push_constant_bytes,
                 name: desc.kernel.name,
                 workgroup_size: desc.spec.first().copied().unwrap_or(1),

@@ -52,7 +52,7 @@ pub fn random_u32s(n: usize, seed: u64) -> Vec<u32> {
         .collect()
 }
 
-/// Uniform floats in [0, 1) from the deterministic generator.
+/// Uniform floats in [0, 1) from [`random_u32s`].
 pub fn uniforms(n: usize, seed: u64) -> Vec<f32> {
     random_u32s(n, seed)
         .into_iter()
@@ -61,7 +61,7 @@ pub fn uniforms(n: usize, seed: u64) -> Vec<f32> {
 }
 
 /// A soup of `n` triangles in the unit cube, of mixed sizes, a few of them degenerate
-/// (every 97th a point, every 97th + 1 collinear).
+/// (every 97th a point, the next a collinear sliver).
 pub fn triangle_soup(n: usize, seed: u64) -> Vec<splitray::trace::GpuTriangle> {
     use glam::Vec3;
     let r = uniforms(n * 10, seed);
@@ -73,8 +73,8 @@ pub fn triangle_soup(n: usize, seed: u64) -> Vec<splitray::trace::GpuTriangle> {
             let a = centre + size * (Vec3::new(c[3], c[4], c[5]) - 0.5);
             let b = centre + size * (Vec3::new(c[6], c[7], c[8]) - 0.5);
             let tri = match i % 97 {
-                0 => [centre, centre, centre],
-                1 => [centre, a, centre + 2.0 * (a - centre)],
+                0 => [centre, centre, centre],                 // a point
+                1 => [centre, a, centre + 2.0 * (a - centre)], // collinear
                 _ => [centre, a, b],
             };
             splitray::trace::GpuTriangle::new(tri)
@@ -82,7 +82,8 @@ pub fn triangle_soup(n: usize, seed: u64) -> Vec<splitray::trace::GpuTriangle> {
         .collect()
 }
 
-/// Rays from around the unit cube towards points inside it; every fifth is short.
+/// `n` unit rays from around the unit cube towards points inside it; every fifth has a
+/// short tmax (0.3).
 pub fn random_rays(n: usize, seed: u64) -> Vec<splitray::trace::Ray> {
     use glam::Vec3;
     let r = uniforms(n * 6, seed);
@@ -102,7 +103,27 @@ pub fn random_rays(n: usize, seed: u64) -> Vec<splitray::trace::Ray> {
         .collect()
 }
 
-/// Traces `rays` with `tracer` and reads the hits back.
+/// Primary rays through the pixel centres of a `width` × `height` image of `camera`.
+pub fn camera_rays(
+    camera: &splitray::scene::Camera,
+    width: u32,
+    height: u32,
+) -> Vec<splitray::trace::Ray> {
+    let frame = camera.frame(width, height);
+    (0..height)
+        .flat_map(|y| (0..width).map(move |x| (x, y)))
+        .map(|(x, y)| {
+            splitray::trace::Ray::new(
+                frame.origin,
+                frame.pixel_center_direction(x, y),
+                0.0,
+                f32::INFINITY,
+            )
+        })
+        .collect()
+}
+
+/// Uploads `rays`, traces them with `tracer` and reads the hits back.
 pub fn trace_hits(
     gpu: &splitray::vk::Gpu,
     tracer: &mut dyn splitray::trace::Tracer,

@@ -1,0 +1,48 @@
+#version 460
+// Closest-hit and occlusion queries through the driver's own acceleration structure
+// (VK_KHR_ray_query): `--tracer ray-query`. One invocation per ray.
+//
+// Needs GL_EXT_ray_query, so the pipeline is created only on devices that offer ray
+// queries (src/trace/ray_query.rs); elsewhere this module is compiled but never used.
+// The geometry is opaque, so rayQueryProceedEXT never stops on a candidate and the
+// committed intersection is the closest one. Ties in t are broken by the driver, not
+// by triangle index.
+// With OCCLUSION defined, the query ends at the first hit found (shadow rays).
+//! variant occlusion: OCCLUSION=1
+#extension GL_EXT_ray_query : require
+#include "grid.glsl"
+#include "geometry.glsl"
+
+layout(std430, set = 0, binding = 0) readonly buffer Rays { Ray rays[]; };
+layout(std430, set = 0, binding = 1) writeonly buffer Hits { Hit hits[]; };
+layout(set = 0, binding = 2) uniform accelerationStructureEXT scene;
+layout(push_constant) uniform Push {
+    uint ray_count;
+} pc;
+
+void main() {
+    uint ray_index = linear_invocation_id();
+    if (ray_index >= pc.ray_count) return;
+    Ray ray = rays[ray_index];
+    uint flags = gl_RayFlagsOpaqueEXT;
+#ifdef OCCLUSION
+    flags |= gl_RayFlagsTerminateOnFirstHitEXT;
+#endif
+    // Ray queries need 0 <= tmin <= tmax; +inf is kept finite for drivers' sake.
+    float tmin = max(ray.tmin, 0.0);
+    float tmax = min(ray.tmax, 3.402823466e38);
+    Hit hit = Hit(1.0 / 0.0, MISS, 0.0, 0.0);
+    if (tmax > tmin) {
+        rayQueryEXT query;
+        rayQueryInitializeEXT(query, scene, flags, 0xFF, ray.origin, tmin, ray.dir, tmax);
+        while (rayQueryProceedEXT(query)) {
+        }
+        if (rayQueryGetIntersectionTypeEXT(query, true) ==
+            gl_RayQueryCommittedIntersectionTriangleEXT) {
+            vec2 uv = rayQueryGetIntersectionBarycentricsEXT(query, true);
+            hit = Hit(rayQueryGetIntersectionTEXT(query, true),
+                      uint(rayQueryGetIntersectionPrimitiveIndexEXT(query, true)), uv.x, uv.y);
+        }
+    }
+    hits[ray_index] = hit;
+}
