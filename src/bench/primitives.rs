@@ -422,7 +422,7 @@ pub fn run(gpu: &Gpu, opts: &PrimitivesBenchOptions) -> BenchResult<PrimitivesRe
     let mut k = 0u32;
     while rkeys.len() < n {
         let len = (lens[rkeys.len()] % 16 + 1) as usize;
-        rkeys.extend(std::iter::repeat(k).take(len.min(n - rkeys.len())));
+        rkeys.extend(std::iter::repeat_n(k, len.min(n - rkeys.len())));
         k += 1;
     }
     let rvals = random_u32s(n, 4);

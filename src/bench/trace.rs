@@ -61,6 +61,11 @@ pub struct TracerRow {
     pub mrays_per_s: f64,
     /// Peak GPU memory during a frame, rays and hits included.
     pub peak_gpu_bytes: u64,
+    /// The part of the peak that the tracer itself allocated (its triangles, lists,
+    /// buffers and acceleration structures): the peak less the rays and hits.
+    pub tracer_peak_bytes: u64,
+    /// GPU time per kernel over the last frame.
+    pub kernels: Vec<vk::KernelTime>,
     /// Fraction of the rays actually traced (1 unless extrapolated).
     pub subset: f64,
     /// Hits checked against brute force before timing, and how many differed.
@@ -103,8 +108,8 @@ impl fmt::Display for TraceReport {
         )?;
         writeln!(
             f,
-            "{:<12} {:>11} {:>10} {:>10} {:>10} {:>11} {:>9}  {}",
-            "tracer", "frame ms", "min ms", "max ms", "Mrays/s", "peak MiB", "verified", "vs each"
+            "{:<12} {:>11} {:>10} {:>10} {:>10} {:>11} {:>11} {:>9}  vs each",
+            "tracer", "frame ms", "min ms", "max ms", "Mrays/s", "peak MiB", "own MiB", "verified"
         )?;
         for r in &self.rows {
             let ratios: Vec<String> = self
@@ -115,13 +120,14 @@ impl fmt::Display for TraceReport {
                 .collect();
             writeln!(
                 f,
-                "{:<12} {:>11.2} {:>10.2} {:>10.2} {:>10.2} {:>11.1} {:>9}  faster than: {}{}",
+                "{:<12} {:>11.2} {:>10.2} {:>10.2} {:>10.2} {:>11.1} {:>11.1} {:>9}  faster than: {}{}",
                 r.tracer,
                 r.frame_ms,
                 r.min_ms,
                 r.max_ms,
                 r.mrays_per_s,
                 r.peak_gpu_bytes as f64 / (1 << 20) as f64,
+                r.tracer_peak_bytes as f64 / (1 << 20) as f64,
                 format!("{}/{}", r.verified_rays - r.mismatches, r.verified_rays),
                 ratios.join(", "),
                 if r.subset < 1.0 {
@@ -310,6 +316,18 @@ pub fn run(
 
         let mut times = Vec::new();
         let mut peak = 0;
+        let mut kernels = Vec::new();
+        // Everything on the device before the tracer's first frame: rays, hits and the
+        // bench's own buffers (the tracer's pipelines hold no device memory).
+        drop(tracer);
+        gpu.wait_idle()?;
+        let baseline = gpu.memory_bytes().0;
+        let mut tracer: Box<dyn Tracer> = match (kind, opts.pdacrt) {
+            (TracerKind::Pdacrt, Some(params)) => {
+                Box::new(PdacrtTracer::with_params(gpu, &triangles, params)?)
+            }
+            _ => kind.create(gpu, &triangles)?,
+        };
         for frame in 0..=opts.frames.max(5) {
             gpu.wait_idle()?;
             gpu.reset_peak_memory();
@@ -323,7 +341,8 @@ pub fn run(
                 gpu.wait(&p)?;
             }
             let ms = start.elapsed().as_secs_f64() * 1e3;
-            let _ = gpu.take_profile();
+            gpu.wait_idle()?;
+            kernels = gpu.take_profile().summary();
             if frame > 0 {
                 // Frame 0 warms up: LLVM compiles each kernel at its first dispatch.
                 times.push(ms * scale);
@@ -350,6 +369,8 @@ pub fn run(
             max_ms: *times.last().unwrap(),
             mrays_per_s: total_rays as f64 / (median * 1e3),
             peak_gpu_bytes: peak,
+            tracer_peak_bytes: peak.saturating_sub(baseline),
+            kernels,
             subset: 1.0 / scale,
             verified_rays: verified,
             mismatches,

@@ -63,6 +63,9 @@ enum BenchCommand {
         /// Print PDACRT's per-level statistics.
         #[arg(long)]
         levels: bool,
+        /// Print each tracer's per-kernel GPU times of its last frame.
+        #[arg(long)]
+        profile: bool,
         /// PDACRT α: nodes with fewer triangles are terminal (default 256).
         #[arg(long)]
         alpha: Option<u32>,
@@ -141,6 +144,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             frames,
             dump_hits,
             levels,
+            profile,
             json,
             alpha,
             beta,
@@ -176,6 +180,12 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             )
             .map_err(|e| anyhow::anyhow!("{e}"))?;
             print!("{report}");
+            if *profile {
+                for row in &report.rows {
+                    println!("\n{} kernels (last frame):", row.tracer);
+                    print!("{}", splitray::vk::ProfileLog::table_of(&row.kernels));
+                }
+            }
             if *levels {
                 println!("PDACRT levels (last frame):");
                 println!(
