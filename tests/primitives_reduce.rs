@@ -15,7 +15,7 @@ fn runs(n: usize, seed: u64, max_run: u32) -> Vec<u32> {
     let mut k = 5u32;
     while keys.len() < n {
         let len = (r[keys.len()] % max_run + 1) as usize;
-        keys.extend(std::iter::repeat(k).take(len.min(n - keys.len())));
+        keys.extend(std::iter::repeat_n(k, len.min(n - keys.len())));
         k += 1 + r[keys.len() - 1] % 3;
     }
     keys
