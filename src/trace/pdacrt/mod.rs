@@ -71,8 +71,8 @@ impl Default for PdacrtParams {
         Self {
             alpha: 256,
             beta: 256,
-            eta: 1 << 21,
-            lambda: 3 << 19,
+            eta: 1 << 19,
+            lambda: 3 << 17,
             batch: 256,
             intersect_workgroup: 64,
             max_rays_per_chunk: 1 << 19,
@@ -623,8 +623,10 @@ impl PdacrtTracer {
         // Channel stride: a multiple of 64 words keeps every channel slice aligned.
         let stride = child_count.next_multiple_of(64);
         self.misc_scratch(max_list.max(stride))?;
-        let run_keys = self.pool.take("pdacrt-run-keys", max_list as u64 * 4)?;
-        let run_counts = self.pool.take("pdacrt-run-counts", max_list as u64 * 4)?;
+        // At most 4 runs per node: one per status code.
+        let max_runs = max_list.min(level.node_count * 4) as u64;
+        let run_keys = self.pool.take("pdacrt-run-keys", max_runs * 4)?;
+        let run_counts = self.pool.take("pdacrt-run-counts", max_runs * 4)?;
         let run_total = self.pool.take("pdacrt-run-total", 4)?;
         let tri_counts = self
             .pool
@@ -813,9 +815,6 @@ impl PdacrtTracer {
         let order = self.pool.take("pdacrt-entry-order", entries as u64 * 4)?;
         let sorted_t = self.pool.take("pdacrt-sorted-t", entries as u64 * 4)?;
         let sorted_tri = self.pool.take("pdacrt-sorted-tri", entries as u64 * 4)?;
-        let run_rays = self.pool.take("pdacrt-run-rays", entries as u64 * 4)?;
-        let run_t = self.pool.take("pdacrt-run-t", entries as u64 * 4)?;
-        let run_tri = self.pool.take("pdacrt-run-tri", entries as u64 * 4)?;
         let run_total = self.pool.take("pdacrt-run-total", 4)?;
         let (_, sort_scratch) = self.scratch.sort.as_ref().unwrap();
         let misc = self.scratch.misc.as_ref().unwrap();
@@ -881,10 +880,12 @@ impl PdacrtTracer {
                 t: (&sorted_t).into(),
                 ids: (&sorted_tri).into(),
             },
+            // The per-entry arrays are dead once gathered into sorted order: the runs
+            // (at most one per entry) reuse them, which keeps a flush at six arrays.
             RunOutputs {
-                keys: (&run_rays).into(),
-                a: (&run_t).into(),
-                b: Some((&run_tri).into()),
+                keys: (&order).into(),
+                a: (&entry_t).into(),
+                b: Some((&entry_tri).into()),
                 count: (&run_total).into(),
             },
             misc,
@@ -893,9 +894,9 @@ impl PdacrtTracer {
         rec.dispatch_items(
             &self.kernels.update_hits,
             &[
-                (&run_rays).into(),
-                (&run_t).into(),
-                (&run_tri).into(),
+                (&order).into(),
+                (&entry_t).into(),
+                (&entry_tri).into(),
                 (&run_total).into(),
                 best_t.into(),
                 best_tri.into(),
@@ -907,8 +908,7 @@ impl PdacrtTracer {
         rec.end_scope()?;
         rec.submit(&[])?;
         for b in [
-            entry_t, entry_tri, keys, order, sorted_t, sorted_tri, run_rays, run_t, run_tri,
-            run_total,
+            entry_t, entry_tri, keys, order, sorted_t, sorted_tri, run_total,
         ] {
             self.pool.give(b);
         }

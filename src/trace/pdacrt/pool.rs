@@ -24,10 +24,16 @@ impl BufferPool {
         }
     }
 
-    /// A buffer of at least `bytes` bytes (contents undefined).
+    /// A buffer of at least `bytes` bytes (contents undefined): the smallest free one
+    /// that fits, else a new one of the next power of two.
     pub fn take(&mut self, name: &str, bytes: u64) -> vk::Result<Buffer> {
         let capacity = bytes.max(256).next_power_of_two();
-        if let Some(buffer) = self.free.get_mut(&capacity).and_then(Vec::pop) {
+        let fit = self
+            .free
+            .range(bytes.max(1)..)
+            .find(|(_, v)| !v.is_empty())
+            .map(|(k, _)| *k);
+        if let Some(buffer) = fit.and_then(|k| self.free.get_mut(&k)).and_then(Vec::pop) {
             return Ok(buffer);
         }
         let limit = self.gpu.info().limits.max_storage_buffer_range;
