@@ -86,7 +86,7 @@ fn tiny_render_writes_exr_png_and_stats_with_validation_on() {
     assert_eq!((film.width(), film.height()), (40, 30));
     assert_eq!((meta.spp, meta.seed), (2, 7));
     assert_eq!(meta.integrator, "primary");
-    assert_eq!(meta.tracer, "brute-force");
+    assert_eq!(meta.tracer, "pdacrt");
     assert!(film.depth.is_some() && film.triangle_id.is_some() && film.normal.is_some());
     assert!(dir.path().join("img.png").is_file());
     let stats: serde_json::Value =
@@ -101,7 +101,7 @@ fn tiny_render_writes_exr_png_and_stats_with_validation_on() {
         .map(|k| k["name"].as_str().unwrap().to_string())
         .collect();
     assert!(
-        kernels.contains(&"trace_brute_force".to_string()),
+        kernels.contains(&"trace_pdacrt_segmented_intersect".to_string()),
         "{kernels:?}"
     );
 }
@@ -210,4 +210,56 @@ fn bad_input_gives_a_clear_error_and_no_output() {
     // clap's own usage errors exit with 2; an unknown integrator is one of them.
     let out = splitray(&["render", "--integrator", "bogus"], d);
     assert!(!out.status.success() && text(&out).contains("bogus"));
+}
+
+#[test]
+fn bench_trace_verifies_and_compares_tracers() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = splitray(
+        &[
+            "bench",
+            "trace",
+            "cornell-box",
+            "--width",
+            "24",
+            "--height",
+            "16",
+            "--workload",
+            "ao",
+            "--tracers",
+            "pdacrt,brute-force,cpu-dacrt",
+            "--levels",
+            "--json",
+            "trace.json",
+            "--dump-hits",
+            "hits.bin",
+            "--validation",
+        ],
+        dir.path(),
+    );
+    assert!(out.status.success(), "{}", text(&out));
+    let t = text(&out);
+    for part in [
+        "pdacrt",
+        "brute-force",
+        "cpu-dacrt",
+        "Mrays/s",
+        "faster than",
+    ] {
+        assert!(t.contains(part), "missing {part:?} in:\n{t}");
+    }
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("trace.json")).unwrap()).unwrap();
+    let rows = json["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 3);
+    assert!(rows
+        .iter()
+        .all(|r| r["mismatches"] == 0 && r["verified_rays"].as_u64().unwrap() > 0));
+    // 8 AO rays per primary hit.
+    assert_eq!(json["rays"].as_u64().unwrap() % 8, 0);
+    // Primary hits: 8 bytes per pixel, row 0 first.
+    assert_eq!(
+        std::fs::read(dir.path().join("hits.bin")).unwrap().len(),
+        24 * 16 * 8
+    );
 }

@@ -34,7 +34,8 @@ pub struct RenderArgs {
     /// What to compute along the rays: primary (eye-light shading) or ao (ambient occlusion).
     #[arg(long)]
     integrator: Option<IntegratorKind>,
-    /// How rays are cast: brute-force (every ray against every triangle, the oracle).
+    /// How rays are cast: pdacrt (default; no acceleration structure), brute-force (the
+    /// oracle), cpu-dacrt (serial CPU baseline) or ray-query (driver BVH, where offered).
     #[arg(long)]
     tracer: Option<TracerKind>,
     /// Vulkan device by index or name substring (see `splitray info`); also SPLITRAY_DEVICE.
