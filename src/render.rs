@@ -164,6 +164,7 @@ pub fn render(
             materials: &materials,
             camera,
             scene_radius: scene.bounds().radius(),
+            light: shadow_light(scene),
         },
         &PassOptions {
             integrator: options.integrator,
@@ -225,4 +226,18 @@ pub fn render(
         metadata,
         stats,
     })
+}
+
+/// The `shadow` integrator's light: the scene's first point light (RGB intensity
+/// averaged into one white intensity), else one inside the top of the scene box, bright
+/// enough that the irradiance at the box centre is about 1.
+pub fn shadow_light(scene: &Scene) -> glam::Vec4 {
+    match scene.point_lights.first() {
+        Some(l) => l.position.extend(l.intensity.element_sum() / 3.0),
+        None => {
+            let position = crate::bench::workloads::shadow_light(scene);
+            let d = (position - scene.bounds().center()).length();
+            position.extend(d * d)
+        }
+    }
 }

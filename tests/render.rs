@@ -241,3 +241,195 @@ fn a_scene_beyond_one_storage_binding_is_refused_by_name() {
     );
     common::assert_clean(&gpu);
 }
+
+/// A closed cube [0, 1]³ of 12 triangles, all of material 0.
+fn closed_cube() -> Vec<Triangle> {
+    let v = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
+    let quads = [
+        [v(0., 0., 0.), v(1., 0., 0.), v(1., 1., 0.), v(0., 1., 0.)],
+        [v(0., 0., 1.), v(0., 1., 1.), v(1., 1., 1.), v(1., 0., 1.)],
+        [v(0., 0., 0.), v(0., 1., 0.), v(0., 1., 1.), v(0., 0., 1.)],
+        [v(1., 0., 0.), v(1., 0., 1.), v(1., 1., 1.), v(1., 1., 0.)],
+        [v(0., 0., 0.), v(0., 0., 1.), v(1., 0., 1.), v(1., 0., 0.)],
+        [v(0., 1., 0.), v(1., 1., 0.), v(1., 1., 1.), v(0., 1., 1.)],
+    ];
+    quads
+        .iter()
+        .flat_map(|q| {
+            [
+                Triangle::new(q[0], q[1], q[2], 0),
+                Triangle::new(q[0], q[2], q[3], 0),
+            ]
+        })
+        .collect()
+}
+
+#[test]
+fn path_integrator_in_a_glowing_closed_box_sums_the_bounces_exactly() {
+    // Every surface emits Le and reflects albedo a: a path gathers Le at its camera hit
+    // and at each of its 7 diffuse bounces, its throughput falling by a each time. Every
+    // ray hits, so each sample is exactly Le · Σ_{k=0..7} a^k (the 7-bounce truncation of
+    // Le / (1 − a)), with no noise at all.
+    let gpu = common::gpu();
+    let mut scene = scene::load("cornell-box").unwrap();
+    scene.triangles = closed_cube();
+    scene.materials.truncate(1);
+    let (le, a) = (Vec3::new(0.5, 1.0, 2.0), 0.6f32);
+    scene.materials[0].emission = le;
+    scene.materials[0].diffuse = Vec3::splat(a);
+    scene.camera.position = Vec3::new(0.5, 0.5, 0.3);
+    scene.camera.look_at = Vec3::new(0.6, 0.4, 1.0);
+    scene.camera.up = Vec3::Y;
+    let out = render(
+        &gpu,
+        &scene,
+        &options(&scene, 24, 16, 2, IntegratorKind::Path),
+        &mut |_| {},
+    )
+    .unwrap();
+    let expected = le * (0..=7).map(|k| a.powi(k)).sum::<f32>();
+    for i in 0..24 * 16 {
+        let got = Vec3::from(out.film.mean_rgb(i));
+        assert!(
+            (got - expected).abs().max_element() <= 1e-4 * expected.max_element(),
+            "pixel {i}: {got} vs {expected}"
+        );
+    }
+    common::assert_clean(&gpu);
+}
+
+#[test]
+fn shadow_integrator_matches_the_inverse_square_law_on_an_open_plane() {
+    // A lone floor under a point light: radiance = albedo/π · I · cos θ / d², nothing
+    // in the way. The expected value comes from the first-hit AOVs (depth, normal).
+    let gpu = common::gpu();
+    let mut scene = scene::load("cornell-box").unwrap();
+    scene.triangles.truncate(2); // the floor
+    let light = Vec3::new(278.0, 300.0, 280.0);
+    let intensity = 5.0e4;
+    scene.point_lights = vec![splitray::scene::PointLight {
+        position: light,
+        intensity: Vec3::splat(intensity),
+    }];
+    let (w, h) = (32u32, 32u32);
+    let out = render(
+        &gpu,
+        &scene,
+        &options(&scene, w, h, 1, IntegratorKind::Shadow),
+        &mut |_| {},
+    )
+    .unwrap();
+    let frame = scene.camera.frame(w, h);
+    let albedo = scene.materials[scene.triangles[0].material as usize].diffuse;
+    let depth = out.film.depth.as_ref().unwrap();
+    let mut lit = 0;
+    for y in 0..h {
+        for x in 0..w {
+            let i = (y * w + x) as usize;
+            let got = Vec3::from(out.film.mean_rgb(i));
+            if !depth[i].is_finite() {
+                assert_eq!(got, Vec3::ZERO);
+                continue;
+            }
+            let p = frame.origin + depth[i] * frame.pixel_center_direction(x, y);
+            let to = light - p;
+            let cos = Vec3::Y.dot(to.normalize());
+            let expected = albedo / std::f32::consts::PI * intensity * cos / to.length_squared();
+            assert!(
+                (got - expected).abs().max_element() <= 2e-3 * expected.max_element(),
+                "pixel {x},{y}: {got} vs {expected}"
+            );
+            lit += 1;
+        }
+    }
+    assert!(lit > 100, "{lit} lit pixels");
+    common::assert_clean(&gpu);
+}
+
+#[test]
+fn reflection_integrator_shows_what_the_cpu_sees_in_the_mirror() {
+    let gpu = common::gpu();
+    let scene = scene::load("cornell-box").unwrap();
+    let (w, h) = (48u32, 48u32);
+    let out = render(
+        &gpu,
+        &scene,
+        &options(&scene, w, h, 1, IntegratorKind::Reflection),
+        &mut |_| {},
+    )
+    .unwrap();
+    let tris = gpu_triangles(&scene);
+    let primary = pixel_centre_rays(&scene, w, h);
+    let hits = cpu::closest_hits(&primary, &tris);
+    let eps = 1e-4 * scene.bounds().radius();
+    let mut agree = 0;
+    let mut compared = 0;
+    for (i, (r, hit)) in primary.iter().zip(&hits).enumerate() {
+        let got = Vec3::from(out.film.mean_rgb(i));
+        if !hit.is_hit() {
+            assert_eq!(got, Vec3::ZERO);
+            continue;
+        }
+        let d = Vec3::from(r.dir);
+        let mut n = tris[hit.triangle as usize].normal().normalize();
+        if n.dot(d) > 0.0 {
+            n = -n;
+        }
+        let p = Vec3::from(r.origin) + hit.t * d + eps * n;
+        let m = Ray::new(p, (d - 2.0 * d.dot(n) * n).normalize(), 0.0, f32::INFINITY);
+        let second = cpu::closest_hit(&m, &tris);
+        let expected = if second.is_hit() {
+            let t = &scene.triangles[second.triangle as usize];
+            let mat = &scene.materials[t.material as usize];
+            mat.emission
+                + mat.diffuse
+                    * tris[second.triangle as usize]
+                        .normal()
+                        .normalize()
+                        .dot(Vec3::from(m.dir))
+                        .abs()
+        } else {
+            Vec3::ZERO
+        };
+        compared += 1;
+        if (got - expected).abs().max_element() <= 1e-3 {
+            agree += 1;
+        }
+    }
+    // Rays that graze an edge on the way may land on the neighbouring triangle.
+    assert!(
+        agree * 100 >= compared * 99,
+        "{agree} of {compared} pixels agree"
+    );
+    common::assert_clean(&gpu);
+}
+
+#[test]
+fn frame_params_layout_matches_glsl() {
+    use splitray::integrator::FrameParams;
+    use splitray::vk::{ComputePipeline, PipelineDesc, StreamKind};
+    let gpu = common::gpu();
+    let words: Vec<u32> = (0..32u32).map(|k| 0x3F80_0000 + k * 7919).collect();
+    let params: FrameParams = bytemuck::cast_slice::<u32, FrameParams>(&words)[0];
+    let pipeline = ComputePipeline::new(
+        &gpu,
+        &PipelineDesc {
+            kernel: splitray::shaders::TEST_FRAME_ECHO,
+            bindings: 1,
+            push_constant_bytes: 128,
+            spec: &[],
+        },
+    )
+    .unwrap();
+    let out = gpu.zeroed::<u32>("echo", 32).unwrap();
+    let mut rec = gpu.recorder(StreamKind::Main).unwrap();
+    rec.dispatch(&pipeline, &[(&out).into()], &params, [1, 1, 1])
+        .unwrap();
+    gpu.wait(&rec.submit(&[]).unwrap()).unwrap();
+    let echoed = out.read::<u32>().unwrap();
+    // Word 27 is padding on both sides; every other word must come back where it went.
+    for k in (0..32).filter(|k| *k != 27) {
+        assert_eq!(echoed[k], words[k], "word {k}");
+    }
+    common::assert_clean(&gpu);
+}

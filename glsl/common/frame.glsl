@@ -1,6 +1,6 @@
 // Camera and per-pass parameters shared by the integrator kernels, passed as push
-// constants (112 bytes, within the 128 that every device offers) (src/integrator/gpu.rs
-// `FrameParams` is the Rust side; the layout test in tests/integrators.rs checks it).
+// constants (128 bytes, the size every device offers). `FrameParams` in
+// src/integrator/gpu_types.rs is the Rust side; tests/render.rs checks the two agree.
 #ifndef SPLITRAY_FRAME_GLSL
 #define SPLITRAY_FRAME_GLSL
 
@@ -19,8 +19,9 @@ struct FrameParams {
     uint ao_rays;       // ambient-occlusion rays per hit
     float ao_radius;
     float ray_epsilon;  // offset of secondary-ray origins, scaled to the scene
+    uint bounce;        // path integrator: which bounce this pass shades (0 = camera hit)
     uint pad0;
-    uint pad1;
+    vec4 light;         // shadow integrator: point light position, w = intensity (W/sr)
 };
 
 #endif

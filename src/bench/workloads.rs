@@ -136,8 +136,8 @@ fn cosine_direction(n: Vec3, u1: f32, u2: f32) -> Vec3 {
     (r * phi.cos() * t + r * phi.sin() * b + (1.0 - u1).max(0.0).sqrt() * n).normalize()
 }
 
-/// The point light of the shadow workload: the scene's first, else one above and in
-/// front of the scene box.
+/// The point light of the shadow workload: the scene's first, else one inside the top of
+/// the scene box (so a closed room such as the Cornell box is lit from within).
 pub fn shadow_light(scene: &Scene) -> Vec3 {
     scene
         .point_lights
@@ -145,7 +145,7 @@ pub fn shadow_light(scene: &Scene) -> Vec3 {
         .map(|l| l.position)
         .unwrap_or_else(|| {
             let b = scene.bounds();
-            b.center() + Vec3::new(0.3, 1.2, 0.5) * b.radius()
+            b.center() + Vec3::new(0.1, 0.45, 0.1) * b.extent()
         })
 }
 

@@ -31,7 +31,9 @@ pub struct RenderArgs {
     /// Random seed (same seed, same device → same image).
     #[arg(long)]
     seed: Option<u64>,
-    /// What to compute along the rays: primary (eye-light shading) or ao (ambient occlusion).
+    /// What to compute along the rays: primary (eye-light shading), ao (ambient
+    /// occlusion), shadow (one point light), reflection (one mirror bounce) or path
+    /// (7 diffuse bounces).
     #[arg(long)]
     integrator: Option<IntegratorKind>,
     /// How rays are cast: pdacrt (default; no acceleration structure), brute-force (the

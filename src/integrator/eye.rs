@@ -10,7 +10,8 @@ use crate::scene::CameraFrame;
 use crate::shaders;
 use crate::trace::{GpuTriangle, Hit, Query, Ray, Tracer};
 use crate::vk::{
-    self, Buffer, ComputePipeline, Gpu, MemoryKind, PipelineDesc, StreamKind, TimelinePoint,
+    self, Buffer, ComputePipeline, Gpu, MemoryKind, PipelineDesc, Recorder, StreamKind,
+    TimelinePoint,
 };
 
 const WORKGROUP: u32 = 64;
@@ -23,6 +24,8 @@ pub struct PassInputs<'a> {
     pub camera: CameraFrame,
     /// Radius of the scene's bounding sphere: scales the AO radius and ray offsets.
     pub scene_radius: f32,
+    /// The shadow integrator's point light: position and intensity (W/sr).
+    pub light: glam::Vec4,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -66,6 +69,10 @@ struct Pipelines {
     shade_primary: ComputePipeline,
     ao_rays: ComputePipeline,
     shade_ao: ComputePipeline,
+    shadow_rays: ComputePipeline,
+    shade_shadow: ComputePipeline,
+    reflect_rays: ComputePipeline,
+    path_bounce: ComputePipeline,
 }
 
 impl Pipelines {
@@ -87,20 +94,27 @@ impl Pipelines {
             shade_primary: make(shaders::INTEGRATOR_SHADE_PRIMARY, 6)?,
             ao_rays: make(shaders::INTEGRATOR_AO_RAYS, 4)?,
             shade_ao: make(shaders::INTEGRATOR_SHADE_AO, 3)?,
+            shadow_rays: make(shaders::INTEGRATOR_SHADOW_RAYS, 7)?,
+            shade_shadow: make(shaders::INTEGRATOR_SHADE_SHADOW, 3)?,
+            reflect_rays: make(shaders::INTEGRATOR_REFLECT_RAYS, 4)?,
+            path_bounce: make(shaders::INTEGRATOR_PATH_BOUNCE, 7)?,
         })
     }
 }
 
-/// One set of ray and hit buffers for a chunk.
+/// One set of ray and hit buffers for a chunk: the camera rays, the secondary rays
+/// (`per_pixel` for each camera ray) and two vec4 of per-pixel state (the shadow
+/// integrator's pending contribution, the path integrator's throughput).
 struct RaySlot {
     rays: Buffer,
     hits: Buffer,
-    ao_rays: Buffer,
-    ao_hits: Buffer,
+    secondary_rays: Buffer,
+    secondary_hits: Buffer,
+    state: Buffer,
 }
 
 impl RaySlot {
-    fn new(gpu: &Gpu, index: usize, chunk: u64, ao_rays: u64) -> vk::Result<Self> {
+    fn new(gpu: &Gpu, index: usize, chunk: u64, per_pixel: u64) -> vk::Result<Self> {
         let ray = size_of::<Ray>() as u64;
         let hit = size_of::<Hit>() as u64;
         let buffer = |name: &str, bytes| {
@@ -109,8 +123,9 @@ impl RaySlot {
         Ok(Self {
             rays: buffer("rays", chunk * ray)?,
             hits: buffer("hits", chunk * hit)?,
-            ao_rays: buffer("ao-rays", chunk * ao_rays * ray)?,
-            ao_hits: buffer("ao-hits", chunk * ao_rays * hit)?,
+            secondary_rays: buffer("secondary-rays", chunk * per_pixel * ray)?,
+            secondary_hits: buffer("secondary-hits", chunk * per_pixel * hit)?,
+            state: buffer("pixel-state", chunk * 32)?,
         })
     }
 }
@@ -126,9 +141,14 @@ pub fn render_passes(
 ) -> vk::Result<IntegratorOutput> {
     let pipelines = Pipelines::new(gpu)?;
     let pixels = inputs.camera.width as usize * inputs.camera.height as usize;
-    let ao = options.integrator == IntegratorKind::Ao;
-    let ao_rays = if ao { options.ao_rays.max(1) } else { 0 };
-    let chunk = (options.max_rays_per_chunk / (1 + ao_rays)).clamp(1, pixels.max(1) as u32);
+    let kind = options.integrator;
+    let ao_rays = options.ao_rays.max(1);
+    let per_pixel = match kind {
+        IntegratorKind::Ao => ao_rays,
+        IntegratorKind::Shadow | IntegratorKind::Reflection => 1,
+        IntegratorKind::Primary | IntegratorKind::Path => 0,
+    };
+    let chunk = (options.max_rays_per_chunk / (1 + per_pixel)).clamp(1, pixels.max(1) as u32);
 
     let triangles = gpu.upload("shade-triangles", inputs.triangles)?;
     let triangle_material = gpu.upload("triangle-material", inputs.triangle_material)?;
@@ -138,8 +158,8 @@ pub fn render_passes(
     let triangle_id = gpu.zeroed::<u32>("aov-triangle-id", pixels)?;
     let normal = gpu.zeroed::<[f32; 4]>("aov-normal", pixels)?;
     let slots = [
-        RaySlot::new(gpu, 0, chunk as u64, ao_rays as u64)?,
-        RaySlot::new(gpu, 1, chunk as u64, ao_rays as u64)?,
+        RaySlot::new(gpu, 0, chunk as u64, per_pixel as u64)?,
+        RaySlot::new(gpu, 1, chunk as u64, per_pixel as u64)?,
     ];
 
     let mut frame = FrameParams::new(&inputs.camera);
@@ -148,6 +168,7 @@ pub fn render_passes(
     frame.ao_rays = ao_rays;
     frame.ao_radius = options.ao_radius_fraction * inputs.scene_radius;
     frame.ray_epsilon = 1e-4 * inputs.scene_radius.max(1e-3);
+    frame.light = inputs.light.into();
 
     let mut rays_traced = 0u64;
     let mut in_flight: [Option<TimelinePoint>; 2] = [None, None];
@@ -192,52 +213,24 @@ pub fn render_passes(
                     n,
                 )?;
             }
-            let done = if ao {
-                rec.dispatch_items(
-                    &pipelines.ao_rays,
-                    &[
-                        (&slot.rays).into(),
-                        (&slot.hits).into(),
-                        (&triangles).into(),
-                        (&slot.ao_rays).into(),
-                    ],
-                    &frame,
-                    n,
-                )?;
-                let generated = rec.submit(&[&traced])?;
-                let ao_count = count * ao_rays;
-                let occluded = tracer.trace(
-                    &slot.ao_rays,
-                    &slot.ao_hits,
-                    ao_count,
-                    Query::Occlusion,
-                    &[&generated],
-                )?;
-                rays_traced += ao_count as u64;
-                let mut rec = gpu.recorder(StreamKind::Main)?;
-                rec.dispatch_items(
-                    &pipelines.shade_ao,
-                    &[(&slot.hits).into(), (&slot.ao_hits).into(), (&accum).into()],
-                    &frame,
-                    n,
-                )?;
-                rec.submit(&[&occluded])?
-            } else {
-                rec.dispatch_items(
-                    &pipelines.shade_primary,
-                    &[
-                        (&slot.rays).into(),
-                        (&slot.hits).into(),
-                        (&triangles).into(),
-                        (&triangle_material).into(),
-                        (&materials).into(),
-                        (&accum).into(),
-                    ],
-                    &frame,
-                    n,
-                )?;
-                rec.submit(&[&traced])?
+            let stage = Stage {
+                gpu,
+                pipelines: &pipelines,
+                slot,
+                triangles: &triangles,
+                triangle_material: &triangle_material,
+                materials: &materials,
+                accum: &accum,
+                count,
             };
+            let (done, secondary) = match kind {
+                IntegratorKind::Primary => (stage.shade_primary(rec, &frame, &traced)?, 0),
+                IntegratorKind::Ao => stage.ambient_occlusion(rec, &frame, &traced, tracer)?,
+                IntegratorKind::Shadow => stage.shadow(rec, &frame, &traced, tracer)?,
+                IntegratorKind::Reflection => stage.reflection(rec, &frame, &traced, tracer)?,
+                IntegratorKind::Path => stage.path(rec, &mut frame, traced, tracer)?,
+            };
+            rays_traced += secondary;
             in_flight[step % 2] = Some(done);
             step += 1;
         }
@@ -252,3 +245,218 @@ pub fn render_passes(
         rays_traced,
     })
 }
+
+/// The per-chunk stages after the camera rays are traced; each returns the point that
+/// marks the chunk shaded and the number of secondary rays it traced.
+struct Stage<'a> {
+    gpu: &'a Gpu,
+    pipelines: &'a Pipelines,
+    slot: &'a RaySlot,
+    triangles: &'a Buffer,
+    triangle_material: &'a Buffer,
+    materials: &'a Buffer,
+    accum: &'a Buffer,
+    count: u32,
+}
+
+impl Stage<'_> {
+    fn shade_primary(
+        &self,
+        mut rec: Recorder,
+        frame: &FrameParams,
+        traced: &TimelinePoint,
+    ) -> vk::Result<TimelinePoint> {
+        let s = self.slot;
+        rec.dispatch_items(
+            &self.pipelines.shade_primary,
+            &[
+                (&s.rays).into(),
+                (&s.hits).into(),
+                self.triangles.into(),
+                self.triangle_material.into(),
+                self.materials.into(),
+                self.accum.into(),
+            ],
+            frame,
+            self.count as u64,
+        )?;
+        rec.submit(&[traced])
+    }
+
+    fn ambient_occlusion(
+        &self,
+        mut rec: Recorder,
+        frame: &FrameParams,
+        traced: &TimelinePoint,
+        tracer: &mut dyn Tracer,
+    ) -> vk::Result<(TimelinePoint, u64)> {
+        let s = self.slot;
+        let n = self.count as u64;
+        rec.dispatch_items(
+            &self.pipelines.ao_rays,
+            &[
+                (&s.rays).into(),
+                (&s.hits).into(),
+                self.triangles.into(),
+                (&s.secondary_rays).into(),
+            ],
+            frame,
+            n,
+        )?;
+        let generated = rec.submit(&[traced])?;
+        let ao_count = self.count * frame.ao_rays;
+        let occluded = tracer.trace(
+            &s.secondary_rays,
+            &s.secondary_hits,
+            ao_count,
+            Query::Occlusion,
+            &[&generated],
+        )?;
+        let mut rec = self.gpu.recorder(StreamKind::Main)?;
+        rec.dispatch_items(
+            &self.pipelines.shade_ao,
+            &[
+                (&s.hits).into(),
+                (&s.secondary_hits).into(),
+                self.accum.into(),
+            ],
+            frame,
+            n,
+        )?;
+        Ok((rec.submit(&[&occluded])?, ao_count as u64))
+    }
+
+    fn shadow(
+        &self,
+        mut rec: Recorder,
+        frame: &FrameParams,
+        traced: &TimelinePoint,
+        tracer: &mut dyn Tracer,
+    ) -> vk::Result<(TimelinePoint, u64)> {
+        let s = self.slot;
+        let n = self.count as u64;
+        rec.dispatch_items(
+            &self.pipelines.shadow_rays,
+            &[
+                (&s.rays).into(),
+                (&s.hits).into(),
+                self.triangles.into(),
+                self.triangle_material.into(),
+                self.materials.into(),
+                (&s.secondary_rays).into(),
+                (&s.state).into(),
+            ],
+            frame,
+            n,
+        )?;
+        let generated = rec.submit(&[traced])?;
+        let occluded = tracer.trace(
+            &s.secondary_rays,
+            &s.secondary_hits,
+            self.count,
+            Query::Occlusion,
+            &[&generated],
+        )?;
+        let mut rec = self.gpu.recorder(StreamKind::Main)?;
+        rec.dispatch_items(
+            &self.pipelines.shade_shadow,
+            &[
+                (&s.state).into(),
+                (&s.secondary_hits).into(),
+                self.accum.into(),
+            ],
+            frame,
+            n,
+        )?;
+        Ok((rec.submit(&[&occluded])?, n))
+    }
+
+    fn reflection(
+        &self,
+        mut rec: Recorder,
+        frame: &FrameParams,
+        traced: &TimelinePoint,
+        tracer: &mut dyn Tracer,
+    ) -> vk::Result<(TimelinePoint, u64)> {
+        let s = self.slot;
+        let n = self.count as u64;
+        rec.dispatch_items(
+            &self.pipelines.reflect_rays,
+            &[
+                (&s.rays).into(),
+                (&s.hits).into(),
+                self.triangles.into(),
+                (&s.secondary_rays).into(),
+            ],
+            frame,
+            n,
+        )?;
+        let generated = rec.submit(&[traced])?;
+        let reflected = tracer.trace(
+            &s.secondary_rays,
+            &s.secondary_hits,
+            self.count,
+            Query::ClosestHit,
+            &[&generated],
+        )?;
+        // Eye-light shading of what the mirror shows, seen along the reflected ray.
+        let mut rec = self.gpu.recorder(StreamKind::Main)?;
+        rec.dispatch_items(
+            &self.pipelines.shade_primary,
+            &[
+                (&s.secondary_rays).into(),
+                (&s.secondary_hits).into(),
+                self.triangles.into(),
+                self.triangle_material.into(),
+                self.materials.into(),
+                self.accum.into(),
+            ],
+            frame,
+            n,
+        )?;
+        Ok((rec.submit(&[&reflected])?, n))
+    }
+
+    /// Bounce 0 shades the camera hit; each later bounce traces the ray the previous
+    /// one wrote into the same buffer, in place.
+    fn path(
+        &self,
+        mut rec: Recorder,
+        frame: &mut FrameParams,
+        mut traced: TimelinePoint,
+        tracer: &mut dyn Tracer,
+    ) -> vk::Result<(TimelinePoint, u64)> {
+        let s = self.slot;
+        let n = self.count as u64;
+        let mut secondary = 0;
+        for bounce in 0..=PATH_BOUNCES {
+            frame.bounce = bounce;
+            rec.dispatch_items(
+                &self.pipelines.path_bounce,
+                &[
+                    (&s.rays).into(),
+                    (&s.hits).into(),
+                    self.triangles.into(),
+                    self.triangle_material.into(),
+                    self.materials.into(),
+                    (&s.state).into(),
+                    self.accum.into(),
+                ],
+                frame,
+                n,
+            )?;
+            let shaded = rec.submit(&[&traced])?;
+            if bounce == PATH_BOUNCES {
+                frame.bounce = 0;
+                return Ok((shaded, secondary));
+            }
+            traced = tracer.trace(&s.rays, &s.hits, self.count, Query::ClosestHit, &[&shaded])?;
+            secondary += n;
+            rec = self.gpu.recorder(StreamKind::Main)?;
+        }
+        unreachable!("the loop returns at its last bounce")
+    }
+}
+
+/// Diffuse bounces of the `path` integrator after the camera hit (glsl path_bounce.comp).
+const PATH_BOUNCES: u32 = 7;

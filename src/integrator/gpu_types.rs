@@ -22,10 +22,13 @@ pub struct FrameParams {
     pub ao_rays: u32,
     pub ao_radius: f32,
     pub ray_epsilon: f32,
-    pub pad: [u32; 2],
+    pub bounce: u32,
+    pub pad: u32,
+    /// Point light of the shadow integrator: position, w = intensity in W/sr.
+    pub light: [f32; 4],
 }
 
-const _: () = assert!(size_of::<FrameParams>() == 112);
+const _: () = assert!(size_of::<FrameParams>() == 128);
 
 impl FrameParams {
     pub fn new(frame: &CameraFrame) -> Self {

@@ -1,8 +1,10 @@
 //! Integrators: what is computed along the rays a tracer casts.
 //!
-//! `primary` (eye-light shading) and `ao` (ambient occlusion) are the first-image
-//! integrators; both run as a sequence of named GPU stages per pass and chunk:
-//! generate camera rays → trace → (AO: generate AO rays → trace occlusion) → shade.
+//! The ray workloads of the PDACRT paper's Tables 1–2 as integrators: `primary`
+//! (eye-light shading), `ao` (8 ambient-occlusion rays per hit), `shadow` (one point
+//! light), `reflection` (one mirror bounce) and `path` (7 diffuse bounces). Each runs as
+//! a sequence of named GPU stages per pass and chunk of pixels: generate camera rays →
+//! trace → generate secondary rays → trace → shade.
 
 mod eye;
 pub mod gpu_types;
@@ -21,6 +23,12 @@ pub enum IntegratorKind {
     Primary,
     /// Ambient occlusion: the fraction of cosine-distributed rays that escape.
     Ao,
+    /// Direct light from one point light, with shadow rays.
+    Shadow,
+    /// One perfect-mirror bounce, eye-light shaded.
+    Reflection,
+    /// Diffuse path tracing, 7 bounces, emission only (no next-event estimation).
+    Path,
 }
 
 impl IntegratorKind {
@@ -33,12 +41,27 @@ impl IntegratorKind {
             IntegratorKind::Ao,
             "ambient occlusion (8 rays per hit by default)",
         ),
+        (
+            IntegratorKind::Shadow,
+            "Lambertian direct light from one point light, shadow rays",
+        ),
+        (
+            IntegratorKind::Reflection,
+            "every surface a perfect mirror: one reflection bounce",
+        ),
+        (
+            IntegratorKind::Path,
+            "diffuse path tracing, 7 bounces, emitted light only",
+        ),
     ];
 
     pub fn name(self) -> &'static str {
         match self {
             Self::Primary => "primary",
             Self::Ao => "ao",
+            Self::Shadow => "shadow",
+            Self::Reflection => "reflection",
+            Self::Path => "path",
         }
     }
 }

@@ -1,0 +1,73 @@
+#version 460
+// One bounce of the `path` integrator (PDACRT §3.1: diffuse path tracing, 7 bounces,
+// Lambertian shading): add the emitted radiance at the hit, weighted by the path
+// throughput; multiply the throughput by the albedo (cosine-weighted sampling of a
+// Lambertian BSDF cancels the cos/π/pdf factors); write the next ray. Paths that missed,
+// or have no bounce left, get empty rays (tmax = 0), which every tracer drops at once.
+// Estimates emission-only light transport without next-event estimation: the
+// physically based path tracer with NEE and MIS is the `pt` integrator.
+#include "grid.glsl"
+#include "geometry.glsl"
+#include "frame.glsl"
+#include "material.glsl"
+#include "random.glsl"
+
+layout(push_constant) uniform Push { FrameParams frame; };
+layout(std430, set = 0, binding = 0) buffer Rays { Ray rays[]; };
+layout(std430, set = 0, binding = 1) readonly buffer Hits { Hit hits[]; };
+layout(std430, set = 0, binding = 2) readonly buffer Triangles { Triangle triangles[]; };
+layout(std430, set = 0, binding = 3) readonly buffer TriMaterial { uint triangle_material[]; };
+layout(std430, set = 0, binding = 4) readonly buffer Materials { Material materials[]; };
+layout(std430, set = 0, binding = 5) buffer Throughput { vec4 throughput[]; };
+layout(std430, set = 0, binding = 6) buffer Accum { vec4 accum[]; };
+
+const float PI = 3.14159265358979;
+// Bounces after the camera hit; the camera hit is bounce 0.
+const uint MAX_BOUNCES = 7u;
+
+void basis(vec3 n, out vec3 t, out vec3 b) {
+    float s = n.z >= 0.0 ? 1.0 : -1.0;
+    float a = -1.0 / (s + n.z);
+    float c = n.x * n.y * a;
+    t = vec3(1.0 + s * n.x * n.x * a, s * c, -s * n.x);
+    b = vec3(c, s + n.y * n.y * a, -n.y);
+}
+
+void main() {
+    uint i = linear_invocation_id();
+    if (i >= frame.pixel_count) return;
+    uint pixel = frame.pixel_offset + i;
+    vec3 t_in = frame.bounce == 0u ? vec3(1.0) : throughput[i].rgb;
+    Ray ray = rays[i];
+    Hit hit = hits[i];
+    vec4 added = vec4(0.0, 0.0, 0.0, frame.bounce == 0u ? 1.0 : 0.0);
+    if (hit.triangle == MISS || ray.tmax == 0.0) {
+        rays[i] = Ray(ray.origin, 0.0, ray.dir, 0.0);
+        throughput[i] = vec4(0.0);
+        accum[pixel] += added;
+        return;
+    }
+    Triangle tri = triangles[hit.triangle];
+    Material m = materials[triangle_material[hit.triangle]];
+    added.rgb = t_in * m.emission.rgb;
+    accum[pixel] += added;
+    vec3 t_out = t_in * m.diffuse.rgb;
+    if (frame.bounce >= MAX_BOUNCES || max(t_out.r, max(t_out.g, t_out.b)) == 0.0) {
+        rays[i] = Ray(ray.origin, 0.0, ray.dir, 0.0);
+        throughput[i] = vec4(0.0);
+        return;
+    }
+    vec3 n = normalize(cross(tri.e1.xyz, tri.e2.xyz));
+    if (dot(n, ray.dir) > 0.0) n = -n;
+    vec3 p = ray.origin + hit.t * ray.dir + frame.ray_epsilon * n;
+    uint dim = 2u + 2u * frame.bounce;
+    float u1 = random01(pixel, frame.sample_index, dim, frame.seed);
+    float u2 = random01(pixel, frame.sample_index, dim + 1u, frame.seed);
+    vec3 tt, bb;
+    basis(n, tt, bb);
+    float r = sqrt(u1);
+    float phi = 2.0 * PI * u2;
+    vec3 d = normalize(r * cos(phi) * tt + r * sin(phi) * bb + sqrt(max(0.0, 1.0 - u1)) * n);
+    rays[i] = Ray(p, 0.0, d, 1.0 / 0.0);
+    throughput[i] = vec4(t_out, 0.0);
+}
