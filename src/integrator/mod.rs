@@ -3,8 +3,10 @@
 //! `primary` (eye-light shading) and `ao` (ambient occlusion) are the first-image
 //! integrators; both run as a sequence of named GPU stages per pass and chunk:
 //! generate camera rays → trace → (AO: generate AO rays → trace occlusion) → shade.
+//! `pt` is the physically based wavefront path tracer of [`pt`].
 
 mod eye;
+pub mod pt;
 pub mod gpu_types;
 
 use std::fmt;
@@ -21,6 +23,8 @@ pub enum IntegratorKind {
     Primary,
     /// Ambient occlusion: the fraction of cosine-distributed rays that escape.
     Ao,
+    /// Wavefront path tracing with next-event estimation and MIS ([`pt`]).
+    Pt,
 }
 
 impl IntegratorKind {
@@ -33,12 +37,17 @@ impl IntegratorKind {
             IntegratorKind::Ao,
             "ambient occlusion (8 rays per hit by default)",
         ),
+        (
+            IntegratorKind::Pt,
+            "wavefront path tracing: NEE + MIS, Russian roulette, material sorting",
+        ),
     ];
 
     pub fn name(self) -> &'static str {
         match self {
             Self::Primary => "primary",
             Self::Ao => "ao",
+            Self::Pt => "pt",
         }
     }
 }
