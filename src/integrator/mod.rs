@@ -6,8 +6,8 @@
 //! `pt` is the physically based wavefront path tracer of [`pt`].
 
 mod eye;
-pub mod pt;
 pub mod gpu_types;
+pub mod pt;
 
 use std::fmt;
 use std::str::FromStr;

@@ -1,6 +1,8 @@
 #version 460
 // Stage `finish`: each path's radiance becomes one sample of its pixel: the film sum
 // gets L (w counts samples) and the second-moment sum gets L^2 (for standard errors).
+// One invocation per pixel adds the chunk's samples of that pixel in sample order, so
+// the sums do not depend on scheduling.
 #include "grid.glsl"
 #include "pt.glsl"
 
@@ -11,11 +13,17 @@ layout(std430, set = 0, binding = 2) buffer Accum2 { vec4 accum2[]; };
 
 void main() {
     uint i = linear_invocation_id();
-    if (i >= params.path_count) return;
+    if (i >= params.pixel_count) return;
     uint pixel = params.pixel_offset + i;
-    vec3 l = paths[i].radiance.rgb;
-    // A non-finite sample would poison the pixel forever: drop it (counted as zero).
-    if (any(isnan(l)) || any(isinf(l))) l = vec3(0.0);
-    accum[pixel] += vec4(l, 1.0);
-    accum2[pixel] += vec4(l * l, 0.0);
+    vec4 sum = accum[pixel];
+    vec4 sum2 = accum2[pixel];
+    for (uint p = i; p < params.path_count; p += params.pixel_count) {
+        vec3 l = paths[p].radiance.rgb;
+        // A non-finite sample would poison the pixel forever: drop it (counted as zero).
+        if (any(isnan(l)) || any(isinf(l))) l = vec3(0.0);
+        sum += vec4(l, 1.0);
+        sum2 += vec4(l * l, 0.0);
+    }
+    accum[pixel] = sum;
+    accum2[pixel] = sum2;
 }

@@ -14,11 +14,12 @@ layout(std430, set = 0, binding = 2) writeonly buffer Paths { PathState paths[];
 void main() {
     uint i = linear_invocation_id();
     if (i >= params.path_count) return;
-    uint pixel = params.pixel_offset + i;
+    uint pixel = pt_pixel(params, i);
+    uint sample_index = pt_sample(params, i);
     uint px = pixel % params.width;
     uint py = pixel / params.width;
-    vec2 offset = vec2(random01(pixel, params.sample_index, 0u, params.seed),
-                       random01(pixel, params.sample_index, 1u, params.seed));
+    vec2 offset = vec2(random01(pixel, sample_index, 0u, params.seed),
+                       random01(pixel, sample_index, 1u, params.seed));
     float sx = 2.0 * (float(px) + offset.x) / float(params.width) - 1.0;
     float sy = 1.0 - 2.0 * (float(py) + offset.y) / float(params.height);
     vec3 dir = normalize(params.forward.xyz + sx * params.right.xyz + sy * params.up.xyz);

@@ -13,8 +13,8 @@ struct PtParams {
     uint height;
     uint sample_index;   // which sample of the pixel this pass takes
     uint seed;
-    uint pixel_offset;   // first pixel of the chunk; path p is pixel pixel_offset + p
-    uint path_count;     // paths (pixels) in the chunk
+    uint pixel_offset;   // first pixel of the chunk
+    uint path_count;     // paths in the chunk: pixel_count x (samples in the chunk)
     uint active_count;   // live paths this bounce
     uint bounce;         // 0 for camera rays
     int max_depth;       // Mitsuba's max_depth; < 0 = unbounded
@@ -22,7 +22,8 @@ struct PtParams {
     uint light_count;    // entries of the light table
     uint flags;          // PT_FLAG_*
     float ray_epsilon;   // offset of secondary-ray origins, scaled to the scene
-    uint pad0;
+    uint pixel_count;    // pixels in the chunk; path p takes pixel pixel_offset +
+                         // p % pixel_count, sample sample_index + p / pixel_count
     uint pad1;
     uint pad2;
 };
@@ -76,6 +77,9 @@ const uint DIM_BSDF_C = 3u;
 const uint DIM_BSDF_U = 4u;
 const uint DIM_BSDF_V = 5u;
 const uint DIM_RR = 6u;
+
+uint pt_pixel(PtParams q, uint p) { return q.pixel_offset + p % q.pixel_count; }
+uint pt_sample(PtParams q, uint p) { return q.sample_index + p / q.pixel_count; }
 
 float pt_luminance(vec3 c) { return dot(c, vec3(0.212671, 0.715160, 0.072169)); }
 

@@ -59,7 +59,8 @@ void main() {
     if (j >= params.active_count) return;
     uint i = (params.flags & PT_FLAG_SORTED) != 0u ? order[j] : j;
     uint p = live_ids[i];
-    uint pixel = params.pixel_offset + p;
+    uint pixel = pt_pixel(params, p);
+    uint sample_index = pt_sample(params, p);
     PathState s = paths[p];
     Ray ray = rays[i];
     Hit hit = hits[i];
@@ -123,10 +124,10 @@ void main() {
     // 2. Next-event estimation.
     if ((params.flags & PT_FLAG_NEE) != 0u && params.light_count > 0u && m.all_delta == 0u) {
         uint d0 = pt_dim(params.bounce, DIM_LIGHT_SELECT);
-        uint li = pick_light(random01(pixel, params.sample_index, d0, params.seed));
+        uint li = pick_light(random01(pixel, sample_index, d0, params.seed));
         Light light = lights[li];
-        float u1 = random01(pixel, params.sample_index, pt_dim(params.bounce, DIM_LIGHT_U), params.seed);
-        float u2 = random01(pixel, params.sample_index, pt_dim(params.bounce, DIM_LIGHT_V), params.seed);
+        float u1 = random01(pixel, sample_index, pt_dim(params.bounce, DIM_LIGHT_U), params.seed);
+        float u2 = random01(pixel, sample_index, pt_dim(params.bounce, DIM_LIGHT_V), params.seed);
         float pmf = light.emission_pmf.w;
         vec3 target;
         vec3 le = vec3(0.0);
@@ -175,9 +176,9 @@ void main() {
     }
 
     // 3. BSDF sampling.
-    vec3 u = vec3(random01(pixel, params.sample_index, pt_dim(params.bounce, DIM_BSDF_C), params.seed),
-                  random01(pixel, params.sample_index, pt_dim(params.bounce, DIM_BSDF_U), params.seed),
-                  random01(pixel, params.sample_index, pt_dim(params.bounce, DIM_BSDF_V), params.seed));
+    vec3 u = vec3(random01(pixel, sample_index, pt_dim(params.bounce, DIM_BSDF_C), params.seed),
+                  random01(pixel, sample_index, pt_dim(params.bounce, DIM_BSDF_U), params.seed),
+                  random01(pixel, sample_index, pt_dim(params.bounce, DIM_BSDF_V), params.seed));
     BsdfSample bs = bsdf_sample(bsdf, wo, u, TRANSPORT_RADIANCE);
     uint depth = s.depth + 1u;
     if (!bs.valid || !(bs.pdf > 0.0)) {
@@ -193,7 +194,7 @@ void main() {
     bool live = beta_max > 0.0;
     if (live && depth >= params.rr_depth) {
         float q = min(beta_max * eta2, 0.95);
-        float ur = random01(pixel, params.sample_index, pt_dim(params.bounce, DIM_RR), params.seed);
+        float ur = random01(pixel, sample_index, pt_dim(params.bounce, DIM_RR), params.seed);
         if (ur < q) beta /= q; else live = false;
     }
 

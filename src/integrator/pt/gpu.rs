@@ -25,7 +25,10 @@ pub struct PtParams {
     pub light_count: u32,
     pub flags: u32,
     pub ray_epsilon: f32,
-    pub pad: [u32; 3],
+    /// Pixels in the chunk: path p takes pixel `pixel_offset + p % pixel_count` and
+    /// sample `sample_index + p / pixel_count`.
+    pub pixel_count: u32,
+    pub pad: [u32; 2],
 }
 
 const _: () = assert!(size_of::<PtParams>() == 128);

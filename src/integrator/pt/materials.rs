@@ -149,7 +149,11 @@ mod tests {
             ..Material::default()
         };
         let p = bsdf_of(&bright);
-        let total: f32 = p.active().iter().map(|l| l.tint_weight[3] * l.tint_weight[0]).sum();
+        let total: f32 = p
+            .active()
+            .iter()
+            .map(|l| l.tint_weight[3] * l.tint_weight[0])
+            .sum();
         assert!(total <= 1.0 + 1e-6, "{total}");
 
         let glass = Material {

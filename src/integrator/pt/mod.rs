@@ -1,7 +1,8 @@
 //! `pt`: a wavefront path tracer on the [`Tracer`] interface (PDACRT by default).
 //!
-//! Each pass takes one sample of every pixel, in chunks of at most
-//! [`PtOptions::max_paths_per_chunk`] pixels. Per chunk and bounce, named stages run as
+//! A chunk is a wavefront of at most [`PtOptions::max_paths_per_chunk`] paths: several
+//! whole passes (samples of every pixel) when the image is small, else a range of the
+//! pixels of one pass. Per chunk and bounce, named stages run as
 //! separate kernels (`glsl/integrator/pt/*.comp`):
 //!
 //! 1. `generate` — a path per pixel and its camera ray (box filter: uniform jitter);
@@ -105,7 +106,7 @@ impl Default for PtOptions {
             rr_depth: 5,
             sort: true,
             strategy: Strategy::Mis,
-            max_paths_per_chunk: 1 << 20,
+            max_paths_per_chunk: 1 << 19,
         }
     }
 }
@@ -245,8 +246,12 @@ pub fn render_pt(
     let pipelines = Pipelines::new(gpu)?;
     let tuning = Tuning::for_device(gpu.info());
     let pixels = camera.width as usize * camera.height as usize;
-    let chunk = options.max_paths_per_chunk.clamp(1, pixels.max(1) as u32);
-    let c = chunk as usize;
+    let max_paths = options.max_paths_per_chunk.max(1) as usize;
+    // Whole passes per chunk when the image is small, else one pass in pixel ranges.
+    let passes_per_chunk = (max_paths / pixels.max(1)).clamp(1, options.spp.max(1) as usize);
+    let pixels_per_chunk = pixels.min(max_paths);
+    let c = passes_per_chunk * pixels_per_chunk;
+    let chunk = c as u32;
 
     let triangles = gpu.upload("pt-triangles", &scene.triangles)?;
     let triangle_material = gpu.upload("pt-triangle-material", &scene.triangle_material)?;
@@ -311,10 +316,13 @@ pub fn render_pt(
     let mut rays_traced = 0u64;
     let mut passes = 0u32;
     while passes < options.spp {
+        let batch = (passes_per_chunk as u32).min(options.spp - passes);
         params.sample_index = passes;
-        for offset in (0..pixels).step_by(c) {
-            let n0 = chunk.min((pixels - offset) as u32);
+        for offset in (0..pixels).step_by(pixels_per_chunk) {
+            let pixel_count = pixels_per_chunk.min(pixels - offset) as u32;
+            let n0 = pixel_count * batch;
             params.pixel_offset = offset as u32;
+            params.pixel_count = pixel_count;
             params.path_count = n0;
             let mut rec = gpu.recorder(StreamKind::Main)?;
             rec.dispatch_items(
@@ -330,8 +338,7 @@ pub fn render_pt(
             while n > 0 {
                 params.active_count = n;
                 params.bounce = bounce;
-                let traced =
-                    tracer.trace(&rays[cur], &hits, n, Query::ClosestHit, &[&ready])?;
+                let traced = tracer.trace(&rays[cur], &hits, n, Query::ClosestHit, &[&ready])?;
                 rays_traced += n as u64;
 
                 let mut rec = gpu.recorder(StreamKind::Main)?;
@@ -447,12 +454,12 @@ pub fn render_pt(
                 &pipelines.finish,
                 &[(&paths).into(), (&accum).into(), (&accum2).into()],
                 &params,
-                n0 as u64,
+                pixel_count as u64,
             )?;
             let done = rec.submit(&[])?;
             gpu.wait(&done)?;
         }
-        passes += 1;
+        passes += batch;
         progress(passes);
         if let Some(limit) = options.time_limit {
             if start.elapsed().as_secs_f64() >= limit {
