@@ -11,11 +11,17 @@
 //! - **per-pixel z-test**: for each pixel and channel, z = (splitray − reference) /
 //!   √(se_splitray² + se_reference²), with splitray's standard error from its own
 //!   per-pixel sample variance and the reference's from its 16 independent runs. For
-//!   two unbiased estimators |z| > 3 happens with probability 0.27% (Gaussian); we
-//!   require at most 1% of the 64·64·3 values beyond 3, leaving room for the
-//!   heavy-ish tail of path-traced samples (the sample variance at 256 spp
-//!   underestimates it now and then) while a bias of even a fraction of a standard
-//!   error in a region would push far more pixels beyond 3.
+//!   Gaussian z, |z| > 3 has probability 0.27%; we require under 2% of the 64·64·3
+//!   values beyond 3. Why not 0.27%: at 256 spp a pixel's samples are very skewed (rare
+//!   paths that reach the light carry most of the value), so a low sample mean comes
+//!   with a low sample variance and z has a heavier, one-sided tail: measured ≈ 0.9–1.2%
+//!   across seeds, nearly all below the reference, while the image means agree to
+//!   0.01–0.3%. (An independent variance estimate from a second render just moves the
+//!   excess to the other side.)
+//! - **8×8-block z-test**: the same statistic over sums of 64 pixels, which are close
+//!   to Gaussian: every block and channel within 4.5 σ (192 tests; a false alarm has
+//!   probability ≈ 1e-3). Any regional bias (a corner, the light's edges, one wall)
+//!   shows here long before it moves the image mean.
 mod common;
 
 use std::path::Path;
@@ -73,6 +79,25 @@ fn cornell_box_matches_mitsuba() {
     common::assert_clean(&gpu);
     let (mean, se) = out.mean_and_stderr();
 
+    // 8×8-pixel blocks: sums of 64 pixels are close to Gaussian, so a block z-test is
+    // exact enough for a tight bound, and it catches any regional bias.
+    let mut zblock_max = 0.0f64;
+    for by in 0..(SIZE / 8) as usize {
+        for bx in 0..(SIZE / 8) as usize {
+            for c in 0..3 {
+                let (mut d, mut v) = (0.0f64, 0.0f64);
+                for y in by * 8..by * 8 + 8 {
+                    for x in bx * 8..bx * 8 + 8 {
+                        let p = y * SIZE as usize + x;
+                        d += mean[p][c] as f64 - ref_mean[p][c] as f64;
+                        v += (se[p][c] as f64).powi(2) + (ref_se[p][c] as f64).powi(2);
+                    }
+                }
+                zblock_max = zblock_max.max(d.abs() / v.sqrt().max(1e-12));
+            }
+        }
+    }
+
     let avg = |img: &[[f32; 3]]| -> f64 {
         img.iter().flatten().map(|&v| v as f64).sum::<f64>() / (3 * img.len()) as f64
     };
@@ -80,6 +105,8 @@ fn cornell_box_matches_mitsuba() {
     let diff = (ours - theirs) / theirs;
 
     let mut beyond = 0usize;
+    let mut beyond4 = 0usize;
+    let mut below = 0usize;
     let mut zmax = 0.0f64;
     let mut worst = 0usize;
     for p in 0..mean.len() {
@@ -95,6 +122,10 @@ fn cornell_box_matches_mitsuba() {
             };
             if z > 3.0 {
                 beyond += 1;
+                below += (d < 0.0) as usize;
+            }
+            if z > 4.0 {
+                beyond4 += 1;
             }
             if z > zmax {
                 zmax = z;
@@ -106,7 +137,8 @@ fn cornell_box_matches_mitsuba() {
     let fraction = beyond as f64 / total as f64;
     eprintln!(
         "pt vs Mitsuba: image mean {ours:.6} vs {theirs:.6} ({:+.3}%), {beyond} of {total} \
-         pixel channels with |z| > 3 ({:.2}%), max |z| {zmax:.2} at pixel ({}, {})",
+         pixel channels with |z| > 3 ({:.2}%; {below} of them below the reference), \
+         {beyond4} with |z| > 4, max |z| {zmax:.2} at pixel ({}, {})",
         diff * 100.0,
         fraction * 100.0,
         worst % SIZE as usize,
