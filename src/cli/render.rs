@@ -121,7 +121,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         args.tracer,
     )?;
     if let Some(t) = args.time {
-        if !(t > 0.0) {
+        if t.is_nan() || t <= 0.0 {
             bail!("--time must be a positive number of seconds");
         }
         options.time_limit = Some(t);

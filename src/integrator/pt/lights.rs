@@ -39,7 +39,7 @@ impl LightTable {
             let m = &scene.materials[t.material as usize];
             let area = t.area();
             let phi = std::f32::consts::PI * luminance(m.emission.max(Vec3::ZERO)) * area;
-            if !(phi > 0.0) || t.is_degenerate() {
+            if phi.is_nan() || phi <= 0.0 || t.is_degenerate() {
                 continue;
             }
             let e1 = t.p[1] - t.p[0];
@@ -55,7 +55,7 @@ impl LightTable {
         }
         for l in &scene.point_lights {
             let phi = 4.0 * std::f32::consts::PI * luminance(l.intensity.max(Vec3::ZERO));
-            if !(phi > 0.0) {
+            if phi.is_nan() || phi <= 0.0 {
                 continue;
             }
             lights.push(GpuLight {
