@@ -39,6 +39,18 @@ pub struct RenderOptions {
     pub integrator: IntegratorKind,
     pub tracer: TracerKind,
     pub ao_rays: u32,
+    /// `pt`: Mitsuba's max_depth (1 = emitters seen directly, 2 = direct light; < 0
+    /// unbounded). From the scene's `[render] max_depth`, else unbounded.
+    pub max_depth: i32,
+    /// `pt`: Russian roulette from this depth on (Mitsuba's default 5).
+    pub rr_depth: u32,
+    /// `pt`: sort paths by material key before shading.
+    pub sort_materials: bool,
+    /// `pt`: which estimators contribute light.
+    pub strategy: integrator::pt::Strategy,
+    /// Stop after the pass during which this many seconds ran out (`spp` is then the
+    /// most passes).
+    pub time_limit: Option<f64>,
 }
 
 impl RenderOptions {
@@ -75,6 +87,11 @@ impl RenderOptions {
             integrator,
             tracer,
             ao_rays: 8,
+            max_depth: s.max_depth.map_or(-1, |d| d.min(i32::MAX as u32) as i32),
+            rr_depth: 5,
+            sort_materials: true,
+            strategy: Default::default(),
+            time_limit: None,
         };
         if options.width == 0
             || options.height == 0
@@ -155,6 +172,9 @@ pub fn render(
     gpu.reset_peak_memory();
     let start = Instant::now();
     let mut tracer = options.tracer.create(gpu, &triangles)?;
+    if options.integrator == IntegratorKind::Pt {
+        return render_pt(gpu, scene, options, tracer.as_mut(), start, progress);
+    }
     let output = integrator::render_passes(
         gpu,
         tracer.as_mut(),
@@ -240,4 +260,75 @@ pub fn shadow_light(scene: &Scene) -> glam::Vec4 {
             position.extend(d * d)
         }
     }
+}
+
+/// The `pt` integrator's half of [`render`].
+fn render_pt(
+    gpu: &Gpu,
+    scene: &Scene,
+    options: &RenderOptions,
+    tracer: &mut dyn crate::trace::Tracer,
+    start: Instant,
+    progress: &mut dyn FnMut(u32),
+) -> Result<RenderOutput, RenderError> {
+    let pt_scene = integrator::pt::PtScene::new(scene);
+    let camera = scene.camera.frame(options.width, options.height);
+    let output = integrator::pt::render_pt(
+        gpu,
+        tracer,
+        &pt_scene,
+        &camera,
+        &integrator::pt::PtOptions {
+            spp: options.spp,
+            time_limit: options.time_limit,
+            seed: options.seed,
+            max_depth: options.max_depth,
+            rr_depth: options.rr_depth,
+            sort: options.sort_materials,
+            strategy: options.strategy,
+            ..Default::default()
+        },
+        progress,
+    )?;
+    let seconds = start.elapsed().as_secs_f64();
+    let (_, peak_gpu_bytes) = gpu.memory_bytes();
+    let (mean, _) = output.mean_and_stderr();
+    let film = Film::from_mean_rgb(options.width, options.height, &mean)?;
+    let device = device_description(gpu);
+    let stats = RenderStats {
+        scene: scene.name.clone(),
+        triangles: scene.triangles.len(),
+        width: options.width,
+        height: options.height,
+        spp: output.passes,
+        seed: options.seed,
+        integrator: options.integrator.name().into(),
+        tracer: options.tracer.name().into(),
+        device: device.clone(),
+        render_time_s: seconds,
+        rays_traced: output.rays_traced,
+        rays_per_second: output.rays_traced as f64 / seconds.max(1e-9),
+        peak_gpu_bytes,
+        kernels: gpu.take_profile().summary(),
+    };
+    let metadata = RenderMetadata {
+        spp: output.passes,
+        seed: options.seed,
+        integrator: options.integrator.name().into(),
+        tracer: options.tracer.name().into(),
+        device,
+        render_time_s: seconds,
+        extra: vec![
+            ("scene".into(), scene.name.clone()),
+            ("rays_traced".into(), output.rays_traced.to_string()),
+            ("max_depth".into(), options.max_depth.to_string()),
+            ("rr_depth".into(), options.rr_depth.to_string()),
+            ("sort_materials".into(), options.sort_materials.to_string()),
+        ],
+    };
+    Ok(RenderOutput {
+        film,
+        metadata,
+        stats,
+    })
 }

@@ -2,6 +2,7 @@
 //! compares against references measured in the same run.
 
 pub mod primitives;
+pub mod pt;
 pub mod trace;
 pub mod workloads;
 

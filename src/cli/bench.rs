@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use anyhow::Context;
 use clap::{Args, Subcommand};
 use splitray::bench::primitives::{self, PrimitivesBenchOptions};
+use splitray::bench::pt::{self as pt_bench, PtBenchOptions};
 use splitray::bench::trace::{self, TraceBenchOptions};
 use splitray::bench::workloads::Workload;
 use splitray::trace::{PdacrtParams, TracerKind};
@@ -35,6 +36,25 @@ enum BenchCommand {
         /// Timed runs per primitive (at least 5).
         #[arg(long, default_value_t = 5)]
         runs: usize,
+        /// Also write the report as JSON.
+        #[arg(long, value_name = "OUT.json")]
+        json: Option<PathBuf>,
+    },
+    /// The path tracer's samples/s and Mrays/s with and without material sorting.
+    Pt {
+        /// A built-in scene, a scene .toml or an .obj.
+        scene: String,
+        #[arg(long, default_value_t = 256)]
+        width: u32,
+        #[arg(long, default_value_t = 256)]
+        height: u32,
+        #[arg(long, default_value_t = 16)]
+        spp: u32,
+        /// Mitsuba's max_depth (-1 = unbounded, Russian roulette from depth 5).
+        #[arg(long, default_value_t = -1, allow_hyphen_values = true)]
+        max_depth: i32,
+        #[arg(long, default_value = "pdacrt")]
+        tracer: TracerKind,
         /// Also write the report as JSON.
         #[arg(long, value_name = "OUT.json")]
         json: Option<PathBuf>,
@@ -105,7 +125,9 @@ fn write_json<T: serde::Serialize>(path: &Option<PathBuf>, value: &T) -> anyhow:
 pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     // Load inputs before opening the device, so bad input fails fast.
     let scene = match &args.what {
-        BenchCommand::Trace { scene, .. } => Some(splitray::scene::load(scene)?),
+        BenchCommand::Trace { scene, .. } | BenchCommand::Pt { scene, .. } => {
+            Some(splitray::scene::load(scene)?)
+        }
         BenchCommand::Primitives { .. } => None,
     };
     let gpu = Gpu::new(&GpuDesc {
@@ -130,6 +152,32 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
                     scan_n: *scan_n,
                     runs: *runs,
                     tuning: None,
+                },
+            )
+            .map_err(|e| anyhow::anyhow!("{e}"))?;
+            print!("{report}");
+            write_json(json, &report)?;
+        }
+        BenchCommand::Pt {
+            width,
+            height,
+            spp,
+            max_depth,
+            tracer,
+            json,
+            ..
+        } => {
+            let scene = scene.expect("loaded above");
+            let report = pt_bench::run(
+                &gpu,
+                &scene,
+                &PtBenchOptions {
+                    width: *width,
+                    height: *height,
+                    spp: *spp,
+                    max_depth: *max_depth,
+                    tracer: *tracer,
+                    ..Default::default()
                 },
             )
             .map_err(|e| anyhow::anyhow!("{e}"))?;

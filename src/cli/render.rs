@@ -32,10 +32,27 @@ pub struct RenderArgs {
     #[arg(long)]
     seed: Option<u64>,
     /// What to compute along the rays: primary (eye-light shading), ao (ambient
-    /// occlusion), shadow (one point light), reflection (one mirror bounce) or path
-    /// (7 diffuse bounces).
+    /// occlusion), shadow (one point light), reflection (one mirror bounce), path
+    /// (7 diffuse bounces) or pt (physically based path tracing).
     #[arg(long)]
     integrator: Option<IntegratorKind>,
+    /// Render for this many seconds instead (stops after the pass during which the time
+    /// ran out; with --spp, at most that many passes).
+    #[arg(long, value_name = "SECONDS")]
+    time: Option<f64>,
+    /// pt: maximum path depth as in Mitsuba (1 = emitters seen directly, 2 = direct
+    /// light, -1 = unbounded; default: the scene's, else -1).
+    #[arg(long, allow_hyphen_values = true)]
+    max_depth: Option<i32>,
+    /// pt: Russian roulette from this depth on (Mitsuba's default 5).
+    #[arg(long, default_value_t = 5)]
+    rr_depth: u32,
+    /// pt: do not sort paths by material before shading (same image, other speed).
+    #[arg(long)]
+    no_sort: bool,
+    /// pt: estimators: mis (default), nee (light sampling only) or bsdf (BSDF sampling only).
+    #[arg(long, default_value = "mis")]
+    strategy: splitray::integrator::pt::Strategy,
     /// How rays are cast: pdacrt (default; no acceleration structure), brute-force (the
     /// oracle), cpu-dacrt (serial CPU baseline) or ray-query (driver BVH, where offered).
     #[arg(long)]
@@ -96,7 +113,7 @@ fn output_path(args: &RenderArgs, scene_name: &str) -> anyhow::Result<PathBuf> {
 pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let scene = splitray::scene::load(&args.scene)?;
     let output = output_path(args, &scene.name)?;
-    let options = RenderOptions::resolve(
+    let mut options = RenderOptions::resolve(
         &scene,
         args.width,
         args.height,
@@ -105,6 +122,21 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         args.integrator,
         args.tracer,
     )?;
+    if let Some(t) = args.time {
+        if t.is_nan() || t <= 0.0 {
+            bail!("--time must be a positive number of seconds");
+        }
+        options.time_limit = Some(t);
+        if args.spp.is_none() {
+            options.spp = u32::MAX;
+        }
+    }
+    if let Some(d) = args.max_depth {
+        options.max_depth = d;
+    }
+    options.rr_depth = args.rr_depth;
+    options.sort_materials = !args.no_sort;
+    options.strategy = args.strategy;
     let gpu = Gpu::new(&GpuDesc {
         instance: InstanceDesc {
             validation: args.validation,
@@ -114,20 +146,46 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         ..Default::default()
     })?;
 
-    let bar = ProgressBar::new(options.spp as u64);
-    bar.set_style(
-        ProgressStyle::with_template(
-            "{spinner} {msg} [{bar:30}] {pos}/{len} spp  {per_sec}  eta {eta}",
-        )
-        .expect("valid progress template")
-        .progress_chars("=> "),
-    );
+    let bar = match options.time_limit {
+        // Timed: the bar runs over seconds; the message carries passes and samples/s.
+        Some(t) => {
+            let bar = ProgressBar::new((t * 10.0).ceil() as u64);
+            bar.set_style(
+                ProgressStyle::with_template("{spinner} {msg} [{bar:30}] {elapsed} eta {eta}")
+                    .expect("valid progress template")
+                    .progress_chars("=> "),
+            );
+            bar
+        }
+        None => {
+            let bar = ProgressBar::new(options.spp as u64);
+            bar.set_style(
+                ProgressStyle::with_template(
+                    "{spinner} {msg} [{bar:30}] {pos}/{len} spp  {per_sec}  eta {eta}",
+                )
+                .expect("valid progress template")
+                .progress_chars("=> "),
+            );
+            bar
+        }
+    };
+    let pixels = options.width as f64 * options.height as f64;
+    let started = std::time::Instant::now();
+    let timed = options.time_limit.is_some();
     bar.set_message(format!(
         "{} {}x{}",
         scene.name, options.width, options.height
     ));
+    let label = format!("{} {}x{}", scene.name, options.width, options.height);
     let result = render(&gpu, &scene, &options, &mut |done| {
-        bar.set_position(done as u64)
+        let secs = started.elapsed().as_secs_f64().max(1e-9);
+        let rate = done as f64 * pixels / secs;
+        bar.set_message(format!("{label} {done} spp, {:.3} Msamples/s", rate * 1e-6));
+        if timed {
+            bar.set_position((secs * 10.0) as u64);
+        } else {
+            bar.set_position(done as u64);
+        }
     });
     bar.finish_and_clear();
     let result = result?;

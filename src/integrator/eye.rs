@@ -147,6 +147,11 @@ pub fn render_passes(
         IntegratorKind::Ao => ao_rays,
         IntegratorKind::Shadow | IntegratorKind::Reflection => 1,
         IntegratorKind::Primary | IntegratorKind::Path => 0,
+        IntegratorKind::Pt => {
+            return Err(vk::VkError::Usage(
+                "the pt integrator renders through integrator::pt::render_pt".into(),
+            ))
+        }
     };
     let chunk = (options.max_rays_per_chunk / (1 + per_pixel)).clamp(1, pixels.max(1) as u32);
 
@@ -229,6 +234,7 @@ pub fn render_passes(
                 IntegratorKind::Shadow => stage.shadow(rec, &frame, &traced, tracer)?,
                 IntegratorKind::Reflection => stage.reflection(rec, &frame, &traced, tracer)?,
                 IntegratorKind::Path => stage.path(rec, &mut frame, traced, tracer)?,
+                IntegratorKind::Pt => unreachable!("refused before the loop"),
             };
             rays_traced += secondary;
             in_flight[step % 2] = Some(done);

@@ -5,9 +5,11 @@
 //! light), `reflection` (one mirror bounce) and `path` (7 diffuse bounces). Each runs as
 //! a sequence of named GPU stages per pass and chunk of pixels: generate camera rays →
 //! trace → generate secondary rays → trace → shade.
+//! `pt` is the physically based wavefront path tracer of [`pt`].
 
 mod eye;
 pub mod gpu_types;
+pub mod pt;
 
 use std::fmt;
 use std::str::FromStr;
@@ -29,6 +31,8 @@ pub enum IntegratorKind {
     Reflection,
     /// Diffuse path tracing, 7 bounces, emission only (no next-event estimation).
     Path,
+    /// Wavefront path tracing with next-event estimation and MIS ([`pt`]).
+    Pt,
 }
 
 impl IntegratorKind {
@@ -53,6 +57,10 @@ impl IntegratorKind {
             IntegratorKind::Path,
             "diffuse path tracing, 7 bounces, emitted light only",
         ),
+        (
+            IntegratorKind::Pt,
+            "wavefront path tracing: NEE + MIS, Russian roulette, material sorting",
+        ),
     ];
 
     pub fn name(self) -> &'static str {
@@ -62,6 +70,7 @@ impl IntegratorKind {
             Self::Shadow => "shadow",
             Self::Reflection => "reflection",
             Self::Path => "path",
+            Self::Pt => "pt",
         }
     }
 }
