@@ -82,13 +82,19 @@ impl Default for PdacrtParams {
 }
 
 impl PdacrtParams {
-    /// Defaults fitted to the device: the batch must fit shared memory (48 + 4 bytes per
-    /// staged triangle).
+    /// Defaults fitted to the device. The paper's α = β = 256 and N = T = 256 are for a
+    /// GTX 580; on CPU devices (lavapipe) a sweep on the bunny (512², primary rays,
+    /// docs/PERFORMANCE.md) found α = 64 with β = 256 about 2× faster than 256/256: each
+    /// level costs a fixed handful of dispatches and sorts, while the segmented brute
+    /// force is cheap per test, so finer terminal nodes pay. The batch must fit shared
+    /// memory (48 + 4 bytes per staged triangle).
     pub fn for_device(gpu: &Gpu) -> Self {
         let mut p = Self::default();
         let shared = gpu.info().limits.max_compute_shared_memory_size;
         p.batch = p.batch.min(shared / 52);
-        if !gpu.info().is_cpu() {
+        if gpu.info().is_cpu() {
+            p.alpha = 64;
+        } else {
             p.intersect_workgroup = 128;
         }
         p
