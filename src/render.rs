@@ -212,40 +212,68 @@ pub fn render(
     film.set_triangle_id(output.triangle_id)?;
     film.set_normal(output.normal.iter().map(|n| [n[0], n[1], n[2]]).collect())?;
 
+    Ok(finish(
+        gpu,
+        scene,
+        options,
+        film,
+        options.spp,
+        seconds,
+        peak_gpu_bytes,
+        output.rays_traced,
+        vec![],
+    ))
+}
+
+/// Statistics and header metadata of a finished render.
+#[allow(clippy::too_many_arguments)]
+fn finish(
+    gpu: &Gpu,
+    scene: &Scene,
+    options: &RenderOptions,
+    film: Film,
+    spp: u32,
+    seconds: f64,
+    peak_gpu_bytes: u64,
+    rays_traced: u64,
+    extra: Vec<(String, String)>,
+) -> RenderOutput {
     let device = device_description(gpu);
     let stats = RenderStats {
         scene: scene.name.clone(),
         triangles: scene.triangles.len(),
         width: options.width,
         height: options.height,
-        spp: options.spp,
+        spp,
         seed: options.seed,
         integrator: options.integrator.name().into(),
         tracer: options.tracer.name().into(),
         device: device.clone(),
         render_time_s: seconds,
-        rays_traced: output.rays_traced,
-        rays_per_second: output.rays_traced as f64 / seconds.max(1e-9),
+        rays_traced,
+        rays_per_second: rays_traced as f64 / seconds.max(1e-9),
         peak_gpu_bytes,
         kernels: gpu.take_profile().summary(),
     };
+    let mut all_extra = vec![
+        ("scene".to_string(), scene.name.clone()),
+        ("rays_traced".to_string(), rays_traced.to_string()),
+    ];
+    all_extra.extend(extra);
     let metadata = RenderMetadata {
-        spp: options.spp,
+        spp,
         seed: options.seed,
         integrator: options.integrator.name().into(),
         tracer: options.tracer.name().into(),
         device,
         render_time_s: seconds,
-        extra: vec![
-            ("scene".into(), scene.name.clone()),
-            ("rays_traced".into(), output.rays_traced.to_string()),
-        ],
+        extra: all_extra,
     };
-    Ok(RenderOutput {
+    RenderOutput {
         film,
         metadata,
         stats,
-    })
+    }
 }
 
 /// The `shadow` integrator's light: the scene's first point light (RGB intensity
@@ -294,41 +322,19 @@ fn render_pt(
     let (_, peak_gpu_bytes) = gpu.memory_bytes();
     let (mean, _) = output.mean_and_stderr();
     let film = Film::from_mean_rgb(options.width, options.height, &mean)?;
-    let device = device_description(gpu);
-    let stats = RenderStats {
-        scene: scene.name.clone(),
-        triangles: scene.triangles.len(),
-        width: options.width,
-        height: options.height,
-        spp: output.passes,
-        seed: options.seed,
-        integrator: options.integrator.name().into(),
-        tracer: options.tracer.name().into(),
-        device: device.clone(),
-        render_time_s: seconds,
-        rays_traced: output.rays_traced,
-        rays_per_second: output.rays_traced as f64 / seconds.max(1e-9),
+    Ok(finish(
+        gpu,
+        scene,
+        options,
+        film,
+        output.passes,
+        seconds,
         peak_gpu_bytes,
-        kernels: gpu.take_profile().summary(),
-    };
-    let metadata = RenderMetadata {
-        spp: output.passes,
-        seed: options.seed,
-        integrator: options.integrator.name().into(),
-        tracer: options.tracer.name().into(),
-        device,
-        render_time_s: seconds,
-        extra: vec![
-            ("scene".into(), scene.name.clone()),
-            ("rays_traced".into(), output.rays_traced.to_string()),
+        output.rays_traced,
+        vec![
             ("max_depth".into(), options.max_depth.to_string()),
             ("rr_depth".into(), options.rr_depth.to_string()),
             ("sort_materials".into(), options.sort_materials.to_string()),
         ],
-    };
-    Ok(RenderOutput {
-        film,
-        metadata,
-        stats,
-    })
+    ))
 }
