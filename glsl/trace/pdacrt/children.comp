@@ -5,7 +5,8 @@
 // A child with no triangles or no rays is dropped (nothing to intersect); one with fewer
 // than α triangles or β rays, at the depth limit, or too thin to split further is
 // terminal; the rest form the next level. Writes the six channels that are then
-// prefix-summed into next-level and terminal-buffer positions.
+// prefix-summed into next-level and terminal-buffer positions (CH_TERM_FLAG counts the
+// segments a terminal child becomes).
 #include "grid.glsl"
 #include "pdacrt.glsl"
 
@@ -21,6 +22,7 @@ layout(push_constant) uniform Push {
     uint beta;
     uint last_level;  // 1: every surviving child is terminal (depth limit)
     float min_extent;
+    uint max_segment_rays;
 } pc;
 
 void main() {
@@ -60,7 +62,8 @@ void main() {
     channels[CH_NEXT_FLAG * pc.stride + c] = next ? 1u : 0u;
     channels[CH_NEXT_TRIS * pc.stride + c] = next ? ch.tri_count : 0u;
     channels[CH_NEXT_RAYS * pc.stride + c] = next ? ch.ray_count : 0u;
-    channels[CH_TERM_FLAG * pc.stride + c] = term ? 1u : 0u;
+    // A terminal node with many rays becomes several segments (see write_nodes.comp).
+    channels[CH_TERM_FLAG * pc.stride + c] = term ? (ch.ray_count + pc.max_segment_rays - 1u) / pc.max_segment_rays : 0u;
     channels[CH_TERM_TRIS * pc.stride + c] = term ? ch.tri_count : 0u;
     channels[CH_TERM_RAYS * pc.stride + c] = term ? ch.ray_count : 0u;
 }

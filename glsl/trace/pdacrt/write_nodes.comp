@@ -1,7 +1,12 @@
 #version 460
 // Next-level nodes and terminal segments, Algorithm 1 lines 13–14: each surviving child
 // becomes a node of the next level (pivots re-indexed by the prefix sums, so terminal
-// and dropped children leave no gaps) or a segment of the terminal-node buffer.
+// and dropped children leave no gaps) or segments of the terminal-node buffer. A
+// terminal node with more than max_segment_rays rays is split into segments of at most
+// that many rays over the same triangles: Algorithm 3 gives each segment one workgroup,
+// and the paper's N-thread blocks assume nodes below β rays — a node that is terminal
+// for its few triangles may hold a whole image's rays (the root of a small scene does),
+// which one workgroup would trace alone.
 #include "grid.glsl"
 #include "pdacrt.glsl"
 
@@ -15,6 +20,7 @@ layout(push_constant) uniform Push {
     uint segment_base;
     uint term_tri_base;
     uint term_ray_base;
+    uint max_segment_rays;
 } pc;
 
 void main() {
@@ -26,8 +32,12 @@ void main() {
             offsets[CH_NEXT_TRIS * pc.stride + c], ch.tri_count,
             offsets[CH_NEXT_RAYS * pc.stride + c], ch.ray_count);
     } else if (ch.kind == CHILD_TERMINAL) {
-        segments[pc.segment_base + offsets[CH_TERM_FLAG * pc.stride + c]] = Segment(
-            pc.term_tri_base + offsets[CH_TERM_TRIS * pc.stride + c], ch.tri_count,
-            pc.term_ray_base + offsets[CH_TERM_RAYS * pc.stride + c], ch.ray_count);
+        uint first = pc.segment_base + offsets[CH_TERM_FLAG * pc.stride + c];
+        uint tri_start = pc.term_tri_base + offsets[CH_TERM_TRIS * pc.stride + c];
+        uint ray_start = pc.term_ray_base + offsets[CH_TERM_RAYS * pc.stride + c];
+        for (uint done = 0u, k = 0u; done < ch.ray_count; done += pc.max_segment_rays, ++k) {
+            segments[first + k] = Segment(tri_start, ch.tri_count, ray_start + done,
+                                          min(pc.max_segment_rays, ch.ray_count - done));
+        }
     }
 }

@@ -46,6 +46,7 @@ pub struct ChildrenPush {
     pub beta: u32,
     pub last_level: u32,
     pub min_extent: f32,
+    pub max_segment_rays: u32,
 }
 
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -63,6 +64,7 @@ pub struct WriteNodesPush {
     pub segment_base: u32,
     pub term_tri_base: u32,
     pub term_ray_base: u32,
+    pub max_segment_rays: u32,
 }
 
 #[derive(Clone, Copy, Pod, Zeroable)]

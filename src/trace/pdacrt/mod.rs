@@ -100,6 +100,12 @@ impl PdacrtParams {
         p
     }
 
+    /// Rays per terminal segment at most: larger terminal nodes are split so that one
+    /// node does not serialise on one workgroup (write_nodes.comp).
+    pub fn max_segment_rays(&self) -> u32 {
+        self.intersect_workgroup * 8
+    }
+
     fn validate(&self) -> vk::Result<()> {
         let bad = |what: &str| Err(vk::VkError::Usage(format!("PDACRT parameters: {what}")));
         if self.alpha == 0 || self.beta == 0 {
@@ -383,20 +389,28 @@ impl PdacrtTracer {
             let seg_tags = self.pool.take("pdacrt-tags", tris.max(n) as u64 * 4)?;
             self.iota(&mut rec, &term.tri_ids, &seg_tags, tris, 0, 0)?;
             self.iota(&mut rec, &term.ray_ids, &seg_tags, n, 0, 0)?;
-            rec.update(
-                &term.segments,
-                0,
-                &[Segment {
+            let per = p.max_segment_rays();
+            let segments: Vec<Segment> = (0..n.div_ceil(per))
+                .map(|k| Segment {
                     tri_start: 0,
                     tri_count: tris,
-                    ray_start: 0,
-                    ray_count: n,
-                }],
-            )?;
+                    ray_start: k * per,
+                    ray_count: per.min(n - k * per),
+                })
+                .collect();
+            // They fit: the segment capacity is at least a quarter of the ray capacity
+            // (≥ n), and each segment holds 8N ≥ 4 rays. vkCmdUpdateBuffer takes at most 64 KiB at a time.
+            for (i, part) in segments.chunks(4096).enumerate() {
+                rec.update(
+                    &term.segments,
+                    (i * 4096 * size_of::<Segment>()) as u64,
+                    part,
+                )?;
+            }
             rec.barrier();
             term.tris = tris;
             term.rays = n;
-            term.segment_count = 1;
+            term.segment_count = segments.len() as u32;
             self.pool.give(seg_tags);
             None
         } else {
@@ -497,6 +511,7 @@ impl PdacrtTracer {
                     segment_base: term.segment_count,
                     term_tri_base: term.tris,
                     term_ray_base: term.rays,
+                    max_segment_rays: p.max_segment_rays(),
                 },
                 child_count as u64,
             )?;
@@ -760,6 +775,7 @@ impl PdacrtTracer {
                 beta: self.params.beta,
                 last_level: (depth + 1 >= self.params.max_depth) as u32,
                 min_extent,
+                max_segment_rays: self.params.max_segment_rays(),
             },
             child_count as u64,
         )?;
