@@ -548,3 +548,249 @@ fn bunny() {
     eprintln!("bunny: {stats:?}");
     assert!(stats.degenerate_triangles < 100);
 }
+
+// ---- explicit BSDFs in [[material]] ------------------------------------------------
+
+const MAT_HEAD: &str = "[[mesh]]\npath = \"meshes/tri.obj\"\n";
+
+/// Loads `MAT_HEAD + body` as `mat.toml` next to the triangle mesh.
+fn load_mat(body: &str) -> (Result<Scene, String>, String) {
+    let dir = good_dir();
+    let text = format!("{MAT_HEAD}{body}");
+    let p = write(dir.path(), "mat.toml", &text);
+    (
+        scene::load(p.to_str().unwrap()).map_err(|e| e.to_string()),
+        text,
+    )
+}
+
+/// 1-based line of the first line containing `needle`.
+fn line_of(text: &str, needle: &str) -> usize {
+    text.lines()
+        .position(|l| l.contains(needle))
+        .unwrap_or_else(|| panic!("{needle:?} not in the text"))
+        + 1
+}
+
+#[test]
+fn explicit_bsdfs_parse() {
+    use splitray::scene::{BsdfKind, MaterialBsdf, MaterialLayer, MicrofacetModel};
+    let (s, _) = load_mat(
+        r#"
+[[material]]
+name = "gold"
+bsdf = "conductor"
+reflectance = [1.0, 0.78, 0.34]
+roughness = 0.25
+distribution = "beckmann"
+emission = [0, 0, 0]
+[[material]]
+name = "red"
+bsdf = "glass"
+ior = 1.33
+[[material]]
+name = "stack"
+[[material.layer]]
+bsdf = "lambert"
+weight = 0.5
+[[material.layer]]
+bsdf = "plastic"
+roughness = 0.1
+distribution = "blinn-phong"
+weight = 0.5
+"#,
+    );
+    let s = s.unwrap();
+    let get = |n: &str| &s.materials[s.material_index(n).unwrap() as usize];
+    let layer = |kind, reflectance: Vec3, roughness, distribution, ior, weight| MaterialLayer {
+        kind,
+        reflectance,
+        roughness,
+        distribution,
+        ior,
+        weight,
+    };
+    assert_eq!(
+        get("gold").bsdf,
+        Some(MaterialBsdf {
+            layers: vec![layer(
+                BsdfKind::Conductor,
+                Vec3::new(1.0, 0.78, 0.34),
+                0.25,
+                MicrofacetModel::Beckmann,
+                1.5,
+                1.0
+            )]
+        })
+    );
+    // An override of an MTL material keeps the MTL fields and adds the BSDF.
+    let red = get("red");
+    assert_eq!(red.diffuse, Vec3::new(0.6, 0.1, 0.1));
+    assert_eq!(red.ior, 1.33);
+    assert_eq!(
+        red.bsdf,
+        Some(MaterialBsdf {
+            layers: vec![layer(
+                BsdfKind::Glass,
+                Vec3::ONE,
+                0.2,
+                MicrofacetModel::Ggx,
+                1.33,
+                1.0
+            )]
+        })
+    );
+    assert_eq!(
+        get("stack").bsdf,
+        Some(MaterialBsdf {
+            layers: vec![
+                layer(
+                    BsdfKind::Lambert,
+                    Vec3::splat(0.8),
+                    0.2,
+                    MicrofacetModel::Ggx,
+                    1.5,
+                    0.5
+                ),
+                layer(
+                    BsdfKind::Plastic,
+                    Vec3::splat(0.8),
+                    0.1,
+                    MicrofacetModel::BlinnPhong,
+                    1.5,
+                    0.5
+                ),
+            ]
+        })
+    );
+    assert_eq!(get("lamp").bsdf, None);
+}
+
+#[test]
+fn explicit_bsdf_errors_name_file_and_line() {
+    // (body, text on the offending line, message parts)
+    let lambert = |w: &str| format!("[[material.layer]]\nbsdf = \"lambert\"\nweight = {w}\n");
+    let five = format!("[[material]]\nname = \"m\"\n{}", lambert("0.1").repeat(5));
+    let plastic_over = format!(
+        "[[material]]\nname = \"m\"\n{}[[material.layer]]\nbsdf = \"plastic\" # 5th\nweight = 0.1\n",
+        lambert("0.1").repeat(3)
+    );
+    let cases: Vec<(String, &str, Vec<&str>)> = vec![
+        (
+            "[[material]]\nname = \"m\"\nbsdf = \"metal\"\n".into(),
+            "metal",
+            vec!["unknown bsdf 'metal'", "known: lambert, oren-nayar, mirror"],
+        ),
+        (
+            "[[material]]\nname = \"m\"\nbsdf = \"conductor\"\nroughness = 0\n".into(),
+            "roughness",
+            vec!["material 'm'", "roughness 0 is outside (0, 1]"],
+        ),
+        (
+            "[[material]]\nname = \"m\"\nbsdf = \"rough-glass\"\nroughness = 1.5\n".into(),
+            "roughness",
+            vec!["roughness 1.5 is outside (0, 1]"],
+        ),
+        (
+            "[[material]]\nname = \"m\"\nbsdf = \"glass\"\nior = 0\n".into(),
+            "ior",
+            vec!["material 'm'", "ior 0 must be > 0"],
+        ),
+        (
+            "[[material]]\nname = \"m\"\nbsdf = \"plastic\"\nior = -1.5\n".into(),
+            "ior",
+            vec!["ior -1.5 must be > 0"],
+        ),
+        (
+            "[[material]]\nname = \"m\"\nbsdf = \"conductor\"\ndistribution = \"phong\"\n".into(),
+            "phong",
+            vec!["unknown distribution 'phong'", "ggx, beckmann, blinn-phong"],
+        ),
+        (
+            "[[material]]\nname = \"m\"\nbsdf = \"lambert\"\nroughness = 0.5\n".into(),
+            "roughness",
+            vec!["'roughness' does not apply to bsdf 'lambert'"],
+        ),
+        (
+            "[[material]]\nname = \"m\"\nbsdf = \"conductor\"\nreflectance = [1.2, 0, 0]\n"
+                .into(),
+            "reflectance",
+            vec!["must lie in [0, 1]"],
+        ),
+        (
+            "[[material]]\nname = \"m\"\nroughness = 0.5\n".into(),
+            "roughness",
+            vec!["'roughness' needs 'bsdf'"],
+        ),
+        (
+            format!("[[material]]\nname = \"m\"\nbsdf = \"lambert\" # both\n{}", lambert("1")),
+            "both",
+            vec!["either 'bsdf' or [[material.layer]]"],
+        ),
+        (
+            five,
+            // the fifth layer's bsdf line
+            "",
+            vec!["more than 4 BSDF layers"],
+        ),
+        (
+            plastic_over,
+            "5th",
+            vec!["more than 4 BSDF layers (a plastic layer counts as 2)"],
+        ),
+        (
+            format!("[[material]]\nname = \"m\"\n{}", lambert("0")),
+            "weight",
+            vec!["layer weight 0 is outside (0, 1]"],
+        ),
+        (
+            format!("[[material]]\nname = \"m\"\n{}", lambert("-0.5")),
+            "weight",
+            vec!["layer weight -0.5 is outside (0, 1]"],
+        ),
+        (
+            format!(
+                "[[material]]\nname = \"m\"\n{}{}",
+                lambert("0.6"),
+                lambert("0.7 # over")
+            ),
+            "over",
+            vec!["layer weights sum to 1.3", "more than 1"],
+        ),
+        (
+            "[[material]]\nname = \"m\"\n[[material.layer]]\nbsdf = \"lambert\"\nweight = 1\nalbedo = [1, 1, 1]\n"
+                .into(),
+            "albedo",
+            vec!["unknown field 'albedo'"],
+        ),
+        (
+            "[[material]]\nname = \"m\"\n[[material.layer]]\nbsdf = \"lambert\" # no weight\n"
+                .into(),
+            "[[material.layer]]",
+            vec!["missing field 'weight'"],
+        ),
+    ];
+    for (body, needle, parts) in cases {
+        let (r, text) = load_mat(&body);
+        let msg = match r {
+            Ok(_) => panic!("should fail:\n{body}"),
+            Err(e) => e,
+        };
+        let line = if needle.is_empty() {
+            // the fifth `bsdf = ` line of the file
+            text.lines()
+                .enumerate()
+                .filter(|(_, l)| l.starts_with("bsdf"))
+                .nth(4)
+                .unwrap()
+                .0
+                + 1
+        } else {
+            line_of(&text, needle)
+        };
+        let at = format!("mat.toml:{line}:");
+        let mut want = parts.clone();
+        want.push(&at);
+        assert_has(&msg, &want);
+    }
+}

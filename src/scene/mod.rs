@@ -112,6 +112,10 @@ pub struct Material {
     pub illum: u32,
     /// Ke: emitted radiance.
     pub emission: Vec3,
+    /// An explicit BSDF from a scene file; when set it replaces the MTL mapping above
+    /// (`emission` still applies).
+    #[serde(default)]
+    pub bsdf: Option<MaterialBsdf>,
 }
 
 impl Default for Material {
@@ -126,6 +130,7 @@ impl Default for Material {
             dissolve: 1.0,
             illum: 1,
             emission: Vec3::ZERO,
+            bsdf: None,
         }
     }
 }
@@ -140,6 +145,134 @@ impl Material {
 
     pub fn is_emissive(&self) -> bool {
         self.emission.max_element() > 0.0
+    }
+}
+
+/// An explicit BSDF description: a stack of 1 to 4 weighted layers (thesis §4.4.1).
+/// The single-BSDF form of a scene file is one layer of weight 1. A `Plastic` layer
+/// becomes two BSDF layers (diffuse + glossy coat) and counts twice toward the limit.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct MaterialBsdf {
+    pub layers: Vec<MaterialLayer>,
+}
+
+/// One layer of a [`MaterialBsdf`].
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct MaterialLayer {
+    pub kind: BsdfKind,
+    /// Albedo (lambert, oren-nayar, plastic), tint (mirror, glass, rough-glass) or
+    /// normal-incidence reflectance F0 (conductor); each channel in [0, 1].
+    pub reflectance: Vec3,
+    /// Microfacet α in (0, 1], or Oren–Nayar σ in radians.
+    pub roughness: f32,
+    pub distribution: MicrofacetModel,
+    /// η = η_inside / η_outside (glass, rough-glass; plastic: the coat's Fresnel F0).
+    pub ior: f32,
+    /// Mixture weight in (0, 1]; the weights of a stack sum to at most 1.
+    pub weight: f32,
+}
+
+/// The BSDF kinds a scene file can name.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum BsdfKind {
+    Lambert,
+    OrenNayar,
+    Mirror,
+    Glass,
+    RoughGlass,
+    /// Microfacet reflection with Schlick Fresnel (F0 = reflectance).
+    Conductor,
+    /// Lambert + microfacet coat whose F0 comes from the ior.
+    Plastic,
+}
+
+impl BsdfKind {
+    pub const ALL: [BsdfKind; 7] = [
+        BsdfKind::Lambert,
+        BsdfKind::OrenNayar,
+        BsdfKind::Mirror,
+        BsdfKind::Glass,
+        BsdfKind::RoughGlass,
+        BsdfKind::Conductor,
+        BsdfKind::Plastic,
+    ];
+
+    /// The scene-file name (`"rough-glass"` …).
+    pub fn name(self) -> &'static str {
+        match self {
+            BsdfKind::Lambert => "lambert",
+            BsdfKind::OrenNayar => "oren-nayar",
+            BsdfKind::Mirror => "mirror",
+            BsdfKind::Glass => "glass",
+            BsdfKind::RoughGlass => "rough-glass",
+            BsdfKind::Conductor => "conductor",
+            BsdfKind::Plastic => "plastic",
+        }
+    }
+
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|k| k.name() == name)
+    }
+
+    /// Whether `roughness` means something for this kind.
+    pub fn has_roughness(self) -> bool {
+        matches!(
+            self,
+            BsdfKind::OrenNayar | BsdfKind::RoughGlass | BsdfKind::Conductor | BsdfKind::Plastic
+        )
+    }
+
+    /// Whether `distribution` means something for this kind.
+    pub fn is_microfacet(self) -> bool {
+        matches!(
+            self,
+            BsdfKind::RoughGlass | BsdfKind::Conductor | BsdfKind::Plastic
+        )
+    }
+
+    /// Whether `ior` means something for this kind.
+    pub fn has_ior(self) -> bool {
+        matches!(
+            self,
+            BsdfKind::Glass | BsdfKind::RoughGlass | BsdfKind::Plastic
+        )
+    }
+
+    /// BSDF layers this kind takes in a stack (plastic: 2).
+    pub fn layer_count(self) -> usize {
+        if self == BsdfKind::Plastic {
+            2
+        } else {
+            1
+        }
+    }
+}
+
+/// Microfacet distributions a scene file can name.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum MicrofacetModel {
+    Ggx,
+    Beckmann,
+    BlinnPhong,
+}
+
+impl MicrofacetModel {
+    pub const ALL: [MicrofacetModel; 3] = [
+        MicrofacetModel::Ggx,
+        MicrofacetModel::Beckmann,
+        MicrofacetModel::BlinnPhong,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            MicrofacetModel::Ggx => "ggx",
+            MicrofacetModel::Beckmann => "beckmann",
+            MicrofacetModel::BlinnPhong => "blinn-phong",
+        }
+    }
+
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|k| k.name() == name)
     }
 }
 

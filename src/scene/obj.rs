@@ -252,6 +252,7 @@ fn convert_material(m: &tobj::Material) -> Material {
         dissolve: dissolve.unwrap_or(d.dissolve),
         illum: m.illumination_model.map_or(d.illum, u32::from),
         emission: v3(m.emissive.or_else(|| param3("Ke")), d.emission),
+        bsdf: None,
     }
 }
 

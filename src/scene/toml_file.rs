@@ -35,6 +35,29 @@
 //! illum = 2
 //! emission = [17.0, 12.0, 4.0]
 //!
+//! [[material]]                      # an explicit BSDF (the `pt` integrator) replaces the
+//! name = "gold"                     # MTL mapping; it may also override an MTL material
+//! bsdf = "conductor"                # lambert | oren-nayar | mirror | glass | rough-glass |
+//!                                   # conductor (microfacet reflection) | plastic (diffuse
+//!                                   # + glossy coat, F0 from ior; counts as 2 layers)
+//! reflectance = [1.0, 0.78, 0.34]   # albedo / tint / F0, each in [0, 1]; default 0.8 grey
+//!                                   # (lambert, oren-nayar, plastic), else white
+//! roughness = 0.25                  # in (0, 1]: microfacet α, or σ in radians for
+//!                                   # oren-nayar; default 0.2; only for the rough kinds
+//! distribution = "ggx"              # ggx (default) | beckmann | blinn-phong (microfacet kinds)
+//! ior = 1.5                         # > 0; glass, rough-glass, plastic; default 1.5
+//!
+//! [[material]]                      # or a stack of 1 to 4 weighted layers (thesis §4.4.1),
+//! name = "varnished"                # instead of `bsdf` and its keys
+//! [[material.layer]]
+//! bsdf = "lambert"                  # each layer: bsdf, weight and that kind's keys above
+//! reflectance = [0.5, 0.3, 0.1]
+//! weight = 0.7                      # in (0, 1]; the weights sum to at most 1
+//! [[material.layer]]
+//! bsdf = "conductor"
+//! roughness = 0.1
+//! weight = 0.3
+//!
 //! [[point_light]]                   # optional, any number
 //! position = [278.0, 500.0, 279.5]
 //! intensity = [1e5, 1e5, 1e5]       # W/sr, RGB
@@ -55,9 +78,10 @@ use toml::Spanned;
 
 use super::obj::{load_obj_mesh, read_text};
 use super::{
-    framing_camera, validate, Camera, FilmSize, Location, Material, PointLight, RenderSettings,
-    Scene, SceneError,
+    framing_camera, validate, BsdfKind, Camera, FilmSize, Location, Material, MaterialBsdf,
+    MaterialLayer, MicrofacetModel, PointLight, RenderSettings, Scene, SceneError,
 };
+use crate::bsdf::MAX_LAYERS;
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -115,18 +139,47 @@ enum Scale {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct MaterialToml {
-    name: String,
+    name: Spanned<String>,
     diffuse: Option<[f32; 3]>,
     specular: Option<[f32; 3]>,
     shininess: Option<f32>,
-    ior: Option<f32>,
+    ior: Option<Spanned<f32>>,
     dissolve: Option<f32>,
     illum: Option<u32>,
     emission: Option<[f32; 3]>,
+    bsdf: Option<Spanned<String>>,
+    reflectance: Option<Spanned<[f32; 3]>>,
+    roughness: Option<Spanned<f32>>,
+    distribution: Option<Spanned<String>>,
+    #[serde(default)]
+    layer: Vec<LayerToml>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct LayerToml {
+    bsdf: Spanned<String>,
+    reflectance: Option<Spanned<[f32; 3]>>,
+    roughness: Option<Spanned<f32>>,
+    distribution: Option<Spanned<String>>,
+    ior: Option<Spanned<f32>>,
+    weight: Spanned<f32>,
+}
+
+/// The BSDF keys of one layer (of a `[[material.layer]]`, or of the material itself).
+struct LayerKeys<'a> {
+    bsdf: &'a Spanned<String>,
+    reflectance: Option<&'a Spanned<[f32; 3]>>,
+    roughness: Option<&'a Spanned<f32>>,
+    distribution: Option<&'a Spanned<String>>,
+    ior: Option<&'a Spanned<f32>>,
+    /// Whether `ior` is the material's MTL `ior` (which every kind may carry).
+    shared_ior: bool,
+    weight: f32,
 }
 
 impl MaterialToml {
-    fn apply(&self, m: &mut Material) {
+    fn apply(&self, m: &mut Material, bsdf: &Option<MaterialBsdf>) {
         if let Some(v) = self.diffuse {
             m.diffuse = v.into();
         }
@@ -136,8 +189,8 @@ impl MaterialToml {
         if let Some(v) = self.shininess {
             m.shininess = v;
         }
-        if let Some(v) = self.ior {
-            m.ior = v;
+        if let Some(v) = &self.ior {
+            m.ior = *v.get_ref();
         }
         if let Some(v) = self.dissolve {
             m.dissolve = v;
@@ -148,8 +201,201 @@ impl MaterialToml {
         if let Some(v) = self.emission {
             m.emission = v.into();
         }
+        if bsdf.is_some() {
+            m.bsdf = bsdf.clone();
+        }
+    }
+
+    /// The explicit BSDF of `bsdf = …` or `[[material.layer]]`, validated.
+    fn explicit_bsdf(&self, at: &Loc) -> Result<Option<MaterialBsdf>, SceneError> {
+        let name = self.name.get_ref();
+        let invalid = |span: std::ops::Range<usize>, message: String| SceneError::Invalid {
+            at: at(span),
+            message: format!("material '{name}': {message}"),
+        };
+        if let Some(bsdf) = &self.bsdf {
+            if !self.layer.is_empty() {
+                return Err(invalid(
+                    bsdf.span(),
+                    "give either 'bsdf' or [[material.layer]] tables, not both".to_string(),
+                ));
+            }
+            let layer = layer_of(
+                name,
+                &LayerKeys {
+                    bsdf,
+                    reflectance: self.reflectance.as_ref(),
+                    roughness: self.roughness.as_ref(),
+                    distribution: self.distribution.as_ref(),
+                    ior: self.ior.as_ref(),
+                    shared_ior: true,
+                    weight: 1.0,
+                },
+                at,
+            )?;
+            return Ok(Some(MaterialBsdf {
+                layers: vec![layer],
+            }));
+        }
+        let stray = [
+            ("reflectance", self.reflectance.as_ref().map(Spanned::span)),
+            ("roughness", self.roughness.as_ref().map(Spanned::span)),
+            (
+                "distribution",
+                self.distribution.as_ref().map(Spanned::span),
+            ),
+        ];
+        if let Some((key, Some(span))) = stray.into_iter().find(|(_, s)| s.is_some()) {
+            return Err(invalid(
+                span,
+                format!(
+                    "'{key}' needs 'bsdf' next to it (in a layer stack it goes in each [[material.layer]])"
+                ),
+            ));
+        }
+        if self.layer.is_empty() {
+            return Ok(None);
+        }
+        let mut layers = Vec::with_capacity(self.layer.len());
+        let (mut count, mut total) = (0, 0.0);
+        for l in &self.layer {
+            let w = *l.weight.get_ref();
+            if !(w > 0.0 && w <= 1.0) {
+                return Err(invalid(
+                    l.weight.span(),
+                    format!("layer weight {w} is outside (0, 1]"),
+                ));
+            }
+            let layer = layer_of(
+                name,
+                &LayerKeys {
+                    bsdf: &l.bsdf,
+                    reflectance: l.reflectance.as_ref(),
+                    roughness: l.roughness.as_ref(),
+                    distribution: l.distribution.as_ref(),
+                    ior: l.ior.as_ref(),
+                    shared_ior: false,
+                    weight: w,
+                },
+                at,
+            )?;
+            count += layer.kind.layer_count();
+            total += w;
+            if count > MAX_LAYERS {
+                return Err(invalid(
+                    l.bsdf.span(),
+                    format!("more than {MAX_LAYERS} BSDF layers (a plastic layer counts as 2)"),
+                ));
+            }
+            if total > 1.0 + 1e-4 {
+                return Err(invalid(
+                    l.weight.span(),
+                    format!("layer weights sum to {total}, more than 1"),
+                ));
+            }
+            layers.push(layer);
+        }
+        Ok(Some(MaterialBsdf { layers }))
     }
 }
+
+type Loc<'a> = dyn Fn(std::ops::Range<usize>) -> Location + 'a;
+
+/// One validated layer; `material` names the material in error messages.
+fn layer_of(material: &str, k: &LayerKeys, at: &Loc) -> Result<MaterialLayer, SceneError> {
+    let invalid = |span: std::ops::Range<usize>, message: String| SceneError::Invalid {
+        at: at(span),
+        message: format!("material '{material}': {message}"),
+    };
+    let kind_name = k.bsdf.get_ref();
+    let Some(kind) = BsdfKind::from_name(kind_name) else {
+        let names: Vec<&str> = BsdfKind::ALL.iter().map(|k| k.name()).collect();
+        return Err(SceneError::Unknown {
+            at: at(k.bsdf.span()),
+            what: "bsdf",
+            name: kind_name.clone(),
+            hint: format!(" (known: {})", names.join(", ")),
+        });
+    };
+    let not_for = |key: &str, span| {
+        invalid(
+            span,
+            format!("'{key}' does not apply to bsdf '{kind_name}'"),
+        )
+    };
+
+    let reflectance = match k.reflectance {
+        Some(r) => {
+            let v = Vec3::from(*r.get_ref());
+            if !(v.cmpge(Vec3::ZERO).all() && v.cmple(Vec3::ONE).all()) {
+                return Err(invalid(
+                    r.span(),
+                    format!("reflectance {v} must lie in [0, 1] per channel"),
+                ));
+            }
+            v
+        }
+        None if matches!(
+            kind,
+            BsdfKind::Lambert | BsdfKind::OrenNayar | BsdfKind::Plastic
+        ) =>
+        {
+            Vec3::splat(0.8)
+        }
+        None => Vec3::ONE,
+    };
+    let roughness = match k.roughness {
+        Some(r) if !kind.has_roughness() => return Err(not_for("roughness", r.span())),
+        Some(r) => {
+            let v = *r.get_ref();
+            if !(v > 0.0 && v <= 1.0) {
+                return Err(invalid(
+                    r.span(),
+                    format!("roughness {v} is outside (0, 1]"),
+                ));
+            }
+            v
+        }
+        None => DEFAULT_ROUGHNESS,
+    };
+    let distribution = match k.distribution {
+        Some(d) if !kind.is_microfacet() => return Err(not_for("distribution", d.span())),
+        Some(d) => MicrofacetModel::from_name(d.get_ref()).ok_or_else(|| {
+            let names: Vec<&str> = MicrofacetModel::ALL.iter().map(|m| m.name()).collect();
+            SceneError::Unknown {
+                at: at(d.span()),
+                what: "distribution",
+                name: d.get_ref().clone(),
+                hint: format!(" (known: {})", names.join(", ")),
+            }
+        })?,
+        None => MicrofacetModel::Ggx,
+    };
+    let ior = match k.ior {
+        Some(i) if !kind.has_ior() && !k.shared_ior => return Err(not_for("ior", i.span())),
+        Some(i) if kind.has_ior() => {
+            let v = *i.get_ref();
+            if !(v > 0.0 && v.is_finite()) {
+                return Err(invalid(i.span(), format!("ior {v} must be > 0")));
+            }
+            v
+        }
+        _ => DEFAULT_IOR,
+    };
+    Ok(MaterialLayer {
+        kind,
+        reflectance,
+        roughness,
+        distribution,
+        ior,
+        weight: k.weight,
+    })
+}
+
+/// Roughness when a rough kind has none: α (or σ in radians).
+const DEFAULT_ROUGHNESS: f32 = 0.2;
+/// ior when glass or plastic has none.
+const DEFAULT_IOR: f32 = 1.5;
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -274,14 +520,16 @@ pub fn parse_toml(
     }
 
     for m in &doc.material {
+        let bsdf = m.explicit_bsdf(&at_span)?;
+        let name = m.name.get_ref();
         let mut found = false;
-        for existing in materials.iter_mut().filter(|e| e.name == m.name) {
-            m.apply(existing);
+        for existing in materials.iter_mut().filter(|e| &e.name == name) {
+            m.apply(existing, &bsdf);
             found = true;
         }
         if !found {
-            let mut new = Material::named(m.name.clone());
-            m.apply(&mut new);
+            let mut new = Material::named(name.clone());
+            m.apply(&mut new, &bsdf);
             materials.push(new);
         }
     }

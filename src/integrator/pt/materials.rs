@@ -20,11 +20,29 @@
 //! `Ks`), the Lambert albedo `Kd / w_d` and F0 `Ks / w_s`, so that the effective
 //! colours are `Kd` and `Ks` as in the Phong model of MTL; when k_d + k_s > 1 both are
 //! scaled by 1 / (k_d + k_s), so the stack never reflects more than it receives.
+//!
+//! # Explicit BSDFs
+//!
+//! A material with [`Material::bsdf`] (`bsdf = …` or `[[material.layer]]` in a scene
+//! TOML) ignores the MTL mapping; each layer becomes BSDF layers of its weight:
+//!
+//! | scene file    | BSDF                                                                   |
+//! |---------------|------------------------------------------------------------------------|
+//! | `lambert`     | Lambert, albedo = reflectance                                          |
+//! | `oren-nayar`  | Oren–Nayar, albedo = reflectance, σ = roughness (radians)             |
+//! | `mirror`      | perfect mirror, tint = reflectance                                     |
+//! | `glass`       | smooth dielectric, tint = reflectance, η = ior                         |
+//! | `rough-glass` | rough dielectric, tint = reflectance, α = roughness, η = ior           |
+//! | `conductor`   | microfacet reflection, Schlick F0 = reflectance, α = roughness         |
+//! | `plastic`     | two layers: the Lambert + microfacet mixture above with `Kd` = reflectance and `Ks` = F0 = ((η−1)/(η+1))² of the ior (0.04 at 1.5), α = roughness |
+//!
+//! For `blinn-phong` the α is turned into the exponent n = 2/α² − 2 (the inverse of
+//! [`alpha_from_shininess`]); GGX and Beckmann take α as is.
 
 use glam::Vec3;
 
 use crate::bsdf::{material_key, Bsdf, BsdfParams, Distribution, MaterialType};
-use crate::scene::Material;
+use crate::scene::{BsdfKind, Material, MaterialBsdf, MaterialLayer, MicrofacetModel};
 
 use super::gpu::PtMaterial;
 
@@ -35,6 +53,9 @@ pub fn alpha_from_shininess(ns: f32) -> f32 {
 
 /// The BSDF stack of a material (see the module docs).
 pub fn bsdf_of(m: &Material) -> BsdfParams {
+    if let Some(b) = &m.bsdf {
+        return explicit_bsdf(b);
+    }
     let glass = matches!(m.illum, 4 | 6 | 7) || m.dissolve < 1.0;
     if glass {
         let eta = if m.ior > 1.0 { m.ior } else { 1.5 };
@@ -58,23 +79,40 @@ pub fn bsdf_of(m: &Material) -> BsdfParams {
         };
         return Bsdf::Mirror { tint }.params();
     }
-    let kd = m.diffuse.max(Vec3::ZERO);
-    let ks = m.specular.max(Vec3::ZERO);
+    if m.illum < 2 {
+        return Bsdf::Lambert {
+            albedo: m.diffuse.max(Vec3::ZERO),
+        }
+        .params();
+    }
+    BsdfParams::layered(&diffuse_glossy(
+        m.diffuse,
+        m.specular,
+        Distribution::Ggx,
+        alpha_from_shininess(m.shininess),
+    ))
+}
+
+/// The energy-bounded mixture of Lambert (`kd`) and microfacet reflection (F0 `ks`)
+/// of the module docs; one layer when either colour is black.
+fn diffuse_glossy(kd: Vec3, ks: Vec3, distribution: Distribution, param: f32) -> Vec<(Bsdf, f32)> {
+    let kd = kd.max(Vec3::ZERO);
+    let ks = ks.max(Vec3::ZERO);
     let (d, s) = (kd.max_element(), ks.max_element());
-    if s <= 0.0 || m.illum < 2 {
-        return Bsdf::Lambert { albedo: kd }.params();
+    if s <= 0.0 {
+        return vec![(Bsdf::Lambert { albedo: kd }, 1.0)];
     }
     let scale = if d + s > 1.0 { 1.0 / (d + s) } else { 1.0 };
     let (wd, ws) = (d / (d + s), s / (d + s));
     let specular = Bsdf::MicrofacetReflection {
         f0: ks * scale / ws,
-        distribution: Distribution::Ggx,
-        roughness: alpha_from_shininess(m.shininess),
+        distribution,
+        roughness: param,
     };
     if d <= 0.0 {
-        return specular.params();
+        return vec![(specular, 1.0)];
     }
-    BsdfParams::layered(&[
+    vec![
         (
             Bsdf::Lambert {
                 albedo: kd * scale / wd,
@@ -82,7 +120,62 @@ pub fn bsdf_of(m: &Material) -> BsdfParams {
             wd,
         ),
         (specular, ws),
-    ])
+    ]
+}
+
+/// The [`Distribution`] and its parameter for α (Blinn–Phong takes an exponent).
+fn distribution_of(model: MicrofacetModel, alpha: f32) -> (Distribution, f32) {
+    match model {
+        MicrofacetModel::Ggx => (Distribution::Ggx, alpha),
+        MicrofacetModel::Beckmann => (Distribution::Beckmann, alpha),
+        MicrofacetModel::BlinnPhong => (
+            Distribution::BlinnPhong,
+            (2.0 / (alpha * alpha) - 2.0).max(0.0),
+        ),
+    }
+}
+
+/// The BSDF layers of one explicit layer, weights already scaled by its weight.
+fn layers_of(l: &MaterialLayer) -> Vec<(Bsdf, f32)> {
+    let (distribution, roughness) = distribution_of(l.distribution, l.roughness);
+    let r = l.reflectance;
+    let one = match l.kind {
+        BsdfKind::Lambert => Bsdf::Lambert { albedo: r },
+        BsdfKind::OrenNayar => Bsdf::OrenNayar {
+            albedo: r,
+            sigma: l.roughness,
+        },
+        BsdfKind::Mirror => Bsdf::Mirror { tint: r },
+        BsdfKind::Glass => Bsdf::Dielectric {
+            tint: r,
+            eta: l.ior,
+        },
+        BsdfKind::RoughGlass => Bsdf::MicrofacetDielectric {
+            tint: r,
+            distribution,
+            roughness,
+            eta: l.ior,
+        },
+        BsdfKind::Conductor => Bsdf::MicrofacetReflection {
+            f0: r,
+            distribution,
+            roughness,
+        },
+        BsdfKind::Plastic => {
+            let f0 = ((l.ior - 1.0) / (l.ior + 1.0)).powi(2);
+            return diffuse_glossy(r, Vec3::splat(f0), distribution, roughness)
+                .into_iter()
+                .map(|(b, w)| (b, w * l.weight))
+                .collect();
+        }
+    };
+    vec![(one, l.weight)]
+}
+
+/// The BSDF stack of an explicit description (see the module docs).
+pub fn explicit_bsdf(b: &MaterialBsdf) -> BsdfParams {
+    let layers: Vec<(Bsdf, f32)> = b.layers.iter().flat_map(layers_of).collect();
+    BsdfParams::layered(&layers)
 }
 
 /// Whether every layer of the stack is a delta lobe.
