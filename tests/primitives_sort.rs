@@ -161,19 +161,25 @@ fn sort_keys_only_and_other_tunings() {
     let gpu = common::gpu();
     let base = Tuning::for_device(gpu.info());
     let sg = gpu.info().limits.subgroup_size;
-    for (w, k, bits, rows) in [
-        (1, 1, 8, false),
-        (8, 3, 4, false),
-        (32, 16, 6, false),
-        (64, 8, 5, false),
-        (sg, 7, 8, true),
-        (sg, 256, 8, false),
+    // (workgroup, keys per invocation, digit bits, subgroup rows, barrier-free segments)
+    for (w, k, bits, rows, segments) in [
+        (1, 1, 8, false, false),
+        (8, 3, 4, false, false),
+        (32, 16, 6, false, false),
+        (64, 8, 5, false, false),
+        (sg, 7, 8, true, false),
+        (sg, 256, 8, false, false),
+        (sg, 256, 8, false, true),
+        (4, 12, 6, false, true),
+        (sg, 7, 8, false, true),
+        (1, 4, 3, false, true),
     ] {
         let tuning = Tuning {
             sort_workgroup_size: w,
             sort_keys_per_invocation: k,
             radix_bits: bits,
             sort_rows: rows,
+            sort_segments: segments,
             ..base
         }
         .fit(gpu.info());

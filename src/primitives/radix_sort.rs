@@ -42,6 +42,8 @@ pub struct RadixSort {
     scan: Scan,
     tuning: Tuning,
     rows: bool,
+    /// Barrier-free segments ([`Tuning::sort_segments`]): histograms per invocation.
+    segments: bool,
 }
 
 impl RadixSort {
@@ -61,7 +63,13 @@ impl RadixSort {
         // The row variant needs the workgroup to be exactly one subgroup.
         let rows =
             tuning.sort_rows && tuning.sort_workgroup_size == gpu.info().limits.subgroup_size;
-        let (histogram, scatter) = if rows {
+        let segments = !rows && tuning.sort_segments && tuning.sort_keys_per_invocation % 4 == 0;
+        let (histogram, scatter) = if segments {
+            (
+                shaders::PRIMITIVES_SORT_SEG_COUNT,
+                shaders::PRIMITIVES_SORT_SEG_SCATTER,
+            )
+        } else if rows {
             (
                 shaders::PRIMITIVES_SORT_HISTOGRAM__ROWS,
                 shaders::PRIMITIVES_SORT_SCATTER_ROWS,
@@ -87,9 +95,10 @@ impl RadixSort {
         );
         Ok(Self {
             setup: Setup::new(gpu)?,
-            histogram: pipeline(gpu, histogram, 4, 12, &spec)?,
-            scatter: pipeline(gpu, scatter, 7, 12, &spec)?,
+            histogram: pipeline(gpu, histogram, if segments { 3 } else { 4 }, 12, &spec)?,
+            scatter: pipeline(gpu, scatter, if segments { 6 } else { 7 }, 12, &spec)?,
             rows,
+            segments,
             copy: pipeline(
                 gpu,
                 shaders::PRIMITIVES_COPY_PAIRS,
@@ -116,15 +125,24 @@ impl RadixSort {
             .max(1)
     }
 
+    /// Histogram rows per tile: one per invocation for segments, else one.
+    fn hist_rows(&self) -> u32 {
+        if self.segments {
+            self.tuning.sort_workgroup_size
+        } else {
+            1
+        }
+    }
+
     fn hist_len(&self, max_n: u32) -> u32 {
-        (self.tiles(max_n) * self.radix() as u64) as u32
+        (self.tiles(max_n) * self.radix() as u64 * self.hist_rows() as u64) as u32
     }
 
     /// Whether the histogram pass stores its per-invocation counts for the scatter
     /// (instead of the scatter counting again): where that table (radix × workgroup
     /// words per tile) is at most a quarter of the tile's keys.
     fn stores_lane_counts(&self) -> bool {
-        !self.rows && self.radix() * 4 <= self.tuning.sort_keys_per_invocation
+        !self.rows && !self.segments && self.radix() * 4 <= self.tuning.sort_keys_per_invocation
     }
 
     fn lane_counts_len(&self, max_n: u32) -> u64 {
@@ -254,8 +272,13 @@ impl RadixSort {
             offset: 4 * 2, // HDR_GROUPS + 1: the tile count of dispatch kind 1
             max: self.tiles(cap) as u32,
         };
-        self.scan
-            .record_setup(rec, tiles_count, self.radix(), misc, scan_off)?;
+        self.scan.record_setup(
+            rec,
+            tiles_count,
+            self.radix() * self.hist_rows(),
+            misc,
+            scan_off,
+        )?;
 
         let with_values = values.is_some() as u32;
         let tmp_keys = BufferSlice::from(&scratch.keys);
@@ -271,9 +294,10 @@ impl RadixSort {
                 bits: (bits.end - shift).min(self.tuning.radix_bits),
                 flags: with_values | stored,
             };
+            let count_bindings = [header, src.0, hist, lanes];
             rec.dispatch_indirect(
                 &self.histogram,
-                &[header, src.0, hist, lanes],
+                &count_bindings[..if self.segments { 3 } else { 4 }],
                 &push,
                 misc,
                 args_offset(1),
@@ -289,9 +313,10 @@ impl RadixSort {
                 misc,
                 scan_off,
             )?;
+            let scatter_bindings = [header, src.0, src.1, hist, dst.0, dst.1, lanes];
             rec.dispatch_indirect(
                 &self.scatter,
-                &[header, src.0, src.1, hist, dst.0, dst.1, lanes],
+                &scatter_bindings[..if self.segments { 6 } else { 7 }],
                 &push,
                 misc,
                 args_offset(1),
@@ -300,13 +325,38 @@ impl RadixSort {
             std::mem::swap(&mut src, &mut dst);
         }
         if passes % 2 == 1 {
-            rec.dispatch_indirect(
-                &self.copy,
-                &[header, src.0, src.1, dst.0, dst.1],
-                &with_values,
-                misc,
-                args_offset(0),
-            )?;
+            // An odd number of passes left the result in the scratch pair.
+            match count {
+                // n known here: a transfer copy (memcpy speed on CPU devices).
+                Count::Host(n) => {
+                    let bytes = n as u64 * 4;
+                    if bytes > 0 {
+                        rec.copy(
+                            src.0.buffer,
+                            src.0.offset,
+                            dst.0.buffer,
+                            dst.0.offset,
+                            bytes,
+                        );
+                        if values.is_some() {
+                            rec.copy(
+                                src.1.buffer,
+                                src.1.offset,
+                                dst.1.buffer,
+                                dst.1.offset,
+                                bytes,
+                            );
+                        }
+                    }
+                }
+                Count::Gpu { .. } => rec.dispatch_indirect(
+                    &self.copy,
+                    &[header, src.0, src.1, dst.0, dst.1],
+                    &with_values,
+                    misc,
+                    args_offset(0),
+                )?,
+            }
             rec.barrier();
         }
         Ok(())

@@ -43,7 +43,8 @@ pub struct Tuning {
     pub sort_workgroup_size: u32,
     /// Keys per invocation in the radix sort.
     pub sort_keys_per_invocation: u32,
-    /// Digit width of one radix sort pass, in bits (1..=8).
+    /// Digit width of one radix sort pass, in bits (1..=8; up to 11 for the segment
+    /// sort, whose counters are per invocation and never summed inside a workgroup).
     pub radix_bits: u32,
     /// Scan rows of one subgroup with `subgroupInclusiveAdd` (coalesced, barrier-free)
     /// instead of per-invocation runs. Used only where the device has subgroup
@@ -54,6 +55,11 @@ pub struct Tuning {
     /// memory, ordered by subgroup barriers) instead of per-invocation runs. Used only
     /// where `sort_workgroup_size` equals the subgroup size.
     pub sort_rows: bool,
+    /// Barrier-free segment sort: every invocation's keys are one segment with its own
+    /// digit histogram, scanned digit-major across all segments, so neither the count
+    /// nor the scatter kernel needs a workgroup barrier. Used only where
+    /// `sort_keys_per_invocation` is a multiple of 4 and `sort_rows` is off.
+    pub sort_segments: bool,
 }
 
 impl Tuning {
@@ -64,11 +70,14 @@ impl Tuning {
             variant: "cpu-segments",
             workgroup_size: w,
             items_per_invocation: 256,
-            sort_workgroup_size: w,
+            // 2^11 counters x 4 invocations x 4 bytes = 32 KiB, the least shared memory
+            // Vulkan guarantees; fit() narrows the digits where a device has less.
+            sort_workgroup_size: 4,
             sort_keys_per_invocation: 16384,
-            radix_bits: 8,
+            radix_bits: 11,
             subgroup_rows: true,
             sort_rows: false,
+            sort_segments: true,
         }
     }
 
@@ -84,6 +93,7 @@ impl Tuning {
             radix_bits: 4,
             subgroup_rows: false,
             sort_rows: false,
+            sort_segments: false,
         }
     }
 
@@ -103,13 +113,15 @@ impl Tuning {
         let max_inv = info.limits.max_compute_work_group_invocations.max(1);
         self.workgroup_size = self.workgroup_size.clamp(1, max_inv);
         self.sort_workgroup_size = self.sort_workgroup_size.clamp(1, max_inv);
-        self.radix_bits = self.radix_bits.clamp(1, 8);
         self.items_per_invocation = self.items_per_invocation.max(1);
         self.sort_keys_per_invocation = self.sort_keys_per_invocation.max(1);
         self.subgroup_rows &= info.capabilities.subgroup_arithmetic
             && self.workgroup_size == info.limits.subgroup_size
             && self.items_per_invocation % 4 == 0;
         self.sort_rows &= self.sort_workgroup_size == info.limits.subgroup_size;
+        self.sort_segments &= !self.sort_rows && self.sort_keys_per_invocation % 4 == 0;
+        let max_bits = if self.sort_segments { 11 } else { 8 };
+        self.radix_bits = self.radix_bits.clamp(1, max_bits);
         let shared = info.limits.max_compute_shared_memory_size as u64;
         while self.sort_shared_bytes() > shared {
             if self.radix_bits > 4 {
@@ -155,6 +167,8 @@ impl Tuning {
             self.radix_bits,
             if self.sort_rows {
                 "subgroup-row sort"
+            } else if self.sort_segments {
+                "barrier-free segment sort"
             } else {
                 "per-invocation-run sort"
             }
