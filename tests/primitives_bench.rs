@@ -134,8 +134,11 @@ fn tuning_sweep() {
         );
     }
     let only_sort = std::env::var_os("SPLITRAY_SWEEP_SORT_ONLY").is_some();
-    // (workgroup, items per invocation, subgroup rows, unused)
+    // (workgroup, items per invocation, subgroup rows, segment-scan items per invocation)
     for (w, k, rows, seg) in [
+        (sg, 256, true, 1024),
+        (sg, 256, true, 4096),
+        (sg, 256, true, 16384),
         (sg, 256, true, 0),
         (sg, 256, false, 0),
         (sg, 255, false, 0),
@@ -148,6 +151,7 @@ fn tuning_sweep() {
             workgroup_size: w,
             items_per_invocation: k,
             subgroup_rows: rows,
+            scan_segment: seg,
             ..base
         }
         .fit(gpu.info());

@@ -60,6 +60,11 @@ pub struct Tuning {
     /// nor the scatter kernel needs a workgroup barrier. Used only where
     /// `sort_keys_per_invocation` is a multiple of 4 and `sort_rows` is off.
     pub sort_segments: bool,
+    /// Items per invocation of the barrier-free segment scan (0: off): every invocation
+    /// of `workgroup_size` owns this many contiguous items with its own sum, so neither
+    /// scan kernel needs a barrier or a subgroup operation. A multiple of 4 (`uvec4`
+    /// accesses).
+    pub scan_segment: u32,
 }
 
 impl Tuning {
@@ -78,6 +83,7 @@ impl Tuning {
             subgroup_rows: true,
             sort_rows: false,
             sort_segments: true,
+            scan_segment: 4096,
         }
     }
 
@@ -94,6 +100,7 @@ impl Tuning {
             subgroup_rows: false,
             sort_rows: false,
             sort_segments: false,
+            scan_segment: 0,
         }
     }
 
@@ -120,6 +127,9 @@ impl Tuning {
             && self.items_per_invocation % 4 == 0;
         self.sort_rows &= self.sort_workgroup_size == info.limits.subgroup_size;
         self.sort_segments &= !self.sort_rows && self.sort_keys_per_invocation % 4 == 0;
+        if self.scan_segment % 4 != 0 {
+            self.scan_segment = 0;
+        }
         let max_bits = if self.sort_segments { 11 } else { 8 };
         self.radix_bits = self.radix_bits.clamp(1, max_bits);
         let shared = info.limits.max_compute_shared_memory_size as u64;
