@@ -85,26 +85,27 @@ fn tuning_sweep() {
         gpu.info().name,
         base.describe()
     );
-    // (workgroup, keys per invocation, digit bits, subgroup rows, barrier-free segments)
-    let sorts: Vec<(u32, u32, u32, bool, bool)> = vec![
-        (sg / 2, 16384, 11, false, true),
-        (sg / 2, 8192, 11, false, true),
-        (sg / 2, 32768, 11, false, true),
-        (sg / 4, 16384, 11, false, true),
-        (sg / 2, 16384, 8, false, true),
-        (sg, 16384, 8, false, true),
+    // (workgroup, keys per invocation, digit bits, subgroup rows, barrier-free segments,
+    // interleaved pairs)
+    let sorts: Vec<(u32, u32, u32, bool, bool, bool)> = vec![
+        (sg / 2, 16384, 11, false, true, true),
+        (sg / 2, 32768, 11, false, true, true),
+        (sg / 2, 16384, 11, false, true, false),
+        (sg, 16384, 8, false, true, false),
+        (sg, 16384, 8, false, false, false),
     ];
     let only_scan = std::env::var_os("SPLITRAY_SWEEP_SCAN_ONLY").is_some();
     let sorts: Vec<Tuning> = sorts
         .into_iter()
         .filter(|_| !only_scan)
-        .map(|(w, k, bits, rows, segments)| {
+        .map(|(w, k, bits, rows, segments, pairs)| {
             Tuning {
                 sort_workgroup_size: w,
                 sort_keys_per_invocation: k,
                 radix_bits: bits,
                 sort_rows: rows,
                 sort_segments: segments,
+                sort_pairs: pairs,
                 ..base
             }
             .fit(gpu.info())

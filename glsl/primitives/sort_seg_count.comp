@@ -14,6 +14,7 @@ layout(std430, set = 0, binding = 0) readonly buffer Hdr { uint hdr[]; };
 layout(std430, set = 0, binding = 1) readonly buffer Keys { uint keys[]; };
 layout(std430, set = 0, binding = 1) readonly buffer Keys4 { uvec4 keys4[]; };
 layout(std430, set = 0, binding = 2) writeonly buffer Hist { uint hist[]; };
+// flags bit 2: the keys are the even words of interleaved (key, value) pairs.
 layout(push_constant) uniform Push { uint shift; uint bits; uint flags; } pc;
 
 shared uint counts[RADIX * WORKGROUP_SIZE];
@@ -33,6 +34,18 @@ void main() {
     uint begin = min(seg * KEYS, n);
     uint end = min(begin + KEYS, n);
     uint i = begin;
+    if ((pc.flags & 4u) != 0u) {
+        // Two pairs per uvec4; begin is a multiple of 4, so each read is aligned.
+        for (; i + 2u <= end; i += 2u) {
+            uvec2 k = (keys4[i / 2u].xz >> pc.shift) & mask;
+            counts[k.x * WORKGROUP_SIZE + lid] += 1u;
+            counts[k.y * WORKGROUP_SIZE + lid] += 1u;
+        }
+        for (; i < end; ++i) {
+            uint d = (keys[2u * i] >> pc.shift) & mask;
+            counts[d * WORKGROUP_SIZE + lid] += 1u;
+        }
+    }
     for (; i + 4u <= end; i += 4u) {
         uvec4 k = (keys4[i / 4u] >> pc.shift) & mask;
         counts[k.x * WORKGROUP_SIZE + lid] += 1u;

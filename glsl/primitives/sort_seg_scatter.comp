@@ -17,8 +17,12 @@ layout(std430, set = 0, binding = 1) readonly buffer KeysIn4 { uvec4 keys_in4[];
 layout(std430, set = 0, binding = 2) readonly buffer ValsIn4 { uvec4 vals_in4[]; };
 layout(std430, set = 0, binding = 3) readonly buffer Hist { uint hist[]; };
 layout(std430, set = 0, binding = 4) writeonly buffer KeysOut { uint keys_out[]; };
+layout(std430, set = 0, binding = 4) writeonly buffer PairsOut { uvec2 pairs_out[]; };
 layout(std430, set = 0, binding = 5) writeonly buffer ValsOut { uint vals_out[]; };
-layout(push_constant) uniform Push { uint shift; uint bits; uint flags; } pc; // bit 0: values
+// flags bit 0: values; bit 2: the input is interleaved (key, value) pairs at binding 1;
+// bit 3: write interleaved pairs to binding 4 (one uvec2 store per key instead of two
+// scalar stores, and half the output streams). Bits 2 and 3 need bit 0.
+layout(push_constant) uniform Push { uint shift; uint bits; uint flags; } pc;
 
 shared uint counts[RADIX * WORKGROUP_SIZE];
 
@@ -39,6 +43,47 @@ void main() {
     uint mask = (1u << pc.bits) - 1u;
     bool values = (pc.flags & 1u) != 0u;
     uint i = begin;
+    bool pairs_in = (pc.flags & 4u) != 0u;
+    bool to_pairs = (pc.flags & 8u) != 0u;
+    if (pairs_in || to_pairs) {
+        for (; i + 4u <= end; i += 4u) {
+            uvec4 k, v;
+            if (pairs_in) {
+                uvec4 p0 = keys_in4[i / 2u];
+                uvec4 p1 = keys_in4[i / 2u + 1u];
+                k = uvec4(p0.xz, p1.xz);
+                v = uvec4(p0.yw, p1.yw);
+            } else {
+                k = keys_in4[i / 4u];
+                v = vals_in4[i / 4u];
+            }
+            uvec4 d = ((k >> pc.shift) & mask) * WORKGROUP_SIZE + lid;
+            for (uint c = 0u; c < 4u; ++c) {
+                uint pos = counts[d[c]];
+                counts[d[c]] = pos + 1u;
+                if (to_pairs) {
+                    pairs_out[pos] = uvec2(k[c], v[c]);
+                } else {
+                    keys_out[pos] = k[c];
+                    vals_out[pos] = v[c];
+                }
+            }
+        }
+        for (; i < end; ++i) {
+            uint k = pairs_in ? keys_in[2u * i] : keys_in[i];
+            uint v = pairs_in ? keys_in[2u * i + 1u] : vals_in[i];
+            uint d = ((k >> pc.shift) & mask) * WORKGROUP_SIZE + lid;
+            uint pos = counts[d];
+            counts[d] = pos + 1u;
+            if (to_pairs) {
+                pairs_out[pos] = uvec2(k, v);
+            } else {
+                keys_out[pos] = k;
+                vals_out[pos] = v;
+            }
+        }
+        return;
+    }
     if (values) {
         for (; i + 4u <= end; i += 4u) {
             uvec4 k = keys_in4[i / 4u];

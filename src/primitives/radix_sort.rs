@@ -26,9 +26,10 @@ struct PassPush {
 
 /// The ping-pong pair and the misc scratch of one sort.
 pub struct SortScratch {
-    /// `max_n` u32 keys.
+    /// `max_n` u32 keys; with [`Tuning::sort_pairs`] `2 * max_n` words, which
+    /// key-value sorts use as interleaved (key, value) pairs.
     pub keys: Buffer,
-    /// `max_n` u32 values.
+    /// `max_n` u32 values (one word with [`Tuning::sort_pairs`]: values go in `keys`).
     pub values: Buffer,
     /// Header, histograms and the histogram scan's scratch: [`RadixSort::scratch_bytes`].
     pub misc: Buffer,
@@ -39,11 +40,15 @@ pub struct RadixSort {
     histogram: ComputePipeline,
     scatter: ComputePipeline,
     copy: ComputePipeline,
+    /// Pairs back to keys and values (segment sorts with an odd pass count).
+    unpack: Option<ComputePipeline>,
     scan: Scan,
     tuning: Tuning,
     rows: bool,
     /// Barrier-free segments ([`Tuning::sort_segments`]): histograms per invocation.
     segments: bool,
+    /// Interleaved pairs in the scratch ([`Tuning::sort_pairs`], segments only).
+    pairs: bool,
 }
 
 impl RadixSort {
@@ -99,6 +104,18 @@ impl RadixSort {
             scatter: pipeline(gpu, scatter, if segments { 6 } else { 7 }, 12, &spec)?,
             rows,
             segments,
+            pairs: segments && tuning.sort_pairs,
+            unpack: if segments && tuning.sort_pairs {
+                Some(pipeline(
+                    gpu,
+                    shaders::PRIMITIVES_SORT_UNPACK,
+                    4,
+                    0,
+                    &spec[..2],
+                )?)
+            } else {
+                None
+            },
             copy: pipeline(
                 gpu,
                 shaders::PRIMITIVES_COPY_PAIRS,
@@ -171,9 +188,14 @@ impl RadixSort {
     /// Allocates the scratch for sorts of up to `max_n` keys.
     pub fn alloc_scratch(&self, gpu: &Gpu, max_n: u32) -> Result<SortScratch> {
         let bytes = max_n as u64 * 4;
+        let (keys, values) = if self.pairs {
+            (2 * bytes, 4)
+        } else {
+            (bytes, bytes)
+        };
         Ok(SortScratch {
-            keys: gpu.create_buffer("sort-scratch-keys", bytes, MemoryKind::Device)?,
-            values: gpu.create_buffer("sort-scratch-values", bytes, MemoryKind::Device)?,
+            keys: gpu.create_buffer("sort-scratch-keys", keys, MemoryKind::Device)?,
+            values: gpu.create_buffer("sort-scratch-values", values, MemoryKind::Device)?,
             misc: gpu.create_buffer(
                 "sort-scratch-misc",
                 self.scratch_bytes(max_n),
@@ -250,8 +272,15 @@ impl RadixSort {
         }
         let misc = &scratch.misc;
         check_scratch("radix sort", misc, 0, self.scratch_bytes(cap))?;
-        for b in [&scratch.keys, &scratch.values] {
-            check_scratch("radix sort", b, 0, cap as u64 * 4)?;
+        // Key-value segment sorts ping-pong through interleaved pairs in scratch.keys.
+        let pairs = self.pairs && values.is_some();
+        if self.pairs {
+            let words = if pairs { 2 } else { 1 };
+            check_scratch("radix sort", &scratch.keys, 0, cap as u64 * 4 * words)?;
+        } else {
+            for b in [&scratch.keys, &scratch.values] {
+                check_scratch("radix sort", b, 0, cap as u64 * 4)?;
+            }
         }
         let (hist_off, lanes_off, scan_off) = self.layout(cap);
         let header = misc.slice(0, HEADER_BYTES);
@@ -281,6 +310,55 @@ impl RadixSort {
         )?;
 
         let with_values = values.is_some() as u32;
+        if let (true, Some(vals)) = (pairs, values) {
+            let p = BufferSlice::from(&scratch.keys);
+            for pass in 0..passes {
+                let shift = bits.start + pass * self.tuning.radix_bits;
+                // Even passes: keys and values -> pairs; odd passes: pairs -> keys and values.
+                let to_pairs = pass % 2 == 0;
+                let push = PassPush {
+                    shift,
+                    bits: (bits.end - shift).min(self.tuning.radix_bits),
+                    flags: 1 | if to_pairs { 8 } else { 4 },
+                };
+                let (ki, vi, ko, vo) = if to_pairs {
+                    (keys, vals, p, p)
+                } else {
+                    (p, p, keys, vals)
+                };
+                rec.dispatch_indirect(
+                    &self.histogram,
+                    &[header, ki, hist],
+                    &push,
+                    misc,
+                    args_offset(1),
+                )?;
+                rec.barrier();
+                self.scan.record_passes(
+                    rec,
+                    hist,
+                    hist,
+                    ScanKind::Exclusive,
+                    false,
+                    self.hist_len(cap),
+                    misc,
+                    scan_off,
+                )?;
+                rec.dispatch_indirect(
+                    &self.scatter,
+                    &[header, ki, vi, hist, ko, vo],
+                    &push,
+                    misc,
+                    args_offset(1),
+                )?;
+                rec.barrier();
+            }
+            if let (1, Some(unpack)) = (passes % 2, &self.unpack) {
+                rec.dispatch_indirect(unpack, &[header, p, keys, vals], &(), misc, args_offset(1))?;
+                rec.barrier();
+            }
+            return Ok(());
+        }
         let tmp_keys = BufferSlice::from(&scratch.keys);
         let tmp_vals = BufferSlice::from(&scratch.values);
         let vals = values.unwrap_or(keys);

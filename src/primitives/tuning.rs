@@ -60,6 +60,11 @@ pub struct Tuning {
     /// nor the scatter kernel needs a workgroup barrier. Used only where
     /// `sort_keys_per_invocation` is a multiple of 4 and `sort_rows` is off.
     pub sort_segments: bool,
+    /// With `sort_segments`, key-value sorts ping-pong through interleaved (key, value)
+    /// pairs (one `uvec2` store per key in the scatter instead of two scalar stores,
+    /// and half the output streams); the scratch holds the pairs instead of separate
+    /// keys and values (same bytes).
+    pub sort_pairs: bool,
     /// Items per invocation of the barrier-free segment scan (0: off): every invocation
     /// of `workgroup_size` owns this many contiguous items with its own sum, so neither
     /// scan kernel needs a barrier or a subgroup operation. A multiple of 4 (`uvec4`
@@ -78,11 +83,12 @@ impl Tuning {
             // 2^11 counters x 4 invocations x 4 bytes = 32 KiB, the least shared memory
             // Vulkan guarantees; fit() narrows the digits where a device has less.
             sort_workgroup_size: 4,
-            sort_keys_per_invocation: 16384,
+            sort_keys_per_invocation: 32768,
             radix_bits: 11,
             subgroup_rows: true,
             sort_rows: false,
             sort_segments: true,
+            sort_pairs: true,
             scan_segment: 4096,
         }
     }
@@ -100,6 +106,7 @@ impl Tuning {
             subgroup_rows: false,
             sort_rows: false,
             sort_segments: false,
+            sort_pairs: false,
             scan_segment: 0,
         }
     }
@@ -127,6 +134,7 @@ impl Tuning {
             && self.items_per_invocation % 4 == 0;
         self.sort_rows &= self.sort_workgroup_size == info.limits.subgroup_size;
         self.sort_segments &= !self.sort_rows && self.sort_keys_per_invocation % 4 == 0;
+        self.sort_pairs &= self.sort_segments;
         if self.scan_segment % 4 != 0 {
             self.scan_segment = 0;
         }
@@ -177,6 +185,8 @@ impl Tuning {
             self.radix_bits,
             if self.sort_rows {
                 "subgroup-row sort"
+            } else if self.sort_segments && self.sort_pairs {
+                "barrier-free segment sort, interleaved pairs"
             } else if self.sort_segments {
                 "barrier-free segment sort"
             } else {
