@@ -8,6 +8,14 @@
 //! workgroup ever waits on another (no forward-progress assumption). Passes ping-pong
 //! between the caller's buffers and the scratch pair; after an odd number of passes a
 //! copy brings the result home, so the sorted pairs always end in the caller's buffers.
+//!
+//! The segment variant ([`Tuning::sort_segments`], CPU devices) has no barrier at all:
+//! every invocation's keys are one segment with its own histogram, written digit-major
+//! across all segments (`hist[digit * segments + segment]`), so the scan gives every
+//! (digit, segment) its offset directly and each invocation scatters its segment alone.
+//! With [`Tuning::sort_pairs`] key-value sorts alternate between the caller's buffers
+//! and interleaved (key, value) pairs in the scratch; an odd pass count ends with an
+//! unpack kernel.
 
 use super::{
     args_offset, check_scratch, pipeline, region, Count, Scan, ScanKind, Setup, Tuning,

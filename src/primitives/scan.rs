@@ -1,6 +1,8 @@
 //! Prefix scan (exclusive or inclusive) of u32, any n: reduce-then-scan in three
 //! dispatches — tile sums, one-workgroup scan of the tile sums, then each tile scans
-//! itself from its offset. Each invocation works through a contiguous run.
+//! itself from its offset. Each invocation works through a contiguous run. With
+//! [`Tuning::scan_segment`] (CPU devices) the sums are per invocation instead of per
+//! workgroup, so neither big pass has a barrier or a subgroup operation.
 
 use super::{args_offset, check_scratch, pipeline, region, Count, Setup, Tuning, HEADER_BYTES};
 use crate::shaders;
