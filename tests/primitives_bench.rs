@@ -66,7 +66,7 @@ fn bench_primitives_full() {
 #[test]
 #[ignore = "measurement: run in release with --ignored --nocapture"]
 fn tuning_sweep() {
-    use splitray::bench::primitives::{time_scan, time_sort};
+    use splitray::bench::primitives::{time_cpu_sort, time_scan, time_sort};
     use splitray::primitives::Tuning;
     let gpu = Gpu::new(&GpuDesc {
         instance: InstanceDesc {
@@ -85,42 +85,65 @@ fn tuning_sweep() {
         gpu.info().name,
         base.describe()
     );
-    let sorts: Vec<(u32, u32, u32, bool)> = vec![
-        (sg, 256, 8, false),
-        (sg, 1024, 8, false),
-        (sg, 4096, 8, false),
-        (sg, 16384, 8, false),
-        (2 * sg, 2048, 8, false),
-        (sg, 256, 8, true),
-        (128, 8, 4, false),
+    // (workgroup, keys per invocation, digit bits, subgroup rows, barrier-free segments,
+    // interleaved pairs)
+    let sorts: Vec<(u32, u32, u32, bool, bool, bool)> = vec![
+        (sg / 2, 16384, 11, false, true, true),
+        (sg / 2, 32768, 11, false, true, true),
+        (sg / 2, 16384, 11, false, true, false),
+        (sg, 16384, 8, false, true, false),
+        (sg, 16384, 8, false, false, false),
     ];
     let only_scan = std::env::var_os("SPLITRAY_SWEEP_SCAN_ONLY").is_some();
-    for (w, k, bits, rows) in sorts.into_iter().filter(|_| !only_scan) {
-        let t = Tuning {
-            sort_workgroup_size: w,
-            sort_keys_per_invocation: k,
-            radix_bits: bits,
-            sort_rows: rows,
-            ..base
+    let sorts: Vec<Tuning> = sorts
+        .into_iter()
+        .filter(|_| !only_scan)
+        .map(|(w, k, bits, rows, segments, pairs)| {
+            Tuning {
+                sort_workgroup_size: w,
+                sort_keys_per_invocation: k,
+                radix_bits: bits,
+                sort_rows: rows,
+                sort_segments: segments,
+                sort_pairs: pairs,
+                ..base
+            }
+            .fit(gpu.info())
+        })
+        .collect();
+    // Rounds interleave the tunings (and the CPU reference) so that a change of load on
+    // a shared machine hits them alike; each reports its minimum over all rounds.
+    let rounds: usize = std::env::var("SPLITRAY_SWEEP_ROUNDS").map_or(3, |s| s.parse().unwrap());
+    let mut best = vec![f64::INFINITY; sorts.len()];
+    let mut cpu_best = f64::INFINITY;
+    for _ in 0..rounds.min(if sorts.is_empty() { 0 } else { rounds }) {
+        cpu_best = cpu_best.min(time_cpu_sort(n, 2));
+        for (t, b) in sorts.iter().zip(&mut best) {
+            *b = b.min(time_sort(&gpu, t, n, 2).unwrap());
         }
-        .fit(gpu.info());
-        let ms = time_sort(&gpu, &t, n, 5).unwrap();
+    }
+    if !sorts.is_empty() {
+        println!("sort {n}: {cpu_best:>9.2} ms  cpu sort_unstable_by_key (single thread)");
+    }
+    for (t, ms) in sorts.iter().zip(best) {
         println!(
-            "sort {n}: {:>9.2} ms {:>7.1} Mkeys/s  {}",
+            "sort {n}: {:>9.2} ms {:>7.1} Mkeys/s {:>5.2}x cpu  {}",
             ms,
             n as f64 / ms / 1e3,
+            cpu_best / ms,
             t.describe()
         );
     }
     let only_sort = std::env::var_os("SPLITRAY_SWEEP_SORT_ONLY").is_some();
-    for (w, k, rows) in [
-        (sg, 256, true),
-        (sg, 256, false),
-        (sg, 255, false),
-        (1, 256, false),
-        (1, 1024, false),
-        (1, 4096, false),
-        (2, 1024, false),
+    // (workgroup, items per invocation, subgroup rows, segment-scan items per invocation)
+    for (w, k, rows, seg) in [
+        (sg, 256, true, 1024),
+        (sg, 256, true, 4096),
+        (sg, 256, true, 16384),
+        (sg, 256, true, 0),
+        (sg, 256, false, 0),
+        (sg, 255, false, 0),
+        (1, 1024, false, 0),
     ]
     .into_iter()
     .filter(|_| !only_sort)
@@ -129,12 +152,13 @@ fn tuning_sweep() {
             workgroup_size: w,
             items_per_invocation: k,
             subgroup_rows: rows,
+            scan_segment: seg,
             ..base
         }
         .fit(gpu.info());
         let ms = time_scan(&gpu, &t, 4 * n, 5).unwrap();
         println!(
-            "scan {}: {:>9.2} ms {:>7.1} Mkeys/s  {}",
+            "scan {}: {:>9.2} ms {:>7.1} Mkeys/s  segment {seg}, {}",
             4 * n,
             ms,
             4.0 * n as f64 / ms / 1e3,

@@ -95,20 +95,27 @@ fn scan_shapes_other_than_the_device_default() {
     // Small and large tiles: one workgroup, many, and tile sums longer than a workgroup.
     let gpu = common::gpu();
     let sg = gpu.info().limits.subgroup_size;
-    for (w, k, rows) in [
-        (1, 1, false),
-        (4, 3, false),
-        (32, 8, false),
-        (64, 64, false),
-        (sg, 5, true),
-        (sg, 8, true),
-        (sg, 256, true),
-        (sg, 64, false),
+    // (workgroup, items per invocation, subgroup rows, segment-scan items per invocation)
+    for (w, k, rows, seg) in [
+        (1, 1, false, 0),
+        (4, 3, false, 0),
+        (32, 8, false, 0),
+        (64, 64, false, 0),
+        (sg, 5, true, 0),
+        (sg, 8, true, 0),
+        (sg, 256, true, 0),
+        (sg, 64, false, 0),
+        (1, 1, false, 4),
+        (3, 1, false, 8),
+        (sg, 256, true, 4096),
+        (64, 1, false, 12),
+        (sg, 256, true, 6),
     ] {
         let tuning = Tuning {
             workgroup_size: w,
             items_per_invocation: k,
             subgroup_rows: rows,
+            scan_segment: seg,
             ..Tuning::for_device(gpu.info())
         };
         let scan = Scan::new(&gpu, &tuning).unwrap();
@@ -118,7 +125,7 @@ fn scan_shapes_other_than_the_device_default() {
             assert_eq!(
                 run_scan(&gpu, &scan, &data, kind, false),
                 expected(&data, kind),
-                "w {w} k {k} rows {rows} n {n}"
+                "w {w} k {k} rows {rows} segment {seg} n {n}"
             );
         }
     }

@@ -161,19 +161,30 @@ fn sort_keys_only_and_other_tunings() {
     let gpu = common::gpu();
     let base = Tuning::for_device(gpu.info());
     let sg = gpu.info().limits.subgroup_size;
-    for (w, k, bits, rows) in [
-        (1, 1, 8, false),
-        (8, 3, 4, false),
-        (32, 16, 6, false),
-        (64, 8, 5, false),
-        (sg, 7, 8, true),
-        (sg, 256, 8, false),
+    // (workgroup, keys per invocation, digit bits, subgroup rows, barrier-free segments,
+    // interleaved pairs)
+    for (w, k, bits, rows, segments, pairs) in [
+        (1, 1, 8, false, false, false),
+        (8, 3, 4, false, false, false),
+        (32, 16, 6, false, false, false),
+        (64, 8, 5, false, false, false),
+        (sg, 7, 8, true, false, false),
+        (sg, 256, 8, false, false, false),
+        (sg, 256, 8, false, true, false),
+        (sg, 256, 8, false, true, true),
+        (4, 12, 6, false, true, true),
+        (4, 64, 11, false, true, true),
+        (sg, 7, 8, false, true, true),
+        (1, 4, 3, false, true, false),
+        (2, 8, 10, false, true, true),
     ] {
         let tuning = Tuning {
             sort_workgroup_size: w,
             sort_keys_per_invocation: k,
             radix_bits: bits,
             sort_rows: rows,
+            sort_segments: segments,
+            sort_pairs: pairs,
             ..base
         }
         .fit(gpu.info());

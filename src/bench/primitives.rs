@@ -663,3 +663,20 @@ pub fn time_scan(gpu: &Gpu, tuning: &Tuning, n: usize, runs: usize) -> BenchResu
     )?;
     time_gpu_min(gpu, runs, || Ok(()), record)
 }
+
+/// Minimum ms over `runs` of `sort_unstable_by_key` on the (key, value) pairs that
+/// [`time_sort`] sorts: the single-thread CPU reference of the sort target.
+pub fn time_cpu_sort(n: usize, runs: usize) -> f64 {
+    let keys = random_u32s(n, 1);
+    let pairs: Vec<(u32, u32)> = keys.into_iter().zip(0..n as u32).collect();
+    (0..runs.max(1))
+        .map(|_| {
+            let mut p = pairs.clone();
+            let t = Instant::now();
+            p.sort_unstable_by_key(|x| x.0);
+            let ms = t.elapsed().as_secs_f64() * 1e3;
+            std::hint::black_box(&p);
+            ms
+        })
+        .fold(f64::INFINITY, f64::min)
+}

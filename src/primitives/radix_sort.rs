@@ -8,6 +8,14 @@
 //! workgroup ever waits on another (no forward-progress assumption). Passes ping-pong
 //! between the caller's buffers and the scratch pair; after an odd number of passes a
 //! copy brings the result home, so the sorted pairs always end in the caller's buffers.
+//!
+//! The segment variant ([`Tuning::sort_segments`], CPU devices) has no barrier at all:
+//! every invocation's keys are one segment with its own histogram, written digit-major
+//! across all segments (`hist[digit * segments + segment]`), so the scan gives every
+//! (digit, segment) its offset directly and each invocation scatters its segment alone.
+//! With [`Tuning::sort_pairs`] key-value sorts alternate between the caller's buffers
+//! and interleaved (key, value) pairs in the scratch; an odd pass count ends with an
+//! unpack kernel.
 
 use super::{
     args_offset, check_scratch, pipeline, region, Count, Scan, ScanKind, Setup, Tuning,
@@ -26,9 +34,10 @@ struct PassPush {
 
 /// The ping-pong pair and the misc scratch of one sort.
 pub struct SortScratch {
-    /// `max_n` u32 keys.
+    /// `max_n` u32 keys; with [`Tuning::sort_pairs`] `2 * max_n` words, which
+    /// key-value sorts use as interleaved (key, value) pairs.
     pub keys: Buffer,
-    /// `max_n` u32 values.
+    /// `max_n` u32 values (one word with [`Tuning::sort_pairs`]: values go in `keys`).
     pub values: Buffer,
     /// Header, histograms and the histogram scan's scratch: [`RadixSort::scratch_bytes`].
     pub misc: Buffer,
@@ -39,9 +48,15 @@ pub struct RadixSort {
     histogram: ComputePipeline,
     scatter: ComputePipeline,
     copy: ComputePipeline,
+    /// Pairs back to keys and values (segment sorts with an odd pass count).
+    unpack: Option<ComputePipeline>,
     scan: Scan,
     tuning: Tuning,
     rows: bool,
+    /// Barrier-free segments ([`Tuning::sort_segments`]): histograms per invocation.
+    segments: bool,
+    /// Interleaved pairs in the scratch ([`Tuning::sort_pairs`], segments only).
+    pairs: bool,
 }
 
 impl RadixSort {
@@ -61,7 +76,13 @@ impl RadixSort {
         // The row variant needs the workgroup to be exactly one subgroup.
         let rows =
             tuning.sort_rows && tuning.sort_workgroup_size == gpu.info().limits.subgroup_size;
-        let (histogram, scatter) = if rows {
+        let segments = !rows && tuning.sort_segments && tuning.sort_keys_per_invocation % 4 == 0;
+        let (histogram, scatter) = if segments {
+            (
+                shaders::PRIMITIVES_SORT_SEG_COUNT,
+                shaders::PRIMITIVES_SORT_SEG_SCATTER,
+            )
+        } else if rows {
             (
                 shaders::PRIMITIVES_SORT_HISTOGRAM__ROWS,
                 shaders::PRIMITIVES_SORT_SCATTER_ROWS,
@@ -87,9 +108,22 @@ impl RadixSort {
         );
         Ok(Self {
             setup: Setup::new(gpu)?,
-            histogram: pipeline(gpu, histogram, 4, 12, &spec)?,
-            scatter: pipeline(gpu, scatter, 7, 12, &spec)?,
+            histogram: pipeline(gpu, histogram, if segments { 3 } else { 4 }, 12, &spec)?,
+            scatter: pipeline(gpu, scatter, if segments { 6 } else { 7 }, 12, &spec)?,
             rows,
+            segments,
+            pairs: segments && tuning.sort_pairs,
+            unpack: if segments && tuning.sort_pairs {
+                Some(pipeline(
+                    gpu,
+                    shaders::PRIMITIVES_SORT_UNPACK,
+                    4,
+                    0,
+                    &spec[..2],
+                )?)
+            } else {
+                None
+            },
             copy: pipeline(
                 gpu,
                 shaders::PRIMITIVES_COPY_PAIRS,
@@ -116,15 +150,24 @@ impl RadixSort {
             .max(1)
     }
 
+    /// Histogram rows per tile: one per invocation for segments, else one.
+    fn hist_rows(&self) -> u32 {
+        if self.segments {
+            self.tuning.sort_workgroup_size
+        } else {
+            1
+        }
+    }
+
     fn hist_len(&self, max_n: u32) -> u32 {
-        (self.tiles(max_n) * self.radix() as u64) as u32
+        (self.tiles(max_n) * self.radix() as u64 * self.hist_rows() as u64) as u32
     }
 
     /// Whether the histogram pass stores its per-invocation counts for the scatter
     /// (instead of the scatter counting again): where that table (radix × workgroup
     /// words per tile) is at most a quarter of the tile's keys.
     fn stores_lane_counts(&self) -> bool {
-        !self.rows && self.radix() * 4 <= self.tuning.sort_keys_per_invocation
+        !self.rows && !self.segments && self.radix() * 4 <= self.tuning.sort_keys_per_invocation
     }
 
     fn lane_counts_len(&self, max_n: u32) -> u64 {
@@ -153,9 +196,14 @@ impl RadixSort {
     /// Allocates the scratch for sorts of up to `max_n` keys.
     pub fn alloc_scratch(&self, gpu: &Gpu, max_n: u32) -> Result<SortScratch> {
         let bytes = max_n as u64 * 4;
+        let (keys, values) = if self.pairs {
+            (2 * bytes, 4)
+        } else {
+            (bytes, bytes)
+        };
         Ok(SortScratch {
-            keys: gpu.create_buffer("sort-scratch-keys", bytes, MemoryKind::Device)?,
-            values: gpu.create_buffer("sort-scratch-values", bytes, MemoryKind::Device)?,
+            keys: gpu.create_buffer("sort-scratch-keys", keys, MemoryKind::Device)?,
+            values: gpu.create_buffer("sort-scratch-values", values, MemoryKind::Device)?,
             misc: gpu.create_buffer(
                 "sort-scratch-misc",
                 self.scratch_bytes(max_n),
@@ -232,8 +280,15 @@ impl RadixSort {
         }
         let misc = &scratch.misc;
         check_scratch("radix sort", misc, 0, self.scratch_bytes(cap))?;
-        for b in [&scratch.keys, &scratch.values] {
-            check_scratch("radix sort", b, 0, cap as u64 * 4)?;
+        // Key-value segment sorts ping-pong through interleaved pairs in scratch.keys.
+        let pairs = self.pairs && values.is_some();
+        if self.pairs {
+            let words = if pairs { 2 } else { 1 };
+            check_scratch("radix sort", &scratch.keys, 0, cap as u64 * 4 * words)?;
+        } else {
+            for b in [&scratch.keys, &scratch.values] {
+                check_scratch("radix sort", b, 0, cap as u64 * 4)?;
+            }
         }
         let (hist_off, lanes_off, scan_off) = self.layout(cap);
         let header = misc.slice(0, HEADER_BYTES);
@@ -254,10 +309,64 @@ impl RadixSort {
             offset: 4 * 2, // HDR_GROUPS + 1: the tile count of dispatch kind 1
             max: self.tiles(cap) as u32,
         };
-        self.scan
-            .record_setup(rec, tiles_count, self.radix(), misc, scan_off)?;
+        self.scan.record_setup(
+            rec,
+            tiles_count,
+            self.radix() * self.hist_rows(),
+            misc,
+            scan_off,
+        )?;
 
         let with_values = values.is_some() as u32;
+        if let (true, Some(vals)) = (pairs, values) {
+            let p = BufferSlice::from(&scratch.keys);
+            for pass in 0..passes {
+                let shift = bits.start + pass * self.tuning.radix_bits;
+                // Even passes: keys and values -> pairs; odd passes: pairs -> keys and values.
+                let to_pairs = pass % 2 == 0;
+                let push = PassPush {
+                    shift,
+                    bits: (bits.end - shift).min(self.tuning.radix_bits),
+                    flags: 1 | if to_pairs { 8 } else { 4 },
+                };
+                let (ki, vi, ko, vo) = if to_pairs {
+                    (keys, vals, p, p)
+                } else {
+                    (p, p, keys, vals)
+                };
+                rec.dispatch_indirect(
+                    &self.histogram,
+                    &[header, ki, hist],
+                    &push,
+                    misc,
+                    args_offset(1),
+                )?;
+                rec.barrier();
+                self.scan.record_passes(
+                    rec,
+                    hist,
+                    hist,
+                    ScanKind::Exclusive,
+                    false,
+                    self.hist_len(cap),
+                    misc,
+                    scan_off,
+                )?;
+                rec.dispatch_indirect(
+                    &self.scatter,
+                    &[header, ki, vi, hist, ko, vo],
+                    &push,
+                    misc,
+                    args_offset(1),
+                )?;
+                rec.barrier();
+            }
+            if let (1, Some(unpack)) = (passes % 2, &self.unpack) {
+                rec.dispatch_indirect(unpack, &[header, p, keys, vals], &(), misc, args_offset(1))?;
+                rec.barrier();
+            }
+            return Ok(());
+        }
         let tmp_keys = BufferSlice::from(&scratch.keys);
         let tmp_vals = BufferSlice::from(&scratch.values);
         let vals = values.unwrap_or(keys);
@@ -271,9 +380,10 @@ impl RadixSort {
                 bits: (bits.end - shift).min(self.tuning.radix_bits),
                 flags: with_values | stored,
             };
+            let count_bindings = [header, src.0, hist, lanes];
             rec.dispatch_indirect(
                 &self.histogram,
-                &[header, src.0, hist, lanes],
+                &count_bindings[..if self.segments { 3 } else { 4 }],
                 &push,
                 misc,
                 args_offset(1),
@@ -289,9 +399,10 @@ impl RadixSort {
                 misc,
                 scan_off,
             )?;
+            let scatter_bindings = [header, src.0, src.1, hist, dst.0, dst.1, lanes];
             rec.dispatch_indirect(
                 &self.scatter,
-                &[header, src.0, src.1, hist, dst.0, dst.1, lanes],
+                &scatter_bindings[..if self.segments { 6 } else { 7 }],
                 &push,
                 misc,
                 args_offset(1),
@@ -300,13 +411,38 @@ impl RadixSort {
             std::mem::swap(&mut src, &mut dst);
         }
         if passes % 2 == 1 {
-            rec.dispatch_indirect(
-                &self.copy,
-                &[header, src.0, src.1, dst.0, dst.1],
-                &with_values,
-                misc,
-                args_offset(0),
-            )?;
+            // An odd number of passes left the result in the scratch pair.
+            match count {
+                // n known here: a transfer copy (memcpy speed on CPU devices).
+                Count::Host(n) => {
+                    let bytes = n as u64 * 4;
+                    if bytes > 0 {
+                        rec.copy(
+                            src.0.buffer,
+                            src.0.offset,
+                            dst.0.buffer,
+                            dst.0.offset,
+                            bytes,
+                        );
+                        if values.is_some() {
+                            rec.copy(
+                                src.1.buffer,
+                                src.1.offset,
+                                dst.1.buffer,
+                                dst.1.offset,
+                                bytes,
+                            );
+                        }
+                    }
+                }
+                Count::Gpu { .. } => rec.dispatch_indirect(
+                    &self.copy,
+                    &[header, src.0, src.1, dst.0, dst.1],
+                    &with_values,
+                    misc,
+                    args_offset(0),
+                )?,
+            }
             rec.barrier();
         }
         Ok(())

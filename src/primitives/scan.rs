@@ -1,6 +1,8 @@
 //! Prefix scan (exclusive or inclusive) of u32, any n: reduce-then-scan in three
 //! dispatches — tile sums, one-workgroup scan of the tile sums, then each tile scans
-//! itself from its offset. Each invocation works through a contiguous run.
+//! itself from its offset. Each invocation works through a contiguous run. With
+//! [`Tuning::scan_segment`] (CPU devices) the sums are per invocation instead of per
+//! workgroup, so neither big pass has a barrier or a subgroup operation.
 
 use super::{args_offset, check_scratch, pipeline, region, Count, Setup, Tuning, HEADER_BYTES};
 use crate::shaders;
@@ -30,7 +32,12 @@ pub struct Scan {
 
 impl Scan {
     pub fn new(gpu: &Gpu, tuning: &Tuning) -> Result<Self> {
-        let spec = [tuning.workgroup_size, tuning.items_per_invocation];
+        let seg = Self::segment(tuning);
+        let spec = if seg > 0 {
+            [tuning.workgroup_size, seg]
+        } else {
+            [tuning.workgroup_size, tuning.items_per_invocation]
+        };
         log::debug!(
             "scan on {}: {} — kernels {} + {}",
             gpu.info().name,
@@ -62,9 +69,28 @@ impl Scan {
             && tuning.items_per_invocation % 4 == 0
     }
 
+    /// Items per invocation of the segment scan ([`Tuning::scan_segment`]), 0 where off.
+    fn segment(tuning: &Tuning) -> u32 {
+        if tuning.scan_segment % 4 == 0 {
+            tuning.scan_segment
+        } else {
+            0
+        }
+    }
+
+    /// Items per tile sum: per workgroup, or per invocation for the segment scan.
+    fn tile(&self) -> u32 {
+        match Self::segment(&self.tuning) {
+            0 => self.tuning.tile(),
+            seg => seg,
+        }
+    }
+
     /// Tile sums read as uvec4s where the runs allow (the tile is the same either way).
     fn reduce_kernel(tuning: &Tuning) -> crate::shaders::Kernel {
-        if tuning.items_per_invocation % 4 == 0 {
+        if Self::segment(tuning) > 0 {
+            shaders::PRIMITIVES_SCAN_SEG_REDUCE
+        } else if tuning.items_per_invocation % 4 == 0 {
             shaders::PRIMITIVES_SCAN_REDUCE__VEC4
         } else {
             shaders::PRIMITIVES_SCAN_REDUCE
@@ -73,7 +99,9 @@ impl Scan {
 
     /// The subgroup-row kernel where it is valid, else per-invocation runs.
     fn downsweep_kernel(gpu: &Gpu, tuning: &Tuning) -> crate::shaders::Kernel {
-        if Self::rows(gpu, tuning) {
+        if Self::segment(tuning) > 0 {
+            shaders::PRIMITIVES_SCAN_SEG
+        } else if Self::rows(gpu, tuning) {
             shaders::PRIMITIVES_SCAN_ROWS
         } else if tuning.items_per_invocation % 4 == 0 {
             shaders::PRIMITIVES_SCAN_DOWNSWEEP__VEC4
@@ -83,7 +111,7 @@ impl Scan {
     }
 
     fn tiles(&self, max_n: u32) -> u64 {
-        (max_n as u64).div_ceil(self.tuning.tile() as u64).max(1)
+        (max_n as u64).div_ceil(self.tile() as u64).max(1)
     }
 
     /// Scratch bytes for scans of up to `max_n` items.
@@ -188,7 +216,8 @@ impl Scan {
             count,
             mul,
             scratch.slice(base, HEADER_BYTES),
-            [self.tuning.tile(), 0, 0, 0],
+            // Kind 0 counts the tile sums; kind 1 the segment scan's workgroups.
+            [self.tile(), self.tile() * self.tuning.workgroup_size, 0, 0],
             None,
         )
     }
@@ -209,12 +238,17 @@ impl Scan {
         let header = scratch.slice(base, HEADER_BYTES);
         let sums = scratch.slice(base + HEADER_BYTES, region(self.tiles(max_n) * 4));
         let pred = predicate as u32;
+        let args = args_offset(if Self::segment(&self.tuning) > 0 {
+            1
+        } else {
+            0
+        });
         rec.dispatch_indirect(
             &self.reduce,
             &[header, input, sums],
             &FlagsPush { flags: pred },
             scratch,
-            base + args_offset(0),
+            base + args,
         )?;
         rec.barrier();
         rec.dispatch(&self.block_sums, &[header, sums], &(), [1, 1, 1])?;
@@ -227,7 +261,7 @@ impl Scan {
                 flags: pred | inclusive,
             },
             scratch,
-            base + args_offset(0),
+            base + args,
         )?;
         rec.barrier();
         Ok(())

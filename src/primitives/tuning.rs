@@ -6,20 +6,39 @@
 //! only through a few barriers per tile and through separate dispatches. What changes
 //! per device is the shape, set by specialization constants:
 //!
-//! - **CPU devices (lavapipe/llvmpipe)** — variant `cpu-segments`: a workgroup is one
-//!   SIMD subgroup (`workgroup_size = subgroup_size`, queried, never assumed), each
-//!   invocation owns long runs (256 scan items, 16384 sort keys) read as `uvec4`s, the scan
-//!   runs in coalesced subgroup rows (`subgroupInclusiveAdd`, where the device has
-//!   subgroup arithmetic), and the sort uses 8-bit digits (4 passes for 32-bit keys).
-//!   Measured on lavapipe (Mesa 25, `tuning_sweep` in `tests/primitives_bench.rs`): every
-//!   per-lane buffer or shared-memory access costs about as much as a scalar access, so
-//!   fewer, wider accesses win; the subgroup-row sort (ranks through shared memory and
-//!   subgroup barriers) was 2-3x slower than per-invocation runs and is off; wider
-//!   workgroups and 4- or 6-bit digits were slower too; long runs win (4M keys: 16384
-//!   keys per invocation 178 ms, 4096 232 ms, 1024 199 ms, 256 355 ms — the per-tile
-//!   work of clearing, summing and scanning 256 × 8 shared counters is amortised, and
-//!   the histogram of digits by tile that must be scanned shrinks). With 4M keys that
-//!   is still 32 workgroups, enough for lavapipe's threads.
+//! - **CPU devices (lavapipe/llvmpipe)** — variant `cpu-segments`: barrier-free
+//!   segments. Every invocation owns one long contiguous segment (4096 scan items,
+//!   32768 sort keys) that it reads and writes as `uvec4`s, with its own partial sum
+//!   (scan) or its own column of 2^11 digit counters in shared memory (sort), and no
+//!   kernel of the scan or sort has a workgroup barrier or a subgroup operation. The
+//!   per-segment sums / digit histograms are written in an order (segment-major for the
+//!   scan, digit-major across all segments for the sort) that one small scan turns into
+//!   every segment's offset, so each segment then writes its output sequentially and
+//!   stably. The sort uses 11-bit digits (3 passes for 32-bit keys; 2^11 counters × 4
+//!   invocations × 4 bytes = 32 KiB of shared memory, the Vulkan minimum) and, for
+//!   key-value sorts, ping-pongs through interleaved (key, value) pairs.
+//!   Measured on lavapipe (Mesa 25.0.7, LLVM 15, 2 cores shared with other work;
+//!   `tuning_sweep` in `tests/primitives_bench.rs`, minimum over rounds that interleave
+//!   the tunings and the CPU reference; 2026-11-22, load average 3–7): a lane's buffer
+//!   or shared-memory access costs about as much as a scalar access, and barriers and
+//!   subgroup operations cost extra, so per-invocation segments with `uvec4` accesses
+//!   win. Scan of 16M u32: segments of 4096 items 31.9 ms, 1024 33.3 ms, 16384 33.9 ms,
+//!   the previous subgroup-row scan 43.8 ms, per-invocation runs with barriers 55.8 ms
+//!   (load 4.7). One-invocation workgroups that never name their invocation (hoping
+//!   lavapipe would emit uniform scalar code) were 2x slower than the subgroup rows.
+//!   Sort of 4M pairs: 4 × 16384 keys with 11-bit digits 95.6 ms against 154.2 ms for
+//!   the previous 8 × 16384 8-bit per-invocation-run sort (with barriers) and 172.6 ms
+//!   for 8-bit segments (load 3.5); 4 × 32768 with pairs 122.5 / 183.1 ms against
+//!   147.7 / 238.0 ms for 4 × 16384 with pairs (two sweeps, load 5.3); interleaved
+//!   pairs against separate arrays within noise for 11-bit digits, 0.9x the time for
+//!   8-bit. Shared-memory `atomicAdd` for the counters instead of a load and a store
+//!   measured slower (8 × 16384 8-bit segments 256 ms, against 152 ms for the previous
+//!   per-invocation-run sort in the same sweep) and was dropped. 8192 keys per invocation and 2-invocation workgroups were slower. With
+//!   32768 keys per invocation a workgroup takes 131072 keys, so sorts below ~256K keys
+//!   run on fewer workgroups than lavapipe has threads.
+//!   Compaction, reduce-by-key and gather keep one SIMD subgroup per workgroup
+//!   (`workgroup_size = subgroup_size`, queried, never assumed) with 256 items per
+//!   invocation.
 //! - **GPUs** — variant `gpu-wide`: 128-invocation workgroups (at least one subgroup),
 //!   short runs (8 to 16 items) for occupancy, and 4-bit digits so the per-invocation
 //!   counter table (`2^bits × workgroup_size` words) stays small in shared memory.
@@ -43,7 +62,8 @@ pub struct Tuning {
     pub sort_workgroup_size: u32,
     /// Keys per invocation in the radix sort.
     pub sort_keys_per_invocation: u32,
-    /// Digit width of one radix sort pass, in bits (1..=8).
+    /// Digit width of one radix sort pass, in bits (1..=8; up to 11 for the segment
+    /// sort, whose counters are per invocation and never summed inside a workgroup).
     pub radix_bits: u32,
     /// Scan rows of one subgroup with `subgroupInclusiveAdd` (coalesced, barrier-free)
     /// instead of per-invocation runs. Used only where the device has subgroup
@@ -54,6 +74,21 @@ pub struct Tuning {
     /// memory, ordered by subgroup barriers) instead of per-invocation runs. Used only
     /// where `sort_workgroup_size` equals the subgroup size.
     pub sort_rows: bool,
+    /// Barrier-free segment sort: every invocation's keys are one segment with its own
+    /// digit histogram, scanned digit-major across all segments, so neither the count
+    /// nor the scatter kernel needs a workgroup barrier. Used only where
+    /// `sort_keys_per_invocation` is a multiple of 4 and `sort_rows` is off.
+    pub sort_segments: bool,
+    /// With `sort_segments`, key-value sorts ping-pong through interleaved (key, value)
+    /// pairs (one `uvec2` store per key in the scatter instead of two scalar stores,
+    /// and half the output streams); the scratch holds the pairs instead of separate
+    /// keys and values (same bytes).
+    pub sort_pairs: bool,
+    /// Items per invocation of the barrier-free segment scan (0: off): every invocation
+    /// of `workgroup_size` owns this many contiguous items with its own sum, so neither
+    /// scan kernel needs a barrier or a subgroup operation. A multiple of 4 (`uvec4`
+    /// accesses).
+    pub scan_segment: u32,
 }
 
 impl Tuning {
@@ -64,11 +99,16 @@ impl Tuning {
             variant: "cpu-segments",
             workgroup_size: w,
             items_per_invocation: 256,
-            sort_workgroup_size: w,
-            sort_keys_per_invocation: 16384,
-            radix_bits: 8,
+            // 2^11 counters x 4 invocations x 4 bytes = 32 KiB, the least shared memory
+            // Vulkan guarantees; fit() narrows the digits where a device has less.
+            sort_workgroup_size: 4,
+            sort_keys_per_invocation: 32768,
+            radix_bits: 11,
             subgroup_rows: true,
             sort_rows: false,
+            sort_segments: true,
+            sort_pairs: true,
+            scan_segment: 4096,
         }
     }
 
@@ -84,6 +124,9 @@ impl Tuning {
             radix_bits: 4,
             subgroup_rows: false,
             sort_rows: false,
+            sort_segments: false,
+            sort_pairs: false,
+            scan_segment: 0,
         }
     }
 
@@ -103,13 +146,19 @@ impl Tuning {
         let max_inv = info.limits.max_compute_work_group_invocations.max(1);
         self.workgroup_size = self.workgroup_size.clamp(1, max_inv);
         self.sort_workgroup_size = self.sort_workgroup_size.clamp(1, max_inv);
-        self.radix_bits = self.radix_bits.clamp(1, 8);
         self.items_per_invocation = self.items_per_invocation.max(1);
         self.sort_keys_per_invocation = self.sort_keys_per_invocation.max(1);
         self.subgroup_rows &= info.capabilities.subgroup_arithmetic
             && self.workgroup_size == info.limits.subgroup_size
             && self.items_per_invocation % 4 == 0;
         self.sort_rows &= self.sort_workgroup_size == info.limits.subgroup_size;
+        self.sort_segments &= !self.sort_rows && self.sort_keys_per_invocation % 4 == 0;
+        self.sort_pairs &= self.sort_segments;
+        if self.scan_segment % 4 != 0 {
+            self.scan_segment = 0;
+        }
+        let max_bits = if self.sort_segments { 11 } else { 8 };
+        self.radix_bits = self.radix_bits.clamp(1, max_bits);
         let shared = info.limits.max_compute_shared_memory_size as u64;
         while self.sort_shared_bytes() > shared {
             if self.radix_bits > 4 {
@@ -145,16 +194,22 @@ impl Tuning {
             self.variant,
             self.workgroup_size,
             self.items_per_invocation,
-            if self.subgroup_rows {
-                "subgroup-row scan"
+            if self.scan_segment > 0 {
+                format!("segment scan of {} items per invocation", self.scan_segment)
+            } else if self.subgroup_rows {
+                "subgroup-row scan".to_string()
             } else {
-                "per-invocation-run scan"
+                "per-invocation-run scan".to_string()
             },
             self.sort_workgroup_size,
             self.sort_keys_per_invocation,
             self.radix_bits,
             if self.sort_rows {
                 "subgroup-row sort"
+            } else if self.sort_segments && self.sort_pairs {
+                "barrier-free segment sort, interleaved pairs"
+            } else if self.sort_segments {
+                "barrier-free segment sort"
             } else {
                 "per-invocation-run sort"
             }

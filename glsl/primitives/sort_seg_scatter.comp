@@ -1,0 +1,118 @@
+#version 460
+// Radix sort pass, step 3, barrier-free segment variant (pairs with
+// sort_seg_count.comp). Each invocation loads the scanned offsets of its own segment
+// (hist[digit * segments + segment]) into its own column of shared counters and writes
+// its keys (and values) in their original order: stable, with no barrier and no
+// cooperation inside the workgroup. Keys and values are read as uvec4s (KEYS a multiple
+// of 4).
+#include "grid.glsl"
+#include "prim.glsl"
+layout(constant_id = 1) const uint KEYS = 64;
+layout(constant_id = 2) const uint RADIX_BITS = 8;
+const uint RADIX = 1u << RADIX_BITS;
+layout(std430, set = 0, binding = 0) readonly buffer Hdr { uint hdr[]; };
+layout(std430, set = 0, binding = 1) readonly buffer KeysIn { uint keys_in[]; };
+layout(std430, set = 0, binding = 2) readonly buffer ValsIn { uint vals_in[]; };
+layout(std430, set = 0, binding = 1) readonly buffer KeysIn4 { uvec4 keys_in4[]; };
+layout(std430, set = 0, binding = 2) readonly buffer ValsIn4 { uvec4 vals_in4[]; };
+layout(std430, set = 0, binding = 3) readonly buffer Hist { uint hist[]; };
+layout(std430, set = 0, binding = 4) writeonly buffer KeysOut { uint keys_out[]; };
+layout(std430, set = 0, binding = 4) writeonly buffer PairsOut { uvec2 pairs_out[]; };
+layout(std430, set = 0, binding = 5) writeonly buffer ValsOut { uint vals_out[]; };
+// flags bit 0: values; bit 2: the input is interleaved (key, value) pairs at binding 1;
+// bit 3: write interleaved pairs to binding 4 (one uvec2 store per key instead of two
+// scalar stores, and half the output streams). Bits 2 and 3 need bit 0.
+layout(push_constant) uniform Push { uint shift; uint bits; uint flags; } pc;
+
+shared uint counts[RADIX * WORKGROUP_SIZE];
+
+void main() {
+    uint g = linear_group_id();
+    uint tiles = hdr[HDR_GROUPS + 1u];
+    if (g >= tiles) return;
+    uint n = hdr[HDR_N];
+    // A one-invocation workgroup never names its invocation, so that the whole kernel
+    // stays uniform: lavapipe then runs it as scalar code with scalar memory accesses.
+    uint lid = WORKGROUP_SIZE == 1u ? 0u : gl_LocalInvocationID.x;
+    uint segments = tiles * WORKGROUP_SIZE;
+    uint seg = g * WORKGROUP_SIZE + lid;
+    uint begin = min(seg * KEYS, n);
+    uint end = min(begin + KEYS, n);
+    if (begin == end) return;
+    for (uint d = 0u; d < RADIX; ++d) counts[d * WORKGROUP_SIZE + lid] = hist[d * segments + seg];
+    uint mask = (1u << pc.bits) - 1u;
+    bool values = (pc.flags & 1u) != 0u;
+    uint i = begin;
+    bool pairs_in = (pc.flags & 4u) != 0u;
+    bool to_pairs = (pc.flags & 8u) != 0u;
+    if (pairs_in || to_pairs) {
+        for (; i + 4u <= end; i += 4u) {
+            uvec4 k, v;
+            if (pairs_in) {
+                uvec4 p0 = keys_in4[i / 2u];
+                uvec4 p1 = keys_in4[i / 2u + 1u];
+                k = uvec4(p0.xz, p1.xz);
+                v = uvec4(p0.yw, p1.yw);
+            } else {
+                k = keys_in4[i / 4u];
+                v = vals_in4[i / 4u];
+            }
+            uvec4 d = ((k >> pc.shift) & mask) * WORKGROUP_SIZE + lid;
+            for (uint c = 0u; c < 4u; ++c) {
+                uint pos = counts[d[c]];
+                counts[d[c]] = pos + 1u;
+                if (to_pairs) {
+                    pairs_out[pos] = uvec2(k[c], v[c]);
+                } else {
+                    keys_out[pos] = k[c];
+                    vals_out[pos] = v[c];
+                }
+            }
+        }
+        for (; i < end; ++i) {
+            uint k = pairs_in ? keys_in[2u * i] : keys_in[i];
+            uint v = pairs_in ? keys_in[2u * i + 1u] : vals_in[i];
+            uint d = ((k >> pc.shift) & mask) * WORKGROUP_SIZE + lid;
+            uint pos = counts[d];
+            counts[d] = pos + 1u;
+            if (to_pairs) {
+                pairs_out[pos] = uvec2(k, v);
+            } else {
+                keys_out[pos] = k;
+                vals_out[pos] = v;
+            }
+        }
+        return;
+    }
+    if (values) {
+        for (; i + 4u <= end; i += 4u) {
+            uvec4 k = keys_in4[i / 4u];
+            uvec4 v = vals_in4[i / 4u];
+            uvec4 d = ((k >> pc.shift) & mask) * WORKGROUP_SIZE + lid;
+            for (uint c = 0u; c < 4u; ++c) {
+                uint pos = counts[d[c]];
+                counts[d[c]] = pos + 1u;
+                keys_out[pos] = k[c];
+                vals_out[pos] = v[c];
+            }
+        }
+    } else {
+        for (; i + 4u <= end; i += 4u) {
+            uvec4 k = keys_in4[i / 4u];
+            uvec4 d = ((k >> pc.shift) & mask) * WORKGROUP_SIZE + lid;
+            for (uint c = 0u; c < 4u; ++c) {
+                uint pos = counts[d[c]];
+                counts[d[c]] = pos + 1u;
+                keys_out[pos] = k[c];
+            }
+        }
+    }
+    for (; i < end; ++i) {
+        uint k = keys_in[i];
+        uint d = ((k >> pc.shift) & mask) * WORKGROUP_SIZE + lid;
+        uint pos = counts[d];
+        counts[d] = pos + 1u;
+        keys_out[pos] = k;
+        if (values) vals_out[pos] = vals_in[i];
+    }
+}
