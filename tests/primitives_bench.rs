@@ -90,6 +90,9 @@ fn tuning_sweep() {
     let sorts: Vec<(u32, u32, u32, bool, bool, bool)> = vec![
         (sg / 2, 16384, 11, false, true, true),
         (sg / 2, 32768, 11, false, true, true),
+        (sg / 2, 65536, 11, false, true, true),
+        (sg / 4, 32768, 11, false, true, true),
+        (sg / 4, 65536, 11, false, true, true),
         (sg / 2, 16384, 11, false, true, false),
         (sg, 16384, 8, false, true, false),
         (sg, 16384, 8, false, false, false),
@@ -138,7 +141,9 @@ fn tuning_sweep() {
     // (workgroup, items per invocation, subgroup rows, segment-scan items per invocation)
     for (w, k, rows, seg) in [
         (sg, 256, true, 1024),
+        (sg, 256, true, 2048),
         (sg, 256, true, 4096),
+        (sg, 256, true, 8192),
         (sg, 256, true, 16384),
         (sg, 256, true, 0),
         (sg, 256, false, 0),
