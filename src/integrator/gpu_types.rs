@@ -32,11 +32,12 @@ const _: () = assert!(size_of::<FrameParams>() == 128);
 
 impl FrameParams {
     pub fn new(frame: &CameraFrame) -> Self {
+        let [origin, forward, right, up] = frame.gpu_vectors();
         Self {
-            origin: frame.origin.extend(0.0).into(),
-            forward: frame.forward.extend(0.0).into(),
-            right: frame.right.extend(0.0).into(),
-            up: frame.up.extend(0.0).into(),
+            origin,
+            forward,
+            right,
+            up,
             width: frame.width,
             height: frame.height,
             ..Default::default()

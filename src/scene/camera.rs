@@ -50,6 +50,11 @@ impl Camera {
 }
 
 impl CameraFrame {
+    /// origin, forward, right and up as the vec4s the GPU kernels read (w = 0).
+    pub fn gpu_vectors(&self) -> [[f32; 4]; 4] {
+        [self.origin, self.forward, self.right, self.up].map(|v| v.extend(0.0).into())
+    }
+
     /// Unit direction of the ray through film point (x, y) in pixels (pixel centre at +0.5).
     pub fn direction(&self, x: f32, y: f32) -> Vec3 {
         let sx = 2.0 * x / self.width as f32 - 1.0;
