@@ -5,7 +5,9 @@ mod common;
 
 use glam::Vec3;
 use splitray::scene;
-use splitray::trace::{BruteForceTracer, GpuTriangle, Hit, PdacrtParams, PdacrtTracer, Query, Ray};
+use splitray::trace::{
+    BruteForceTracer, GpuTriangle, Hit, LevelSplit, PdacrtParams, PdacrtTracer, Query, Ray,
+};
 use splitray::vk::Gpu;
 
 /// Small thresholds force deep hierarchies even on small inputs.
@@ -266,6 +268,32 @@ fn results_do_not_depend_on_the_parameters() {
             alpha: 100_000,
             ..deep()
         }, // the root is terminal
+        // Both level splits, with staged and direct triangle reads in the intersection.
+        PdacrtParams {
+            split: LevelSplit::SortByKey,
+            stage_triangles: true,
+            ..deep()
+        },
+        PdacrtParams {
+            split: LevelSplit::PrefixSums,
+            stage_triangles: true,
+            ..deep()
+        },
+        PdacrtParams {
+            split: LevelSplit::SortByKey,
+            stage_triangles: false,
+            ..deep()
+        },
+        PdacrtParams {
+            split: LevelSplit::PrefixSums,
+            stage_triangles: false,
+            intersect_workgroup: 3, // segments of 24 rays: 8 per invocation, some partial
+            ..deep()
+        },
+        PdacrtParams {
+            split: LevelSplit::SortByKey,
+            ..PdacrtParams::for_device(&gpu)
+        },
     ];
     for (i, params) in variants.into_iter().enumerate() {
         let mut tracer = PdacrtTracer::with_params(&gpu, &soup, params).unwrap();

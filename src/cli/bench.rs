@@ -107,6 +107,10 @@ enum BenchCommand {
         /// PDACRT: rays per chunk of the level loop.
         #[arg(long)]
         chunk: Option<u32>,
+        /// PDACRT: stage triangles through shared memory in the segmented intersection
+        /// (true) or read them directly (false); the default depends on the device.
+        #[arg(long)]
+        stage_triangles: Option<bool>,
         /// Also write the report as JSON.
         #[arg(long, value_name = "OUT.json")]
         json: Option<PathBuf>,
@@ -201,6 +205,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             batch,
             intersect_workgroup,
             chunk,
+            stage_triangles,
             ..
         } => {
             let scene = scene.expect("loaded above");
@@ -212,6 +217,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             params.batch = batch.unwrap_or(params.batch);
             params.intersect_workgroup = intersect_workgroup.unwrap_or(params.intersect_workgroup);
             params.max_rays_per_chunk = chunk.unwrap_or(params.max_rays_per_chunk);
+            params.stage_triangles = stage_triangles.unwrap_or(params.stage_triangles);
             let report = trace::run(
                 &gpu,
                 &scene,

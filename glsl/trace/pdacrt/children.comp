@@ -7,14 +7,26 @@
 // terminal; the rest form the next level. Writes the six channels that are then
 // prefix-summed into next-level and terminal-buffer positions (CH_TERM_FLAG counts the
 // segments a terminal child becomes).
+//
+// The `ranked` variant (LevelSplit::PrefixSums) works on the unsorted lists instead: the
+// exclusive scan of the side flags (filter_*.comp) gives each child's size as the
+// difference of the ranks at the node's end and start, and the rank at the start serves
+// as the child's source offset (scatter_elements.comp subtracts it).
+//! variant ranked: RANKED=1
 #include "grid.glsl"
 #include "pdacrt.glsl"
 
 layout(std430, set = 0, binding = 0) readonly buffer Nodes { Node nodes[]; };
+#ifdef RANKED
+layout(std430, set = 0, binding = 1) readonly buffer Ranks { uint ranks[]; };
+#define CHILDREN_BINDING 2
+#else
 layout(std430, set = 0, binding = 1) readonly buffer TriCounts { uint tri_counts[]; };
 layout(std430, set = 0, binding = 2) readonly buffer RayCounts { uint ray_counts[]; };
-layout(std430, set = 0, binding = 3) writeonly buffer Children { Child children[]; };
-layout(std430, set = 0, binding = 4) writeonly buffer Channels { uint channels[]; };
+#define CHILDREN_BINDING 3
+#endif
+layout(std430, set = 0, binding = CHILDREN_BINDING) writeonly buffer Children { Child children[]; };
+layout(std430, set = 0, binding = CHILDREN_BINDING + 1) writeonly buffer Channels { uint channels[]; };
 layout(push_constant) uniform Push {
     uint child_count;
     uint stride;
@@ -23,6 +35,11 @@ layout(push_constant) uniform Push {
     uint last_level;  // 1: every surviving child is terminal (depth limit)
     float min_extent;
     uint max_segment_rays;
+    // ranked: where each side-flag array starts in `ranks`
+    uint tri_left_base;
+    uint tri_right_base;
+    uint ray_left_base;
+    uint ray_right_base;
 } pc;
 
 void main() {
@@ -31,14 +48,22 @@ void main() {
     uint p = c >> 1;
     bool right = (c & 1u) != 0u;
     Node nd = nodes[p];
+    Child ch;
+#ifdef RANKED
+    uint tri_base = right ? pc.tri_right_base : pc.tri_left_base;
+    uint ray_base = right ? pc.ray_right_base : pc.ray_left_base;
+    ch.tri_src = ranks[tri_base + nd.tri_start];
+    ch.ray_src = ranks[ray_base + nd.ray_start];
+    ch.tri_count = ranks[tri_base + nd.tri_start + nd.tri_count] - ch.tri_src;
+    ch.ray_count = ranks[ray_base + nd.ray_start + nd.ray_count] - ch.ray_src;
+#else
     uvec3 tc = uvec3(tri_counts[4u * p + CODE_LEFT], tri_counts[4u * p + CODE_BOTH], tri_counts[4u * p + CODE_RIGHT]);
     uvec3 rc = uvec3(ray_counts[4u * p + CODE_LEFT], ray_counts[4u * p + CODE_BOTH], ray_counts[4u * p + CODE_RIGHT]);
-
-    Child ch;
     ch.tri_count = right ? tc.y + tc.z : tc.x + tc.y;
     ch.ray_count = right ? rc.y + rc.z : rc.x + rc.y;
     ch.tri_src = nd.tri_start + (right ? tc.x : 0u);
     ch.ray_src = nd.ray_start + (right ? rc.x : 0u);
+#endif
     uint axis = split_axis(nd.box_min.xyz, nd.box_max.xyz);
     float mid = split_position(nd.box_min.xyz, nd.box_max.xyz, axis);
     ch.box_min = nd.box_min;

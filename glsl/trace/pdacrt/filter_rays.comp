@@ -4,6 +4,13 @@
 // (Algorithm 1 line 9 updates it), so rays shed nodes beyond their hit; in occlusion
 // mode a ray with any hit leaves the hierarchy at once. Boxes and the segment end are
 // padded by `eps`, so rounding can only add work, never lose a hit or a tie.
+//
+// The `ranked` variant (LevelSplit::PrefixSums) also writes the element's side flags —
+// 1 where it belongs to the left (right) child — into `ranks` at left_base + i
+// (right_base + i). One exclusive scan of all flag arrays then ranks every element
+// within its child (see children.comp). Invocation n writes the zero flags that close
+// each array, so the scan's value at n is the array's total.
+//! variant ranked: RANKED=1
 #include "grid.glsl"
 #include "geometry.glsl"
 #include "pdacrt.glsl"
@@ -14,10 +21,26 @@ layout(std430, set = 0, binding = 2) readonly buffer Ids { uint ids[]; };
 layout(std430, set = 0, binding = 3) buffer Keys { uint keys[]; };
 layout(std430, set = 0, binding = 4) readonly buffer BestT { float best_t[]; };
 layout(std430, set = 0, binding = 5) readonly buffer BestTri { uint best_tri[]; };
-layout(push_constant) uniform Push { uint n; float eps; uint occlusion; uint ray_offset; } pc;
+#ifdef RANKED
+layout(std430, set = 0, binding = 6) writeonly buffer Ranks { uint ranks[]; };
+#endif
+layout(push_constant) uniform Push {
+    uint n;
+    float eps;
+    uint occlusion;
+    uint ray_offset;
+    uint left_base;
+    uint right_base;
+} pc;
 
 void main() {
     uint i = linear_invocation_id();
+#ifdef RANKED
+    if (i == pc.n) {
+        ranks[pc.left_base + i] = 0u;
+        ranks[pc.right_base + i] = 0u;
+    }
+#endif
     if (i >= pc.n) return;
     uint node = keys[i] >> 2;
     uint id = ids[i];
@@ -39,4 +62,8 @@ void main() {
         code = (left && right) ? CODE_BOTH : (left ? CODE_LEFT : (right ? CODE_RIGHT : CODE_NONE));
     }
     keys[i] = (node << 2) | code;
+#ifdef RANKED
+    ranks[pc.left_base + i] = uint(code == CODE_LEFT || code == CODE_BOTH);
+    ranks[pc.right_base + i] = uint(code == CODE_RIGHT || code == CODE_BOTH);
+#endif
 }

@@ -6,6 +6,13 @@
 // The test is bounding-box overlap along the split axis: the halves equal the parent box
 // on the other axes, which the triangle already overlaps. Boxes are padded by `eps` so
 // rounding can only add work, never lose a hit.
+//
+// The `ranked` variant (LevelSplit::PrefixSums) also writes the element's side flags —
+// 1 where it belongs to the left (right) child — into `ranks` at left_base + i
+// (right_base + i). One exclusive scan of all flag arrays then ranks every element
+// within its child (see children.comp). Invocation n writes the zero flags that close
+// each array, so the scan's value at n is the array's total.
+//! variant ranked: RANKED=1
 #include "grid.glsl"
 #include "geometry.glsl"
 #include "pdacrt.glsl"
@@ -14,10 +21,19 @@ layout(std430, set = 0, binding = 0) readonly buffer Triangles { Triangle triang
 layout(std430, set = 0, binding = 1) readonly buffer Nodes { Node nodes[]; };
 layout(std430, set = 0, binding = 2) readonly buffer Ids { uint ids[]; };
 layout(std430, set = 0, binding = 3) buffer Keys { uint keys[]; };
-layout(push_constant) uniform Push { uint n; float eps; } pc;
+#ifdef RANKED
+layout(std430, set = 0, binding = 4) writeonly buffer Ranks { uint ranks[]; };
+#endif
+layout(push_constant) uniform Push { uint n; float eps; uint left_base; uint right_base; } pc;
 
 void main() {
     uint i = linear_invocation_id();
+#ifdef RANKED
+    if (i == pc.n) {
+        ranks[pc.left_base + i] = 0u;
+        ranks[pc.right_base + i] = 0u;
+    }
+#endif
     if (i >= pc.n) return;
     uint node = keys[i] >> 2;
     Node nd = nodes[node];
@@ -31,4 +47,8 @@ void main() {
     bool right = max(a, max(b, c)) + pc.eps >= mid;
     uint code = (left && right) ? CODE_BOTH : (left ? CODE_LEFT : CODE_RIGHT);
     keys[i] = (node << 2) | code;
+#ifdef RANKED
+    ranks[pc.left_base + i] = uint(code != CODE_RIGHT);
+    ranks[pc.right_base + i] = uint(code != CODE_LEFT);
+#endif
 }

@@ -4,6 +4,11 @@
 // node index as its key) or the terminal-node buffer. A "both" element goes to both
 // children, a "none" ray to neither. Position = the child's new start + the element's
 // offset within the child's range of the sorted parent list.
+//
+// The `ranked` variant (LevelSplit::PrefixSums) takes unsorted lists: the offset within
+// the child is the element's rank among its parent's elements on that side (the scanned
+// side flags of filter_*.comp), minus the child's source rank (children.comp).
+//! variant ranked: RANKED=1
 #include "grid.glsl"
 #include "pdacrt.glsl"
 
@@ -14,11 +19,16 @@ layout(std430, set = 0, binding = 3) readonly buffer Offsets { uint offsets[]; }
 layout(std430, set = 0, binding = 4) writeonly buffer NextIds { uint next_ids[]; };
 layout(std430, set = 0, binding = 5) writeonly buffer NextKeys { uint next_keys[]; };
 layout(std430, set = 0, binding = 6) writeonly buffer TermIds { uint term_ids[]; };
+#ifdef RANKED
+layout(std430, set = 0, binding = 7) readonly buffer Ranks { uint ranks[]; };
+#endif
 layout(push_constant) uniform Push {
     uint n;
     uint stride;
     uint rays;       // 0: triangle lists, 1: ray lists
     uint term_base;  // where this level's terminal ids start in the buffer
+    uint left_base;  // ranked: where this list's side ranks start in `ranks`
+    uint right_base;
 } pc;
 
 void main() {
@@ -35,7 +45,12 @@ void main() {
         if ((side == 0u && code == CODE_RIGHT) || (side == 1u && code == CODE_LEFT)) continue;
         uint c = 2u * node + side;
         Child ch = children[c];
-        uint offset = j - (pc.rays != 0u ? ch.ray_src : ch.tri_src);
+#ifdef RANKED
+        uint position = ranks[(side == 0u ? pc.left_base : pc.right_base) + j];
+#else
+        uint position = j;
+#endif
+        uint offset = position - (pc.rays != 0u ? ch.ray_src : ch.tri_src);
         if (ch.kind == CHILD_NEXT) {
             uint at = offsets[next_channel * pc.stride + c] + offset;
             next_ids[at] = id;

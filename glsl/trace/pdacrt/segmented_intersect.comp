@@ -5,6 +5,12 @@
 // (line 4) and every ray tests the batch (lines 5–7). The result per buffer entry — the
 // closest (t, triangle) of that ray within that segment — is reduced per ray afterwards
 // (lines 12–13). Ties go to the smaller triangle index, as in every splitray tracer.
+//
+// The `direct` variant reads each triangle straight from the triangle buffer instead of
+// staging it (no shared memory, no barrier). Workgroup barriers are very slow on CPU
+// devices (lavapipe), where shared memory is no nearer than any other memory; the
+// tracer picks the variant per device (PdacrtParams::stage_triangles).
+//! variant direct: DIRECT=1
 #include "grid.glsl"
 #include "geometry.glsl"
 #include "pdacrt.glsl"
@@ -20,9 +26,60 @@ layout(std430, set = 0, binding = 5) writeonly buffer EntryT { float entry_t[]; 
 layout(std430, set = 0, binding = 6) writeonly buffer EntryTri { uint entry_tri[]; };
 layout(push_constant) uniform Push { uint segment_count; uint ray_offset; } pc;
 
+#ifndef DIRECT
 shared Triangle staged[BATCH];
 shared uint staged_id[BATCH];
+#endif
 
+#ifdef DIRECT
+// Rays per invocation: a segment holds at most 8N rays (PdacrtParams::max_segment_rays),
+// so every invocation keeps its share in registers and each triangle is loaded once for
+// up to 8 rays instead of once per ray.
+#define RAYS_PER_INVOCATION 8u
+
+void main() {
+    uint seg = linear_group_id();
+    if (seg >= pc.segment_count) return;
+    Segment s = segments[seg];
+    uint lid = gl_LocalInvocationID.x;
+    uint round_rays = RAYS_PER_INVOCATION * WORKGROUP_SIZE;
+    for (uint ray_base = 0u; ray_base < s.ray_count; ray_base += round_rays) {
+        Ray r[RAYS_PER_INVOCATION];
+        float best_t[RAYS_PER_INVOCATION];
+        uint best[RAYS_PER_INVOCATION];
+        uint mine = 0u;  // rays of this round held by this invocation: k = base + lid + m·N
+        for (uint m = 0u; m < RAYS_PER_INVOCATION; ++m) {
+            uint k = ray_base + lid + m * WORKGROUP_SIZE;
+            best_t[m] = 1.0 / 0.0;
+            best[m] = MISS;
+            if (k < s.ray_count) {
+                r[m] = rays[pc.ray_offset + term_rays[s.ray_start + k]];
+                mine = m + 1u;
+            }
+        }
+        if (mine == 0u) break;
+        for (uint j = 0u; j < s.tri_count; ++j) {
+            uint id = term_tris[s.tri_start + j];
+            Triangle tri = triangles[id];
+            for (uint m = 0u; m < RAYS_PER_INVOCATION; ++m) {
+                if (m >= mine) break;
+                float u, v;
+                float t = intersect_triangle(r[m].origin, r[m].dir, r[m].tmin, r[m].tmax,
+                                             tri.v0.xyz, tri.e1.xyz, tri.e2.xyz, u, v);
+                if (t < best_t[m] || (t == best_t[m] && t < 1.0 / 0.0 && id < best[m])) {
+                    best_t[m] = t;
+                    best[m] = id;
+                }
+            }
+        }
+        for (uint m = 0u; m < mine; ++m) {
+            uint k = s.ray_start + ray_base + lid + m * WORKGROUP_SIZE;
+            entry_t[k] = best_t[m];
+            entry_tri[k] = best[m];
+        }
+    }
+}
+#else
 void main() {
     uint seg = linear_group_id();
     // Uniform per workgroup: the whole group leaves together, before any barrier.
@@ -63,3 +120,4 @@ void main() {
         }
     }
 }
+#endif

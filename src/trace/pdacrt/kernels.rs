@@ -2,6 +2,7 @@
 
 use bytemuck::{Pod, Zeroable};
 
+use super::{LevelSplit, PdacrtParams};
 use crate::shaders;
 use crate::vk::{self, ComputePipeline, Gpu, PipelineDesc};
 
@@ -20,6 +21,8 @@ pub struct IotaPush {
 pub struct FilterTrianglesPush {
     pub n: u32,
     pub eps: f32,
+    pub left_base: u32,
+    pub right_base: u32,
 }
 
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -29,6 +32,8 @@ pub struct FilterRaysPush {
     pub eps: f32,
     pub occlusion: u32,
     pub ray_offset: u32,
+    pub left_base: u32,
+    pub right_base: u32,
 }
 
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -47,6 +52,10 @@ pub struct ChildrenPush {
     pub last_level: u32,
     pub min_extent: f32,
     pub max_segment_rays: u32,
+    pub tri_left_base: u32,
+    pub tri_right_base: u32,
+    pub ray_left_base: u32,
+    pub ray_right_base: u32,
 }
 
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -74,6 +83,8 @@ pub struct ScatterPush {
     pub stride: u32,
     pub rays: u32,
     pub term_base: u32,
+    pub left_base: u32,
+    pub right_base: u32,
 }
 
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -105,8 +116,8 @@ pub struct Kernels {
 }
 
 impl Kernels {
-    /// `intersect_workgroup` (N) and `batch` (T) shape the segmented intersection.
-    pub fn new(gpu: &Gpu, intersect_workgroup: u32, batch: u32) -> vk::Result<Self> {
+    /// N, T and the staging choice of `params` shape the segmented intersection.
+    pub fn new(gpu: &Gpu, params: &PdacrtParams) -> vk::Result<Self> {
         let make = |kernel, bindings, push: usize, spec: &[u32]| {
             ComputePipeline::new(
                 gpu,
@@ -119,17 +130,27 @@ impl Kernels {
             )
         };
         let wg = &[WORKGROUP];
+        // The prefix-sum split binds the rank array to the filters and the scatter
+        // instead of the per-node count tables to `children` (see the `ranked` variants).
+        let ranked = params.split == LevelSplit::PrefixSums;
+        let pick = |sorted, ranked_variant| if ranked { ranked_variant } else { sorted };
         Ok(Self {
             iota: make(shaders::TRACE_PDACRT_IOTA, 2, size_of::<IotaPush>(), wg)?,
             filter_triangles: make(
-                shaders::TRACE_PDACRT_FILTER_TRIANGLES,
-                4,
+                pick(
+                    shaders::TRACE_PDACRT_FILTER_TRIANGLES,
+                    shaders::TRACE_PDACRT_FILTER_TRIANGLES__RANKED,
+                ),
+                4 + ranked as u32,
                 size_of::<FilterTrianglesPush>(),
                 wg,
             )?,
             filter_rays: make(
-                shaders::TRACE_PDACRT_FILTER_RAYS,
-                6,
+                pick(
+                    shaders::TRACE_PDACRT_FILTER_RAYS,
+                    shaders::TRACE_PDACRT_FILTER_RAYS__RANKED,
+                ),
+                6 + ranked as u32,
                 size_of::<FilterRaysPush>(),
                 wg,
             )?,
@@ -140,8 +161,11 @@ impl Kernels {
                 wg,
             )?,
             children: make(
-                shaders::TRACE_PDACRT_CHILDREN,
-                5,
+                pick(
+                    shaders::TRACE_PDACRT_CHILDREN,
+                    shaders::TRACE_PDACRT_CHILDREN__RANKED,
+                ),
+                5 - ranked as u32,
                 size_of::<ChildrenPush>(),
                 wg,
             )?,
@@ -158,16 +182,23 @@ impl Kernels {
                 wg,
             )?,
             scatter: make(
-                shaders::TRACE_PDACRT_SCATTER_ELEMENTS,
-                7,
+                pick(
+                    shaders::TRACE_PDACRT_SCATTER_ELEMENTS,
+                    shaders::TRACE_PDACRT_SCATTER_ELEMENTS__RANKED,
+                ),
+                7 + ranked as u32,
                 size_of::<ScatterPush>(),
                 wg,
             )?,
             segmented_intersect: make(
-                shaders::TRACE_PDACRT_SEGMENTED_INTERSECT,
+                if params.stage_triangles {
+                    shaders::TRACE_PDACRT_SEGMENTED_INTERSECT
+                } else {
+                    shaders::TRACE_PDACRT_SEGMENTED_INTERSECT__DIRECT
+                },
                 7,
                 size_of::<IntersectPush>(),
-                &[intersect_workgroup, batch],
+                &[params.intersect_workgroup, params.batch],
             )?,
             update_hits: make(
                 shaders::TRACE_PDACRT_UPDATE_HITS,

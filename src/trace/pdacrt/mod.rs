@@ -43,7 +43,27 @@ use crate::primitives::{
     reduce_by_key::{Reduction, RunOutputs},
     Gather, RadixSort, ReduceByKey, Scan, ScanKind, SortScratch, Tuning,
 };
-use crate::vk::{self, grid_for, Buffer, Gpu, MemoryKind, Recorder, StreamKind, TimelinePoint};
+use crate::vk::{
+    self, grid_for, Buffer, BufferSlice, Gpu, MemoryKind, Recorder, StreamKind, TimelinePoint,
+};
+
+/// How a level's lists are split into the children's lists.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub enum LevelSplit {
+    /// The paper's way (§2.1, Figure 4): sort each list by status key (node << 2 |
+    /// code), run-length encode the sorted keys into per-node, per-code counts, and
+    /// read each child's range off the sorted list.
+    SortByKey,
+    /// One exclusive scan over the side flags of every element (left child: code left
+    /// or both; right child: both or right). A list is already grouped by node, so the
+    /// sort only ever reorders elements within a node; the scanned flags give each
+    /// element its place within its child directly, and each child's size as a
+    /// difference of two ranks. Same child lists (each in the parent list's order
+    /// rather than code order, which no result depends on: ties go to the smaller
+    /// triangle id), at the cost of one scan instead of a multi-pass radix sort and a
+    /// reduce-by-key per list.
+    PrefixSums,
+}
 
 /// PDACRT's parameters (paper §2.1–2.2).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -60,10 +80,15 @@ pub struct PdacrtParams {
     pub batch: u32,
     /// N: invocations per workgroup (one terminal node each) in the segmented intersection.
     pub intersect_workgroup: u32,
+    /// Stage triangles through shared memory in batches of T (Algorithm 3 line 5), or
+    /// read them straight from the triangle buffer (no barriers; for CPU devices).
+    pub stage_triangles: bool,
     /// Rays traced per pass of the level loop; larger batches go in chunks.
     pub max_rays_per_chunk: u32,
     /// Deepest level; its surviving children are all terminal.
     pub max_depth: u32,
+    /// How each level is split (Algorithm 2 lines 7–12).
+    pub split: LevelSplit,
 }
 
 impl Default for PdacrtParams {
@@ -75,25 +100,38 @@ impl Default for PdacrtParams {
             lambda: 3 << 17,
             batch: 256,
             intersect_workgroup: 64,
+            stage_triangles: true,
             max_rays_per_chunk: 1 << 19,
             max_depth: 28,
+            split: LevelSplit::SortByKey,
         }
     }
 }
 
 impl PdacrtParams {
-    /// Defaults fitted to the device. The paper's α = β = 256 and N = T = 256 are for a
-    /// GTX 580; on CPU devices (lavapipe) a sweep on the bunny (512², primary rays,
-    /// docs/PERFORMANCE.md) found α = 64 with β = 256 about 2× faster than 256/256: each
-    /// level costs a fixed handful of dispatches and sorts, while the segmented brute
-    /// force is cheap per test, so finer terminal nodes pay. The batch must fit shared
-    /// memory (48 + 4 bytes per staged triangle).
+    /// Defaults fitted to the device ([`Default`] is the paper's own setting).
+    ///
+    /// - Every device splits levels by prefix sums ([`LevelSplit::PrefixSums`]): one
+    ///   scan does the work of a radix sort plus a reduce-by-key per list. On lavapipe
+    ///   it made the bunny's levels ~N× cheaper (docs/PERFORMANCE.md); on a GPU it is
+    ///   strictly fewer passes over the same data.
+    /// - The paper's α = β = 256 and N = T = 256 are for a GTX 580; on CPU devices
+    ///   (lavapipe) a sweep on the bunny (512², primary rays, docs/PERFORMANCE.md) found
+    ///   α = 64 with β = 256 about 2× faster than 256/256: each level costs a fixed
+    ///   handful of dispatches, while the segmented brute force is cheap per test, so
+    ///   finer terminal nodes pay.
+    /// - CPU devices read triangles directly in the segmented intersection instead of
+    ///   staging them through shared memory: the barriers cost more than the staging
+    ///   saves there (848 → 215 ms of intersection per bunny frame, docs/PERFORMANCE.md).
+    /// - The batch must fit shared memory (48 + 4 bytes per staged triangle).
     pub fn for_device(gpu: &Gpu) -> Self {
         let mut p = Self::default();
         let shared = gpu.info().limits.max_compute_shared_memory_size;
         p.batch = p.batch.min(shared / 52);
+        p.split = LevelSplit::PrefixSums;
         if gpu.info().is_cpu() {
             p.alpha = 64;
+            p.stage_triangles = false;
         } else {
             p.intersect_workgroup = 128;
         }
@@ -158,6 +196,34 @@ struct Level {
     ray_ids: Buffer,
     ray_keys: Buffer,
     ray_total: u32,
+}
+
+/// The side-flag ranks of a level split by prefix sums: four arrays (triangles left and
+/// right, rays left and right) of list length + 1 in one buffer, scanned together.
+struct Ranks {
+    buffer: Buffer,
+    tri_left: u32,
+    tri_right: u32,
+    ray_left: u32,
+    ray_right: u32,
+}
+
+impl Ranks {
+    /// Words in all four arrays.
+    fn len(&self) -> u32 {
+        2 * self.tri_right + 2 * (self.ray_right - self.ray_left)
+    }
+}
+
+/// What filtering a level leaves for building the next one.
+struct Filtered {
+    totals: LevelTotals,
+    /// Per-child records (children.comp).
+    children: Buffer,
+    /// The prefix-summed channels, `stride` words each.
+    offsets: Buffer,
+    stride: u32,
+    ranks: Option<Ranks>,
 }
 
 /// The terminal-node buffer and its fill.
@@ -243,7 +309,7 @@ impl PdacrtTracer {
         Ok(Self {
             gpu: gpu.clone(),
             params,
-            kernels: Kernels::new(gpu, params.intersect_workgroup, params.batch)?,
+            kernels: Kernels::new(gpu, &params)?,
             sort: RadixSort::new(gpu, &tuning)?,
             reduce: ReduceByKey::new(gpu, &tuning)?,
             scan: Scan::new(gpu, &tuning)?,
@@ -435,8 +501,13 @@ impl PdacrtTracer {
         let mut depth = 0u32;
         while let Some(current) = level.take() {
             let started = Instant::now();
-            let (totals, children, offsets, stride) =
-                self.filter_level(&current, rays, &best_t, &best_tri, offset, query, depth)?;
+            let Filtered {
+                totals,
+                children,
+                offsets,
+                stride,
+                ranks,
+            } = self.filter_level(&current, rays, &best_t, &best_tri, offset, query, depth)?;
             self.stats.host_round_trips += 1;
 
             // Algorithm 1 lines 7–10: flush first if this level's terminal nodes would
@@ -515,7 +586,10 @@ impl PdacrtTracer {
                 },
                 child_count as u64,
             )?;
-            for (rays_list, n_list, keys, ids, next_ids, next_keys, term_ids, term_base) in [
+            let (tri_sides, ray_sides) = ranks.as_ref().map_or(((0, 0), (0, 0)), |r| {
+                ((r.tri_left, r.tri_right), (r.ray_left, r.ray_right))
+            });
+            for (rays_list, n_list, keys, ids, next_ids, next_keys, term_ids, term_base, sides) in [
                 (
                     0,
                     current.tri_total,
@@ -525,6 +599,7 @@ impl PdacrtTracer {
                     next_tri_keys,
                     &term.tri_ids,
                     term.tris,
+                    tri_sides,
                 ),
                 (
                     1,
@@ -535,24 +610,29 @@ impl PdacrtTracer {
                     next_ray_keys,
                     &term.ray_ids,
                     term.rays,
+                    ray_sides,
                 ),
             ] {
+                let mut bindings: Vec<BufferSlice> = vec![
+                    keys.into(),
+                    ids.into(),
+                    (&children).into(),
+                    (&offsets).into(),
+                    next_ids.into(),
+                    next_keys.into(),
+                    term_ids.into(),
+                ];
+                bindings.extend(ranks.as_ref().map(|r| BufferSlice::from(&r.buffer)));
                 rec.dispatch_items(
                     &self.kernels.scatter,
-                    &[
-                        keys.into(),
-                        ids.into(),
-                        (&children).into(),
-                        (&offsets).into(),
-                        next_ids.into(),
-                        next_keys.into(),
-                        term_ids.into(),
-                    ],
+                    &bindings,
                     &ScatterPush {
                         n: n_list,
                         stride,
                         rays: rays_list,
                         term_base,
+                        left_base: sides.0,
+                        right_base: sides.1,
                     },
                     n_list as u64,
                 )?;
@@ -585,6 +665,9 @@ impl PdacrtTracer {
                 offsets,
             ] {
                 self.pool.give(b);
+            }
+            if let Some(ranks) = ranks {
+                self.pool.give(ranks.buffer);
             }
             level = next;
             depth += 1;
@@ -624,8 +707,7 @@ impl PdacrtTracer {
     }
 
     /// Filters one level (Algorithm 1 lines 4–6, Algorithm 2) and reads its totals back:
-    /// the loop's one host round trip per level. Returns the totals, the per-child
-    /// records, the prefix-summed channels and their stride.
+    /// the loop's one host round trip per level.
     #[allow(clippy::too_many_arguments)]
     fn filter_level(
         &mut self,
@@ -636,25 +718,30 @@ impl PdacrtTracer {
         ray_offset: u32,
         query: Query,
         depth: u32,
-    ) -> vk::Result<(LevelTotals, Buffer, Buffer, u32)> {
+    ) -> vk::Result<Filtered> {
         let gpu = self.gpu.clone();
         let max_list = level.tri_total.max(level.ray_total);
-        self.sort_scratch(max_list)?;
         let child_count = level.node_count * 2;
         // Channel stride: a multiple of 64 words keeps every channel slice aligned.
         let stride = child_count.next_multiple_of(64);
-        self.misc_scratch(max_list.max(stride))?;
-        // At most 4 runs per node: one per status code.
-        let max_runs = max_list.min(level.node_count * 4) as u64;
-        let run_keys = self.pool.take("pdacrt-run-keys", max_runs * 4)?;
-        let run_counts = self.pool.take("pdacrt-run-counts", max_runs * 4)?;
-        let run_total = self.pool.take("pdacrt-run-total", 4)?;
-        let tri_counts = self
-            .pool
-            .take("pdacrt-tri-counts", level.node_count as u64 * 16)?;
-        let ray_counts = self
-            .pool
-            .take("pdacrt-ray-counts", level.node_count as u64 * 16)?;
+        let ranked = self.params.split == LevelSplit::PrefixSums;
+        let ranks = ranked
+            .then(|| -> vk::Result<Ranks> {
+                let (t, r) = (level.tri_total + 1, level.ray_total + 1);
+                Ok(Ranks {
+                    buffer: self.pool.take("pdacrt-ranks", 2 * (t + r) as u64 * 4)?,
+                    tri_left: 0,
+                    tri_right: t,
+                    ray_left: 2 * t,
+                    ray_right: 2 * t + r,
+                })
+            })
+            .transpose()?;
+        let scan_n = ranks.as_ref().map_or(0, Ranks::len);
+        if !ranked {
+            self.sort_scratch(max_list)?;
+        }
+        self.misc_scratch(max_list.max(stride).max(scan_n))?;
         let children = self
             .pool
             .take("pdacrt-children", child_count as u64 * CHILD_BYTES)?;
@@ -665,122 +752,111 @@ impl PdacrtTracer {
             size_of::<LevelTotals>() as u64,
             MemoryKind::Readback,
         )?;
-        let (_, sort_scratch) = self.scratch.sort.as_ref().unwrap();
-        let misc = self.scratch.misc.as_ref().unwrap();
 
         let mut rec = gpu.recorder(StreamKind::Main)?;
         rec.begin_scope("pdacrt-level")?;
-        // Algorithm 2 lines 2–6: status codes.
+        // Algorithm 2 lines 2–6: status codes (and, ranked, the side flags).
+        let (tri_bases, ray_bases) = ranks.as_ref().map_or(((0, 0), (0, 0)), |r| {
+            ((r.tri_left, r.tri_right), (r.ray_left, r.ray_right))
+        });
+        let mut bindings: Vec<BufferSlice> = vec![
+            (&self.triangles).into(),
+            (&level.nodes).into(),
+            (&level.tri_ids).into(),
+            (&level.tri_keys).into(),
+        ];
+        bindings.extend(ranks.as_ref().map(|r| BufferSlice::from(&r.buffer)));
         rec.dispatch_items(
             &self.kernels.filter_triangles,
-            &[
-                (&self.triangles).into(),
-                (&level.nodes).into(),
-                (&level.tri_ids).into(),
-                (&level.tri_keys).into(),
-            ],
+            &bindings,
             &FilterTrianglesPush {
                 n: level.tri_total,
                 eps: self.eps,
+                left_base: tri_bases.0,
+                right_base: tri_bases.1,
             },
-            level.tri_total as u64,
+            level.tri_total as u64 + ranked as u64,
         )?;
+        let mut bindings: Vec<BufferSlice> = vec![
+            rays.into(),
+            (&level.nodes).into(),
+            (&level.ray_ids).into(),
+            (&level.ray_keys).into(),
+            best_t.into(),
+            best_tri.into(),
+        ];
+        bindings.extend(ranks.as_ref().map(|r| BufferSlice::from(&r.buffer)));
         rec.dispatch_items(
             &self.kernels.filter_rays,
-            &[
-                rays.into(),
-                (&level.nodes).into(),
-                (&level.ray_ids).into(),
-                (&level.ray_keys).into(),
-                best_t.into(),
-                best_tri.into(),
-            ],
+            &bindings,
             &FilterRaysPush {
                 n: level.ray_total,
                 eps: self.eps,
                 occlusion: (query == Query::Occlusion) as u32,
                 ray_offset,
+                left_base: ray_bases.0,
+                right_base: ray_bases.1,
             },
-            level.ray_total as u64,
+            level.ray_total as u64 + ranked as u64,
         )?;
-        rec.fill(&tri_counts, 0);
-        rec.fill(&ray_counts, 0);
-        rec.barrier();
-        let key_bits = 2 + bits_for(level.node_count);
-        for (list_n, keys, ids, counts) in [
-            (
-                level.tri_total,
-                &level.tri_keys,
-                &level.tri_ids,
-                &tri_counts,
-            ),
-            (
-                level.ray_total,
-                &level.ray_keys,
-                &level.ray_ids,
-                &ray_counts,
-            ),
-        ] {
-            // Sort by status key (Figure 4), then count each (node, code) run
-            // (Algorithm 2 lines 9–12).
-            self.sort.record(
-                &mut rec,
-                list_n,
-                keys.into(),
-                Some(ids.into()),
-                0..key_bits,
-                sort_scratch,
-            )?;
-            self.reduce.record(
-                &mut rec,
-                list_n,
-                keys.into(),
-                Reduction::Count,
-                RunOutputs {
-                    keys: (&run_keys).into(),
-                    a: (&run_counts).into(),
-                    b: None,
-                    count: (&run_total).into(),
-                },
-                misc,
-            )?;
-            rec.dispatch_items(
-                &self.kernels.child_counts,
-                &[
-                    (&run_keys).into(),
-                    (&run_counts).into(),
-                    (&run_total).into(),
-                    counts.into(),
-                ],
-                &MaxRunsPush { max_runs: list_n },
-                (level.node_count * 4) as u64,
-            )?;
-            rec.barrier();
-        }
-        // Algorithm 2 lines 13–15 and Algorithm 1 line 6.
         let min_extent = self.eps * 4.0;
-        rec.dispatch_items(
-            &self.kernels.children,
-            &[
-                (&level.nodes).into(),
-                (&tri_counts).into(),
-                (&ray_counts).into(),
-                (&children).into(),
-                (&channels).into(),
-            ],
-            &ChildrenPush {
-                child_count,
-                stride,
-                alpha: self.params.alpha,
-                beta: self.params.beta,
-                last_level: (depth + 1 >= self.params.max_depth) as u32,
-                min_extent,
-                max_segment_rays: self.params.max_segment_rays(),
-            },
-            child_count as u64,
-        )?;
+        let push = ChildrenPush {
+            child_count,
+            stride,
+            alpha: self.params.alpha,
+            beta: self.params.beta,
+            last_level: (depth + 1 >= self.params.max_depth) as u32,
+            min_extent,
+            max_segment_rays: self.params.max_segment_rays(),
+            tri_left_base: tri_bases.0,
+            tri_right_base: tri_bases.1,
+            ray_left_base: ray_bases.0,
+            ray_right_base: ray_bases.1,
+        };
+        let counts = match &ranks {
+            Some(ranks) => {
+                rec.barrier();
+                // Every side-flag array in one exclusive scan: each array's ranks come
+                // out offset by the arrays before it, which cancels in every use (a
+                // child's size and an element's offset are differences of ranks).
+                let misc = self.scratch.misc.as_ref().unwrap();
+                let all = (&ranks.buffer).into();
+                self.scan
+                    .record(&mut rec, scan_n, all, all, ScanKind::Exclusive, misc)?;
+                // Algorithm 2 lines 13–15 and Algorithm 1 line 6.
+                rec.dispatch_items(
+                    &self.kernels.children,
+                    &[
+                        (&level.nodes).into(),
+                        (&ranks.buffer).into(),
+                        (&children).into(),
+                        (&channels).into(),
+                    ],
+                    &push,
+                    child_count as u64,
+                )?;
+                None
+            }
+            None => {
+                let counts = self.record_sort_split(&mut rec, level)?;
+                rec.dispatch_items(
+                    &self.kernels.children,
+                    &[
+                        (&level.nodes).into(),
+                        (&counts.0).into(),
+                        (&counts.1).into(),
+                        (&children).into(),
+                        (&channels).into(),
+                    ],
+                    &push,
+                    child_count as u64,
+                )?;
+                Some(counts)
+            }
+        };
         rec.barrier();
         // Algorithm 1 line 11: positions of the next level and of the terminal nodes.
+        let misc = self.scratch.misc.as_ref().unwrap();
         for k in 0..6u64 {
             let bytes = stride as u64 * 4;
             self.scan.record(
@@ -806,12 +882,98 @@ impl PdacrtTracer {
         gpu.wait(&done)?;
         self.scratch.retired.clear();
         let totals = summary.read::<LevelTotals>()?[0];
-        for b in [
-            run_keys, run_counts, run_total, tri_counts, ray_counts, channels,
+        self.pool.give(channels);
+        if let Some((tri_counts, ray_counts)) = counts {
+            self.pool.give(tri_counts);
+            self.pool.give(ray_counts);
+        }
+        Ok(Filtered {
+            totals,
+            children,
+            offsets,
+            stride,
+            ranks,
+        })
+    }
+
+    /// The paper's split ([`LevelSplit::SortByKey`]): sorts each list by status key
+    /// (Figure 4) and counts each (node, code) run (Algorithm 2 lines 9–12) into
+    /// per-node, per-code tables for `children`. Returns the triangle and ray tables.
+    fn record_sort_split(
+        &mut self,
+        rec: &mut Recorder,
+        level: &Level,
+    ) -> vk::Result<(Buffer, Buffer)> {
+        let max_list = level.tri_total.max(level.ray_total);
+        // At most 4 runs per node: one per status code.
+        let max_runs = max_list.min(level.node_count * 4) as u64;
+        let run_keys = self.pool.take("pdacrt-run-keys", max_runs * 4)?;
+        let run_counts = self.pool.take("pdacrt-run-counts", max_runs * 4)?;
+        let run_total = self.pool.take("pdacrt-run-total", 4)?;
+        let tri_counts = self
+            .pool
+            .take("pdacrt-tri-counts", level.node_count as u64 * 16)?;
+        let ray_counts = self
+            .pool
+            .take("pdacrt-ray-counts", level.node_count as u64 * 16)?;
+        let (_, sort_scratch) = self.scratch.sort.as_ref().unwrap();
+        let misc = self.scratch.misc.as_ref().unwrap();
+        rec.fill(&tri_counts, 0);
+        rec.fill(&ray_counts, 0);
+        rec.barrier();
+        let key_bits = 2 + bits_for(level.node_count);
+        for (list_n, keys, ids, counts) in [
+            (
+                level.tri_total,
+                &level.tri_keys,
+                &level.tri_ids,
+                &tri_counts,
+            ),
+            (
+                level.ray_total,
+                &level.ray_keys,
+                &level.ray_ids,
+                &ray_counts,
+            ),
         ] {
+            self.sort.record(
+                rec,
+                list_n,
+                keys.into(),
+                Some(ids.into()),
+                0..key_bits,
+                sort_scratch,
+            )?;
+            self.reduce.record(
+                rec,
+                list_n,
+                keys.into(),
+                Reduction::Count,
+                RunOutputs {
+                    keys: (&run_keys).into(),
+                    a: (&run_counts).into(),
+                    b: None,
+                    count: (&run_total).into(),
+                },
+                misc,
+            )?;
+            rec.dispatch_items(
+                &self.kernels.child_counts,
+                &[
+                    (&run_keys).into(),
+                    (&run_counts).into(),
+                    (&run_total).into(),
+                    counts.into(),
+                ],
+                &MaxRunsPush { max_runs: list_n },
+                (level.node_count * 4) as u64,
+            )?;
+            rec.barrier();
+        }
+        for b in [run_keys, run_counts, run_total] {
             self.pool.give(b);
         }
-        Ok((totals, children, offsets, stride))
+        Ok((tri_counts, ray_counts))
     }
 
     /// Processes the terminal-node buffer (Algorithm 3) and updates the global closest
