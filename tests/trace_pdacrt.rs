@@ -6,7 +6,8 @@ mod common;
 use glam::Vec3;
 use splitray::scene;
 use splitray::trace::{
-    BruteForceTracer, GpuTriangle, Hit, LevelSplit, PdacrtParams, PdacrtTracer, Query, Ray,
+    BruteForceTracer, FlushReduce, GpuTriangle, Hit, LevelSplit, PdacrtParams, PdacrtTracer, Query,
+    Ray,
 };
 use splitray::vk::Gpu;
 
@@ -294,11 +295,65 @@ fn results_do_not_depend_on_the_parameters() {
             split: LevelSplit::SortByKey,
             ..PdacrtParams::for_device(&gpu)
         },
+        PdacrtParams {
+            flush_reduce: FlushReduce::SortByRay,
+            ..PdacrtParams::for_device(&gpu)
+        },
     ];
+    // The atomic flush on both intersection variants, where the device has it.
+    let atomic = gpu.info().capabilities.buffer_int64_atomics;
+    let atomic_variants = [true, false].map(|stage_triangles| PdacrtParams {
+        flush_reduce: FlushReduce::AtomicMin,
+        stage_triangles,
+        eta: 64,
+        lambda: 64, // many flushes: the packed hits must carry over between them
+        ..deep()
+    });
+    let variants = variants
+        .into_iter()
+        .chain(atomic_variants.into_iter().filter(|_| atomic));
     for (i, params) in variants.into_iter().enumerate() {
         let mut tracer = PdacrtTracer::with_params(&gpu, &soup, params).unwrap();
         let hits = common::trace_hits(&gpu, &mut tracer, &rays, Query::ClosestHit);
         common::assert_same_hits(&hits, &expected, &format!("variant {i}: {params:?}"));
+    }
+    common::assert_clean(&gpu);
+}
+
+/// Rays whose segments start behind their origins (negative tmin) find hits at negative
+/// t: the closest is the most negative one past tmin. Both flush reductions order them
+/// like brute force (the atomic one through its order-preserving float bits).
+#[test]
+fn negative_t_hits_reduce_like_brute_force() {
+    let gpu = common::gpu();
+    let soup = common::triangle_soup(2000, 31);
+    let rays: Vec<Ray> = common::random_rays(6000, 32)
+        .into_iter()
+        .enumerate()
+        .map(|(i, mut r)| {
+            if i % 2 == 0 {
+                r.tmin = -0.5;
+            }
+            r
+        })
+        .collect();
+    let expected = brute_force(&gpu, &soup, &rays);
+    assert!(
+        expected
+            .iter()
+            .any(|h| h.triangle != splitray::trace::MISS && h.t < 0.0),
+        "the ray set must produce negative-t hits"
+    );
+    let mut reductions = vec![FlushReduce::SortByRay];
+    if gpu.info().capabilities.buffer_int64_atomics {
+        reductions.push(FlushReduce::AtomicMin);
+    }
+    for flush_reduce in reductions {
+        let params = PdacrtParams {
+            flush_reduce,
+            ..deep()
+        };
+        check(&gpu, &soup, &rays, params, &format!("{flush_reduce:?}"));
     }
     common::assert_clean(&gpu);
 }

@@ -8,7 +8,7 @@ use splitray::bench::primitives::{self, PrimitivesBenchOptions};
 use splitray::bench::pt::{self as pt_bench, PtBenchOptions};
 use splitray::bench::trace::{self, TraceBenchOptions};
 use splitray::bench::workloads::Workload;
-use splitray::trace::{PdacrtParams, TracerKind};
+use splitray::trace::{FlushReduce, LevelSplit, PdacrtParams, TracerKind};
 use splitray::vk::{Gpu, GpuDesc, InstanceDesc};
 
 #[derive(Debug, Args)]
@@ -111,10 +111,30 @@ enum BenchCommand {
         /// (true) or read them directly (false); the default depends on the device.
         #[arg(long)]
         stage_triangles: Option<bool>,
+        /// PDACRT: split levels by `sort` (the paper's sort by status key) or `scan`
+        /// (one prefix scan of side flags); the default is `scan`.
+        #[arg(long)]
+        split: Option<SplitArg>,
+        /// PDACRT: reduce flushes by `sort` (the paper's sort by ray id and segmented
+        /// arg-min) or `atomic` (64-bit atomicMin; the default where the device has it).
+        #[arg(long)]
+        flush: Option<FlushArg>,
         /// Also write the report as JSON.
         #[arg(long, value_name = "OUT.json")]
         json: Option<PathBuf>,
     },
+}
+
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+pub enum SplitArg {
+    Sort,
+    Scan,
+}
+
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+pub enum FlushArg {
+    Sort,
+    Atomic,
 }
 
 fn write_json<T: serde::Serialize>(path: &Option<PathBuf>, value: &T) -> anyhow::Result<()> {
@@ -206,6 +226,8 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             intersect_workgroup,
             chunk,
             stage_triangles,
+            split,
+            flush,
             ..
         } => {
             let scene = scene.expect("loaded above");
@@ -218,6 +240,18 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             params.intersect_workgroup = intersect_workgroup.unwrap_or(params.intersect_workgroup);
             params.max_rays_per_chunk = chunk.unwrap_or(params.max_rays_per_chunk);
             params.stage_triangles = stage_triangles.unwrap_or(params.stage_triangles);
+            if let Some(split) = split {
+                params.split = match split {
+                    SplitArg::Sort => LevelSplit::SortByKey,
+                    SplitArg::Scan => LevelSplit::PrefixSums,
+                };
+            }
+            if let Some(flush) = flush {
+                params.flush_reduce = match flush {
+                    FlushArg::Sort => FlushReduce::SortByRay,
+                    FlushArg::Atomic => FlushReduce::AtomicMin,
+                };
+            }
             let report = trace::run(
                 &gpu,
                 &scene,

@@ -126,14 +126,15 @@ pub fn run(args: &InfoArgs) -> anyhow::Result<()> {
             l.timestamp_period_ns
         );
         println!(
-            "    features: timeline semaphores {}, synchronization2 {}, maintenance4 {}, push descriptors {}, buffer device address {}, ray query {}, subgroup arithmetic {}",
+            "    features: timeline semaphores {}, synchronization2 {}, maintenance4 {}, push descriptors {}, buffer device address {}, ray query {}, subgroup arithmetic {}, 64-bit buffer atomics {}",
             c.timeline_semaphore,
             c.synchronization2,
             c.maintenance4,
             c.push_descriptor,
             c.buffer_device_address,
             c.ray_query,
-            c.subgroup_arithmetic
+            c.subgroup_arithmetic,
+            c.buffer_int64_atomics
         );
     }
     Ok(())

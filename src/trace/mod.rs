@@ -17,7 +17,7 @@ use std::str::FromStr;
 
 pub use brute_force::BruteForceTracer;
 pub use cpu_dacrt::{CpuDacrtTracer, DacrtParams};
-pub use pdacrt::{LevelSplit, PdacrtParams, PdacrtTracer};
+pub use pdacrt::{FlushReduce, LevelSplit, PdacrtParams, PdacrtTracer};
 pub use ray_query::RayQueryTracer;
 pub use types::{GpuTriangle, Hit, Ray, MISS};
 

@@ -141,9 +141,12 @@ impl Gpu {
                 khr::deferred_host_operations::NAME.as_ptr(),
             ]);
         }
+        let int64_atomics = info.capabilities.buffer_int64_atomics;
         let mut f12 = vk::PhysicalDeviceVulkan12Features::default()
             .timeline_semaphore(true)
-            .buffer_device_address(ray_query);
+            .buffer_device_address(ray_query)
+            .shader_buffer_int64_atomics(int64_atomics);
+        let f10 = vk::PhysicalDeviceFeatures::default().shader_int64(int64_atomics);
         let mut f13 = vk::PhysicalDeviceVulkan13Features::default()
             .synchronization2(true)
             .maintenance4(true);
@@ -153,6 +156,7 @@ impl Gpu {
         let mut create_info = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queue_infos)
             .enabled_extension_names(&extensions)
+            .enabled_features(&f10)
             .push_next(&mut f12)
             .push_next(&mut f13);
         if ray_query {

@@ -47,6 +47,9 @@ pub struct CapabilityInfo {
     pub ray_query: bool,
     pub subgroup_arithmetic: bool,
     pub shader_int64: bool,
+    /// shaderInt64 with shaderBufferInt64Atomics (64-bit atomicMin on storage buffers);
+    /// enabled on the device when present (PDACRT's atomic flush uses it).
+    pub buffer_int64_atomics: bool,
 }
 
 /// Everything `splitray info` says about a device.
@@ -215,6 +218,8 @@ pub fn enumerate(instance: &Instance) -> Result<Vec<PhysicalDeviceInfo>> {
                     .subgroup_supported_operations
                     .contains(vk::SubgroupFeatureFlags::ARITHMETIC),
                 shader_int64: f10.shader_int64 == vk::TRUE,
+                buffer_int64_atomics: f10.shader_int64 == vk::TRUE
+                    && f12.shader_buffer_int64_atomics == vk::TRUE,
             },
             raw: pd,
             api_version_raw: v,

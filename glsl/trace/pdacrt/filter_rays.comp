@@ -46,19 +46,21 @@ void main() {
     uint id = ids[i];
     uint code = CODE_NONE;
     if (pc.occlusion == 0u || best_tri[id] == MISS) {
-        Node nd = nodes[node];
-        vec3 lo = nd.box_min.xyz - pc.eps;
-        vec3 hi = nd.box_max.xyz + pc.eps;
-        uint axis = split_axis(nd.box_min.xyz, nd.box_max.xyz);
-        float mid = split_position(nd.box_min.xyz, nd.box_max.xyz, axis);
+        vec3 box_min = nodes[node].box_min.xyz;
+        vec3 box_max = nodes[node].box_max.xyz;
+        vec3 lo = box_min - pc.eps;
+        vec3 hi = box_max + pc.eps;
+        uint axis = split_axis(box_min, box_max);
+        bvec3 on_axis = axis_mask(axis);
+        float mid = split_position(box_min, box_max, axis);
         Ray r = rays[pc.ray_offset + id];
         float t1 = min(r.tmax, best_t[id] + pc.eps);
-        vec3 left_hi = hi;
-        left_hi[axis] = mid + pc.eps;
-        vec3 right_lo = lo;
-        right_lo[axis] = mid - pc.eps;
-        bool left = ray_meets_box(r.origin, r.dir, r.tmin, t1, lo, left_hi);
-        bool right = ray_meets_box(r.origin, r.dir, r.tmin, t1, right_lo, hi);
+        vec3 left_hi = mix(hi, vec3(mid + pc.eps), on_axis);
+        vec3 right_lo = mix(lo, vec3(mid - pc.eps), on_axis);
+        bvec3 parallel = equal(r.dir, vec3(0.0));
+        vec3 inv = 1.0 / mix(r.dir, vec3(1.0), parallel);
+        bool left = ray_meets_box_inv(r.origin, inv, parallel, r.tmin, t1, lo, left_hi);
+        bool right = ray_meets_box_inv(r.origin, inv, parallel, r.tmin, t1, right_lo, hi);
         code = (left && right) ? CODE_BOTH : (left ? CODE_LEFT : (right ? CODE_RIGHT : CODE_NONE));
     }
     keys[i] = (node << 2) | code;

@@ -58,6 +58,17 @@ struct Segment {
     uint ray_count;
 };
 
+// Order-preserving map of float bits to uint (negative floats reversed below the
+// positive ones), so that comparing the uints compares the floats.
+uint ordered_bits(float t) {
+    uint b = floatBitsToUint(t);
+    return (b & 0x80000000u) != 0u ? ~b : (b | 0x80000000u);
+}
+
+float from_ordered_bits(uint o) {
+    return uintBitsToFloat((o & 0x80000000u) != 0u ? (o & 0x7FFFFFFFu) : ~o);
+}
+
 // The split of Algorithm 2 line 4: the midpoint of the box's largest extent.
 uint split_axis(vec3 lo, vec3 hi) {
     vec3 e = hi - lo;
@@ -65,7 +76,29 @@ uint split_axis(vec3 lo, vec3 hi) {
 }
 
 float split_position(vec3 lo, vec3 hi, uint axis) {
-    return 0.5 * (lo[axis] + hi[axis]);
+    vec3 m = lo + hi;  // selects rather than m[axis]: see axis_mask
+    return 0.5 * (axis == 0u ? m.x : (axis == 1u ? m.y : m.z));
+}
+
+// The split axis as a component mask, for selects instead of dynamic component indexing
+// (which CPU devices may lower to a local array in memory).
+bvec3 axis_mask(uint axis) {
+    return equal(uvec3(axis), uvec3(0u, 1u, 2u));
+}
+
+// Whether the segment [t0, t1] of the ray meets the closed box [lo, hi], with the
+// reciprocal direction precomputed. Axes the ray runs parallel to (d == 0) are tested by
+// the origin alone; the select discards their NaN or infinite slab distances. The same
+// slab test as ray_meets_box below, component-wise.
+bool ray_meets_box_inv(vec3 o, vec3 inv, bvec3 parallel, float t0, float t1, vec3 lo, vec3 hi) {
+    vec3 ta = (lo - o) * inv;
+    vec3 tb = (hi - o) * inv;
+    vec3 near = mix(min(ta, tb), vec3(-1.0 / 0.0), parallel);
+    vec3 far = mix(max(ta, tb), vec3(1.0 / 0.0), parallel);
+    bool outside = any(bvec3(uvec3(parallel) & (uvec3(lessThan(o, lo)) | uvec3(greaterThan(o, hi)))));
+    float enter = max(t0, max(near.x, max(near.y, near.z)));
+    float leave = min(t1, min(far.x, min(far.y, far.z)));
+    return !outside && enter <= leave;
 }
 
 // Whether the segment [t0, t1] of the ray meets the closed box [lo, hi]. An axis the ray

@@ -1,4 +1,8 @@
 #version 460
+#ifdef ATOMIC
+#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+#extension GL_EXT_shader_atomic_int64 : require
+#endif
 // Segmented naive intersection, Algorithm 3 lines 2–10: one workgroup per terminal node
 // (segment); each invocation takes one of the segment's rays at a time (line 3) while
 // the workgroup stages the segment's triangles through shared memory in batches of BATCH
@@ -10,7 +14,16 @@
 // staging it (no shared memory, no barrier). Workgroup barriers are very slow on CPU
 // devices (lavapipe), where shared memory is no nearer than any other memory; the
 // tracer picks the variant per device (PdacrtParams::stage_triangles).
+//
+// The `atomic` variants (FlushReduce::AtomicMin) replace the per-entry outputs and the
+// sort by ray id + segmented arg-min that follows (Algorithm 3 lines 12–13) with one
+// 64-bit atomicMin per entry into the chunk's packed closest hits: (order-preserving t
+// bits << 32 | triangle), so the smaller t wins and equal t goes to the smaller
+// triangle index, exactly the arg-min's order. unpack_best.comp turns them back into
+// the t and triangle arrays.
 //! variant direct: DIRECT=1
+//! variant atomic: ATOMIC=1
+//! variant direct_atomic: DIRECT=1 ATOMIC=1
 #include "grid.glsl"
 #include "geometry.glsl"
 #include "pdacrt.glsl"
@@ -22,9 +35,29 @@ layout(std430, set = 0, binding = 1) readonly buffer Rays { Ray rays[]; };
 layout(std430, set = 0, binding = 2) readonly buffer Segments { Segment segments[]; };
 layout(std430, set = 0, binding = 3) readonly buffer TermTris { uint term_tris[]; };
 layout(std430, set = 0, binding = 4) readonly buffer TermRays { uint term_rays[]; };
+layout(push_constant) uniform Push { uint segment_count; uint ray_offset; } pc;
+
+#ifdef ATOMIC
+layout(std430, set = 0, binding = 5) buffer Best { uint64_t best_packed[]; };
+
+// A closest hit packed for 64-bit atomicMin: smaller t first, then smaller triangle.
+uint64_t pack_hit(float t, uint tri) {
+    return (uint64_t(ordered_bits(t)) << 32) | uint64_t(tri);
+}
+
+// Records entry `entry` (ray `ray` of the chunk): its closest hit within the segment.
+void record(uint entry, uint ray, float t, uint tri) {
+    if (tri != MISS) atomicMin(best_packed[ray], pack_hit(t, tri));
+}
+#else
 layout(std430, set = 0, binding = 5) writeonly buffer EntryT { float entry_t[]; };
 layout(std430, set = 0, binding = 6) writeonly buffer EntryTri { uint entry_tri[]; };
-layout(push_constant) uniform Push { uint segment_count; uint ray_offset; } pc;
+
+void record(uint entry, uint ray, float t, uint tri) {
+    entry_t[entry] = t;
+    entry_tri[entry] = tri;
+}
+#endif
 
 #ifndef DIRECT
 shared Triangle staged[BATCH];
@@ -45,6 +78,7 @@ void main() {
     uint round_rays = RAYS_PER_INVOCATION * WORKGROUP_SIZE;
     for (uint ray_base = 0u; ray_base < s.ray_count; ray_base += round_rays) {
         Ray r[RAYS_PER_INVOCATION];
+        uint ray_id[RAYS_PER_INVOCATION];
         float best_t[RAYS_PER_INVOCATION];
         uint best[RAYS_PER_INVOCATION];
         uint mine = 0u;  // rays of this round held by this invocation: k = base + lid + m·N
@@ -53,7 +87,8 @@ void main() {
             best_t[m] = 1.0 / 0.0;
             best[m] = MISS;
             if (k < s.ray_count) {
-                r[m] = rays[pc.ray_offset + term_rays[s.ray_start + k]];
+                ray_id[m] = term_rays[s.ray_start + k];
+                r[m] = rays[pc.ray_offset + ray_id[m]];
                 mine = m + 1u;
             }
         }
@@ -73,9 +108,7 @@ void main() {
             }
         }
         for (uint m = 0u; m < mine; ++m) {
-            uint k = s.ray_start + ray_base + lid + m * WORKGROUP_SIZE;
-            entry_t[k] = best_t[m];
-            entry_tri[k] = best[m];
+            record(s.ray_start + ray_base + lid + m * WORKGROUP_SIZE, ray_id[m], best_t[m], best[m]);
         }
     }
 }
@@ -90,7 +123,11 @@ void main() {
         uint k = ray_base + lid;
         bool has_ray = k < s.ray_count;
         Ray r;
-        if (has_ray) r = rays[pc.ray_offset + term_rays[s.ray_start + k]];
+        uint ray_id = 0u;
+        if (has_ray) {
+            ray_id = term_rays[s.ray_start + k];
+            r = rays[pc.ray_offset + ray_id];
+        }
         float best_t = 1.0 / 0.0;
         uint best = MISS;
         for (uint tri_base = 0u; tri_base < s.tri_count; tri_base += BATCH) {
@@ -114,10 +151,7 @@ void main() {
             }
             barrier();
         }
-        if (has_ray) {
-            entry_t[s.ray_start + k] = best_t;
-            entry_tri[s.ray_start + k] = best;
-        }
+        if (has_ray) record(s.ray_start + k, ray_id, best_t, best);
     }
 }
 #endif

@@ -2,7 +2,7 @@
 
 use bytemuck::{Pod, Zeroable};
 
-use super::{LevelSplit, PdacrtParams};
+use super::{FlushReduce, LevelSplit, PdacrtParams};
 use crate::shaders;
 use crate::vk::{self, ComputePipeline, Gpu, PipelineDesc};
 
@@ -112,6 +112,7 @@ pub struct Kernels {
     pub scatter: ComputePipeline,
     pub segmented_intersect: ComputePipeline,
     pub update_hits: ComputePipeline,
+    pub unpack_best: ComputePipeline,
     pub finalize_hits: ComputePipeline,
 }
 
@@ -134,6 +135,7 @@ impl Kernels {
         // instead of the per-node count tables to `children` (see the `ranked` variants).
         let ranked = params.split == LevelSplit::PrefixSums;
         let pick = |sorted, ranked_variant| if ranked { ranked_variant } else { sorted };
+        let atomic = params.flush_reduce == FlushReduce::AtomicMin;
         Ok(Self {
             iota: make(shaders::TRACE_PDACRT_IOTA, 2, size_of::<IotaPush>(), wg)?,
             filter_triangles: make(
@@ -191,15 +193,17 @@ impl Kernels {
                 wg,
             )?,
             segmented_intersect: make(
-                if params.stage_triangles {
-                    shaders::TRACE_PDACRT_SEGMENTED_INTERSECT
-                } else {
-                    shaders::TRACE_PDACRT_SEGMENTED_INTERSECT__DIRECT
+                match (params.stage_triangles, atomic) {
+                    (true, false) => shaders::TRACE_PDACRT_SEGMENTED_INTERSECT,
+                    (false, false) => shaders::TRACE_PDACRT_SEGMENTED_INTERSECT__DIRECT,
+                    (true, true) => shaders::TRACE_PDACRT_SEGMENTED_INTERSECT__ATOMIC,
+                    (false, true) => shaders::TRACE_PDACRT_SEGMENTED_INTERSECT__DIRECT_ATOMIC,
                 },
-                7,
+                7 - atomic as u32,
                 size_of::<IntersectPush>(),
                 &[params.intersect_workgroup, params.batch],
             )?,
+            unpack_best: make(shaders::TRACE_PDACRT_UNPACK_BEST, 3, 4, wg)?,
             update_hits: make(
                 shaders::TRACE_PDACRT_UPDATE_HITS,
                 6,

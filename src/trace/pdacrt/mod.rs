@@ -65,6 +65,20 @@ pub enum LevelSplit {
     PrefixSums,
 }
 
+/// How a flush reduces its entries to each ray's closest hit.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub enum FlushReduce {
+    /// The paper's way (Algorithm 3 lines 12–13): every (segment, ray) entry writes its
+    /// closest hit; the entries are sorted by ray id, reduced by a segmented arg-min,
+    /// and the runs update the global closest hits (Algorithm 1 line 9).
+    SortByRay,
+    /// Every entry lowers its ray's packed (t, triangle) with one 64-bit atomicMin (the
+    /// same order as the arg-min: t, then triangle index), then one pass unpacks the
+    /// chunk's closest hits. No per-entry arrays, no sort, no sort scratch. Needs
+    /// shaderBufferInt64Atomics.
+    AtomicMin,
+}
+
 /// PDACRT's parameters (paper §2.1–2.2).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct PdacrtParams {
@@ -89,6 +103,8 @@ pub struct PdacrtParams {
     pub max_depth: u32,
     /// How each level is split (Algorithm 2 lines 7–12).
     pub split: LevelSplit,
+    /// How a flush finds each ray's closest hit (Algorithm 3 lines 12–13).
+    pub flush_reduce: FlushReduce,
 }
 
 impl Default for PdacrtParams {
@@ -104,6 +120,7 @@ impl Default for PdacrtParams {
             max_rays_per_chunk: 1 << 19,
             max_depth: 28,
             split: LevelSplit::SortByKey,
+            flush_reduce: FlushReduce::SortByRay,
         }
     }
 }
@@ -129,6 +146,9 @@ impl PdacrtParams {
         let shared = gpu.info().limits.max_compute_shared_memory_size;
         p.batch = p.batch.min(shared / 52);
         p.split = LevelSplit::PrefixSums;
+        if gpu.info().capabilities.buffer_int64_atomics {
+            p.flush_reduce = FlushReduce::AtomicMin;
+        }
         if gpu.info().is_cpu() {
             p.alpha = 64;
             p.stage_triangles = false;
@@ -304,6 +324,14 @@ impl PdacrtTracer {
         params: PdacrtParams,
     ) -> vk::Result<Self> {
         params.validate()?;
+        if params.flush_reduce == FlushReduce::AtomicMin
+            && !gpu.info().capabilities.buffer_int64_atomics
+        {
+            return Err(vk::VkError::Usage(format!(
+                "PDACRT parameters: the atomic flush needs shaderBufferInt64Atomics, which {} lacks",
+                gpu.info().name
+            )));
+        }
         let tuning = Tuning::for_device(gpu.info());
         let (lo, hi, eps) = scene_box(triangles);
         Ok(Self {
@@ -430,6 +458,13 @@ impl PdacrtTracer {
         let mut rec = gpu.recorder(StreamKind::Main)?;
         rec.fill(&best_t, f32::INFINITY.to_bits());
         rec.fill(&best_tri, super::MISS);
+        // The atomic flush's packed closest hits: all ones is above every real hit.
+        let best_packed = (self.params.flush_reduce == FlushReduce::AtomicMin)
+            .then(|| self.pool.take("pdacrt-best-packed", n as u64 * 8))
+            .transpose()?;
+        if let Some(packed) = &best_packed {
+            rec.fill(packed, u32::MAX);
+        }
         let p = self.params;
         let mut term = self.new_terminal_buffer(p.eta, p.eta)?;
         let tris = self.triangle_count;
@@ -516,7 +551,13 @@ impl PdacrtTracer {
                 || term.rays + totals.term_rays > p.lambda
                 || term.segment_count + totals.term_nodes > term.segment_capacity;
             if flushed && term.segment_count > 0 {
-                self.flush(&mut term, rays, offset, n, &best_t, &best_tri)?;
+                self.flush(
+                    &mut term,
+                    rays,
+                    offset,
+                    n,
+                    (&best_t, &best_tri, best_packed.as_ref()),
+                )?;
             }
             if totals.term_tris > term.tri_capacity
                 || totals.term_rays > term.ray_capacity
@@ -675,7 +716,13 @@ impl PdacrtTracer {
 
         // Lines 18–20: the remaining terminal nodes.
         if term.segment_count > 0 {
-            self.flush(&mut term, rays, offset, n, &best_t, &best_tri)?;
+            self.flush(
+                &mut term,
+                rays,
+                offset,
+                n,
+                (&best_t, &best_tri, best_packed.as_ref()),
+            )?;
         }
         let mut rec = gpu.recorder(StreamKind::Main)?;
         rec.dispatch_items(
@@ -697,6 +744,9 @@ impl PdacrtTracer {
         self.give_terminal(term);
         self.pool.give(best_t);
         self.pool.give(best_tri);
+        if let Some(packed) = best_packed {
+            self.pool.give(packed);
+        }
         Ok(())
     }
 
@@ -978,19 +1028,20 @@ impl PdacrtTracer {
 
     /// Processes the terminal-node buffer (Algorithm 3) and updates the global closest
     /// hits (Algorithm 1 line 9). Recorded without a host wait.
-    #[allow(clippy::too_many_arguments)]
     fn flush(
         &mut self,
         term: &mut TerminalBuffer,
         rays: &Buffer,
         ray_offset: u32,
         chunk_rays: u32,
-        best_t: &Buffer,
-        best_tri: &Buffer,
+        (best_t, best_tri, best_packed): (&Buffer, &Buffer, Option<&Buffer>),
     ) -> vk::Result<()> {
         let gpu = self.gpu.clone();
         let entries = term.rays;
         self.stats.flushes += 1;
+        if let Some(packed) = best_packed {
+            return self.flush_atomic(term, rays, ray_offset, chunk_rays, best_t, best_tri, packed);
+        }
         self.sort_scratch(entries)?;
         self.misc_scratch(entries)?;
         let entry_t = self.pool.take("pdacrt-entry-t", entries as u64 * 4)?;
@@ -1096,6 +1147,56 @@ impl PdacrtTracer {
         ] {
             self.pool.give(b);
         }
+        term.tris = 0;
+        term.rays = 0;
+        term.segment_count = 0;
+        Ok(())
+    }
+
+    /// [`FlushReduce::AtomicMin`]: the segmented intersection lowers each ray's packed
+    /// closest hit in place (Algorithm 3 lines 2–10 with lines 12–13 folded in), then the
+    /// chunk's global closest hits are unpacked from them (Algorithm 1 line 9).
+    #[allow(clippy::too_many_arguments)]
+    fn flush_atomic(
+        &mut self,
+        term: &mut TerminalBuffer,
+        rays: &Buffer,
+        ray_offset: u32,
+        chunk_rays: u32,
+        best_t: &Buffer,
+        best_tri: &Buffer,
+        best_packed: &Buffer,
+    ) -> vk::Result<()> {
+        let gpu = self.gpu.clone();
+        let mut rec = gpu.recorder(StreamKind::Main)?;
+        rec.begin_scope("pdacrt-flush")?;
+        let groups = grid_for(&gpu, term.segment_count as u64, 1);
+        rec.dispatch(
+            &self.kernels.segmented_intersect,
+            &[
+                (&self.triangles).into(),
+                rays.into(),
+                (&term.segments).into(),
+                (&term.tri_ids).into(),
+                (&term.ray_ids).into(),
+                best_packed.into(),
+            ],
+            &IntersectPush {
+                segment_count: term.segment_count,
+                ray_offset,
+            },
+            groups,
+        )?;
+        rec.barrier();
+        rec.dispatch_items(
+            &self.kernels.unpack_best,
+            &[best_packed.into(), best_t.into(), best_tri.into()],
+            &chunk_rays,
+            chunk_rays as u64,
+        )?;
+        rec.barrier();
+        rec.end_scope()?;
+        rec.submit(&[])?;
         term.tris = 0;
         term.rays = 0;
         term.segment_count = 0;
