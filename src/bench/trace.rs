@@ -165,6 +165,45 @@ fn strided(rays: &[Ray], count: usize) -> Vec<Ray> {
         .collect()
 }
 
+/// A tracer in the timed rounds, with what phase 1 measured.
+struct Contender {
+    kind: TracerKind,
+    /// The strided subset brute force traces when the whole workload would be too slow.
+    subset_batches: Option<Vec<GpuBatch>>,
+    /// Rays of the workload per ray traced (1 unless on a subset).
+    scale: f64,
+    verified: usize,
+    mismatches: usize,
+    peak: u64,
+    baseline: u64,
+    times: Vec<f64>,
+    kernels: Vec<vk::KernelTime>,
+    tracer: Option<Box<dyn Tracer>>,
+}
+
+/// One frame as a dynamic scene would run it: new geometry (PDACRT and the CPU DACRT
+/// only take the triangles; ray-query rebuilds), then every batch. Returns its ms.
+fn run_frame(
+    gpu: &Gpu,
+    tracer: &mut dyn Tracer,
+    triangles: &[GpuTriangle],
+    batches: &[GpuBatch],
+) -> vk::Result<f64> {
+    gpu.wait_idle()?;
+    let start = Instant::now();
+    tracer.set_geometry(triangles)?;
+    let mut last = None;
+    for b in batches {
+        last = Some(tracer.trace(&b.rays, &b.hits, b.count, b.query, &[])?);
+    }
+    if let Some(p) = last {
+        gpu.wait(&p)?;
+    }
+    let ms = start.elapsed().as_secs_f64() * 1e3;
+    gpu.wait_idle()?;
+    Ok(ms)
+}
+
 fn trace_once(
     gpu: &Gpu,
     tracer: &mut dyn Tracer,
@@ -253,15 +292,20 @@ pub fn run(
         .collect::<vk::Result<_>>()?;
     drop(oracle);
 
-    let mut rows = Vec::new();
-    let mut pdacrt_levels = Vec::new();
+    // Phase 1, per tracer alone on the device: verify it, then measure its peak memory
+    // over a warm-up frame and one more (its pools persist between frames, so another
+    // tracer alive at the same time would blur both figures).
+    let make = |kind: TracerKind| -> vk::Result<Box<dyn Tracer>> {
+        match (kind, opts.pdacrt) {
+            (TracerKind::Pdacrt, Some(params)) => Ok(Box::new(PdacrtTracer::with_params(
+                gpu, &triangles, params,
+            )?)),
+            _ => kind.create(gpu, &triangles),
+        }
+    };
+    let mut contenders = Vec::new();
     for &kind in &opts.tracers {
-        let mut tracer: Box<dyn Tracer> = match (kind, opts.pdacrt) {
-            (TracerKind::Pdacrt, Some(params)) => {
-                Box::new(PdacrtTracer::with_params(gpu, &triangles, params)?)
-            }
-            _ => kind.create(gpu, &triangles)?,
-        };
+        let mut tracer = make(kind)?;
         // Verify before timing.
         let (mut verified, mut mismatches) = (0, 0);
         for (rays, want, query) in &samples {
@@ -286,74 +330,94 @@ pub fn run(
         } else {
             1.0
         };
-        let subset_batches: Vec<GpuBatch>;
-        let timed: &[GpuBatch] = if subset < 1.0 {
-            subset_batches = batches
-                .iter()
-                .map(|b| -> vk::Result<GpuBatch> {
-                    let rays = strided(
-                        &b.rays,
-                        ((b.rays.len() as f64 * subset).ceil() as usize).max(1),
-                    );
-                    Ok(GpuBatch {
-                        rays: gpu.upload("bench-rays", &rays)?,
-                        hits: gpu.create_buffer(
-                            "bench-hits",
-                            (rays.len() * size_of::<Hit>()) as u64,
-                            vk::MemoryKind::Device,
-                        )?,
-                        count: rays.len() as u32,
-                        query: b.query,
+        let subset_batches = if subset < 1.0 {
+            Some(
+                batches
+                    .iter()
+                    .map(|b| -> vk::Result<GpuBatch> {
+                        let rays = strided(
+                            &b.rays,
+                            ((b.rays.len() as f64 * subset).ceil() as usize).max(1),
+                        );
+                        Ok(GpuBatch {
+                            rays: gpu.upload("bench-rays", &rays)?,
+                            hits: gpu.create_buffer(
+                                "bench-hits",
+                                (rays.len() * size_of::<Hit>()) as u64,
+                                vk::MemoryKind::Device,
+                            )?,
+                            count: rays.len() as u32,
+                            query: b.query,
+                        })
                     })
-                })
-                .collect::<vk::Result<_>>()?;
-            &subset_batches
+                    .collect::<vk::Result<Vec<_>>>()?,
+            )
         } else {
-            &gpu_batches
+            None
         };
+        let timed = subset_batches.as_deref().unwrap_or(&gpu_batches);
         let traced: usize = timed.iter().map(|b| b.count as usize).sum();
         let scale = total_rays as f64 / traced.max(1) as f64;
 
-        let mut times = Vec::new();
-        let mut peak = 0;
-        let mut kernels = Vec::new();
         // Everything on the device before the tracer's first frame: rays, hits and the
         // bench's own buffers (the tracer's pipelines hold no device memory).
         drop(tracer);
         gpu.wait_idle()?;
         let baseline = gpu.memory_bytes().0;
-        let mut tracer: Box<dyn Tracer> = match (kind, opts.pdacrt) {
-            (TracerKind::Pdacrt, Some(params)) => {
-                Box::new(PdacrtTracer::with_params(gpu, &triangles, params)?)
-            }
-            _ => kind.create(gpu, &triangles)?,
-        };
-        for frame in 0..=opts.frames.max(5) {
+        let mut tracer = make(kind)?;
+        let mut peak = 0;
+        for _ in 0..2 {
             gpu.wait_idle()?;
             gpu.reset_peak_memory();
-            let start = Instant::now();
-            tracer.set_geometry(&triangles)?;
-            let mut last = None;
-            for b in timed {
-                last = Some(tracer.trace(&b.rays, &b.hits, b.count, b.query, &[])?);
-            }
-            if let Some(p) = last {
-                gpu.wait(&p)?;
-            }
-            let ms = start.elapsed().as_secs_f64() * 1e3;
-            gpu.wait_idle()?;
-            kernels = gpu.take_profile().summary();
-            if frame > 0 {
-                // Frame 0 warms up: LLVM compiles each kernel at its first dispatch.
-                times.push(ms * scale);
-                peak = peak.max(gpu.memory_bytes().1);
-            }
-            eprint!(".");
-            let _ = std::io::stderr().flush();
+            run_frame(gpu, tracer.as_mut(), &triangles, timed)?;
+            peak = peak.max(gpu.memory_bytes().1);
         }
-        eprintln!();
-        times.sort_by(f64::total_cmp);
-        let median = times[times.len() / 2];
+        drop(tracer);
+        gpu.wait_idle()?;
+        let _ = gpu.take_profile();
+        contenders.push(Contender {
+            kind,
+            subset_batches,
+            scale,
+            verified,
+            mismatches,
+            peak,
+            baseline,
+            times: Vec::new(),
+            kernels: Vec::new(),
+            tracer: None,
+        });
+    }
+
+    // Phase 2: all tracers together, one warm-up frame each (LLVM compiles each kernel
+    // at its first dispatch on lavapipe), then timed frames in interleaved rounds, so
+    // that a change of load on a shared machine hits every tracer alike.
+    for c in &mut contenders {
+        let mut tracer = make(c.kind)?;
+        let timed = c.subset_batches.as_deref().unwrap_or(&gpu_batches);
+        run_frame(gpu, tracer.as_mut(), &triangles, timed)?;
+        c.tracer = Some(tracer);
+    }
+    let _ = gpu.take_profile();
+    for _ in 0..opts.frames.max(5) {
+        for c in &mut contenders {
+            let timed = c.subset_batches.as_deref().unwrap_or(&gpu_batches);
+            let tracer = c.tracer.as_deref_mut().expect("created above");
+            let ms = run_frame(gpu, tracer, &triangles, timed)?;
+            c.times.push(ms * c.scale);
+            c.kernels = gpu.take_profile().summary();
+        }
+        eprint!(".");
+        let _ = std::io::stderr().flush();
+    }
+    eprintln!();
+
+    let mut rows = Vec::new();
+    let mut pdacrt_levels = Vec::new();
+    for mut c in contenders {
+        c.times.sort_by(f64::total_cmp);
+        let median = c.times[c.times.len() / 2];
+        let tracer = c.tracer.as_deref().expect("created above");
         let stats = tracer.level_stats();
         let (trips, levels) = (
             stats.map(|s| s.host_round_trips),
@@ -363,17 +427,17 @@ pub fn run(
             pdacrt_levels = stats.levels.clone();
         }
         rows.push(TracerRow {
-            tracer: kind.name().into(),
+            tracer: c.kind.name().into(),
             frame_ms: median,
-            min_ms: times[0],
-            max_ms: *times.last().unwrap(),
+            min_ms: c.times[0],
+            max_ms: *c.times.last().unwrap(),
             mrays_per_s: total_rays as f64 / (median * 1e3),
-            peak_gpu_bytes: peak,
-            tracer_peak_bytes: peak.saturating_sub(baseline),
-            kernels,
-            subset: 1.0 / scale,
-            verified_rays: verified,
-            mismatches,
+            peak_gpu_bytes: c.peak,
+            tracer_peak_bytes: c.peak.saturating_sub(c.baseline),
+            kernels: c.kernels,
+            subset: 1.0 / c.scale,
+            verified_rays: c.verified,
+            mismatches: c.mismatches,
             host_round_trips: trips,
             levels,
         });

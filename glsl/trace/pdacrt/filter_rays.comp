@@ -15,14 +15,13 @@
 #include "geometry.glsl"
 #include "pdacrt.glsl"
 
-layout(std430, set = 0, binding = 0) readonly buffer Rays { Ray rays[]; };
-layout(std430, set = 0, binding = 1) readonly buffer Nodes { Node nodes[]; };
-layout(std430, set = 0, binding = 2) readonly buffer Ids { uint ids[]; };
-layout(std430, set = 0, binding = 3) buffer Keys { uint keys[]; };
-layout(std430, set = 0, binding = 4) readonly buffer BestT { float best_t[]; };
-layout(std430, set = 0, binding = 5) readonly buffer BestTri { uint best_tri[]; };
+layout(std430, set = 0, binding = 0) restrict readonly buffer Rays { Ray rays[]; };
+layout(std430, set = 0, binding = 1) restrict readonly buffer Nodes { Node nodes[]; };
+layout(std430, set = 0, binding = 2) restrict readonly buffer Ids { uint ids[]; };
+layout(std430, set = 0, binding = 3) restrict buffer Keys { uint keys[]; };
+layout(std430, set = 0, binding = 4) restrict readonly buffer Best { uvec2 best[]; };  // see pdacrt.glsl
 #ifdef RANKED
-layout(std430, set = 0, binding = 6) writeonly buffer Ranks { uint ranks[]; };
+layout(std430, set = 0, binding = 5) restrict writeonly buffer Ranks { uint ranks[]; };
 #endif
 layout(push_constant) uniform Push {
     uint n;
@@ -45,7 +44,8 @@ void main() {
     uint node = keys[i] >> 2;
     uint id = ids[i];
     uint code = CODE_NONE;
-    if (pc.occlusion == 0u || best_tri[id] == MISS) {
+    uvec2 closest = best[id];
+    if (pc.occlusion == 0u || !has_hit(closest)) {
         vec3 box_min = nodes[node].box_min.xyz;
         vec3 box_max = nodes[node].box_max.xyz;
         vec3 lo = box_min - pc.eps;
@@ -54,7 +54,7 @@ void main() {
         bvec3 on_axis = axis_mask(axis);
         float mid = split_position(box_min, box_max, axis);
         Ray r = rays[pc.ray_offset + id];
-        float t1 = min(r.tmax, best_t[id] + pc.eps);
+        float t1 = min(r.tmax, hit_t(closest) + pc.eps);
         vec3 left_hi = mix(hi, vec3(mid + pc.eps), on_axis);
         vec3 right_lo = mix(lo, vec3(mid - pc.eps), on_axis);
         bvec3 parallel = equal(r.dir, vec3(0.0));

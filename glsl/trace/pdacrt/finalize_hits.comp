@@ -4,25 +4,26 @@
 // the same arithmetic, so t is reproduced exactly.
 #include "grid.glsl"
 #include "geometry.glsl"
+#include "pdacrt.glsl"
 
 layout(std430, set = 0, binding = 0) readonly buffer Triangles { Triangle triangles[]; };
 layout(std430, set = 0, binding = 1) readonly buffer Rays { Ray rays[]; };
-layout(std430, set = 0, binding = 2) readonly buffer BestT { float best_t[]; };
-layout(std430, set = 0, binding = 3) readonly buffer BestTri { uint best_tri[]; };
-layout(std430, set = 0, binding = 4) writeonly buffer Hits { Hit hits[]; };
+layout(std430, set = 0, binding = 2) readonly buffer Best { uvec2 best[]; };  // see pdacrt.glsl
+layout(std430, set = 0, binding = 3) writeonly buffer Hits { Hit hits[]; };
 layout(push_constant) uniform Push { uint n; uint ray_offset; } pc;
 
 void main() {
     uint i = linear_invocation_id();
     if (i >= pc.n) return;
-    uint tri = best_tri[i];
+    uvec2 closest = best[i];
+    uint tri = closest.x;
     Hit h = Hit(1.0 / 0.0, MISS, 0.0, 0.0);
     if (tri != MISS) {
         Ray r = rays[pc.ray_offset + i];
         Triangle t = triangles[tri];
         float u, v;
         intersect_triangle(r.origin, r.dir, r.tmin, 1.0 / 0.0, t.v0.xyz, t.e1.xyz, t.e2.xyz, u, v);
-        h = Hit(best_t[i], tri, u, v);
+        h = Hit(hit_t(closest), tri, u, v);
     }
     hits[pc.ray_offset + i] = h;
 }

@@ -8,6 +8,8 @@
 #ifndef SPLITRAY_PDACRT_GLSL
 #define SPLITRAY_PDACRT_GLSL
 
+#include "geometry.glsl"
+
 #define CODE_LEFT 0u
 #define CODE_BOTH 1u
 #define CODE_RIGHT 2u
@@ -67,6 +69,19 @@ uint ordered_bits(float t) {
 
 float from_ordered_bits(uint o) {
     return uintBitsToFloat((o & 0x80000000u) != 0u ? (o & 0x7FFFFFFFu) : ~o);
+}
+
+// The chunk's global closest hits (the paper's mints and hitid, Algorithm 1 line 9), one
+// uvec2 per ray: (triangle, ordered_bits(t)). Read as a uint64 it is
+// ordered_bits(t) << 32 | triangle, so one 64-bit atomicMin keeps the smaller t and,
+// for equal t, the smaller triangle (segmented_intersect.comp, atomic variants). The
+// initial all-ones value is above every hit and means no hit yet.
+bool has_hit(uvec2 best) {
+    return best.x != MISS;
+}
+
+float hit_t(uvec2 best) {
+    return has_hit(best) ? from_ordered_bits(best.y) : 1.0 / 0.0;
 }
 
 // The split of Algorithm 2 line 4: the midpoint of the box's largest extent.

@@ -3,7 +3,8 @@
 // the list of each child it belongs to — the next level's list (with the child's new
 // node index as its key) or the terminal-node buffer. A "both" element goes to both
 // children, a "none" ray to neither. Position = the child's new start + the element's
-// offset within the child's range of the sorted parent list.
+// offset within the child's range of the sorted parent list (one add: the child's
+// route from write_nodes.comp holds new start − source start).
 //
 // The `ranked` variant (LevelSplit::PrefixSums) takes unsorted lists: the offset within
 // the child is the element's rank among its parent's elements on that side (the scanned
@@ -14,19 +15,16 @@
 
 layout(std430, set = 0, binding = 0) readonly buffer Keys { uint keys[]; };
 layout(std430, set = 0, binding = 1) readonly buffer Ids { uint ids[]; };
-layout(std430, set = 0, binding = 2) readonly buffer Children { Child children[]; };
-layout(std430, set = 0, binding = 3) readonly buffer Offsets { uint offsets[]; };
-layout(std430, set = 0, binding = 4) writeonly buffer NextIds { uint next_ids[]; };
-layout(std430, set = 0, binding = 5) writeonly buffer NextKeys { uint next_keys[]; };
-layout(std430, set = 0, binding = 6) writeonly buffer TermIds { uint term_ids[]; };
+layout(std430, set = 0, binding = 2) readonly buffer Routes { uvec4 routes[]; };  // write_nodes.comp
+layout(std430, set = 0, binding = 3) writeonly buffer NextIds { uint next_ids[]; };
+layout(std430, set = 0, binding = 4) writeonly buffer NextKeys { uint next_keys[]; };
+layout(std430, set = 0, binding = 5) writeonly buffer TermIds { uint term_ids[]; };
 #ifdef RANKED
-layout(std430, set = 0, binding = 7) readonly buffer Ranks { uint ranks[]; };
+layout(std430, set = 0, binding = 6) readonly buffer Ranks { uint ranks[]; };
 #endif
 layout(push_constant) uniform Push {
     uint n;
-    uint stride;
     uint rays;       // 0: triangle lists, 1: ray lists
-    uint term_base;  // where this level's terminal ids start in the buffer
     uint left_base;  // ranked: where this list's side ranks start in `ranks`
     uint right_base;
 } pc;
@@ -39,24 +37,20 @@ void main() {
     uint code = key & 3u;
     if (code == CODE_NONE) return;
     uint id = ids[j];
-    uint next_channel = pc.rays != 0u ? CH_NEXT_RAYS : CH_NEXT_TRIS;
-    uint term_channel = pc.rays != 0u ? CH_TERM_RAYS : CH_TERM_TRIS;
     for (uint side = 0u; side < 2u; ++side) {
         if ((side == 0u && code == CODE_RIGHT) || (side == 1u && code == CODE_LEFT)) continue;
-        uint c = 2u * node + side;
-        Child ch = children[c];
+        uvec4 route = routes[2u * node + side];
 #ifdef RANKED
         uint position = ranks[(side == 0u ? pc.left_base : pc.right_base) + j];
 #else
         uint position = j;
 #endif
-        uint offset = position - (pc.rays != 0u ? ch.ray_src : ch.tri_src);
-        if (ch.kind == CHILD_NEXT) {
-            uint at = offsets[next_channel * pc.stride + c] + offset;
+        uint at = position + (pc.rays != 0u ? route.z : route.y);  // wrapping, see Routes
+        if (route.x == CHILD_NEXT) {
             next_ids[at] = id;
-            next_keys[at] = offsets[CH_NEXT_FLAG * pc.stride + c] << 2;
-        } else if (ch.kind == CHILD_TERMINAL) {
-            term_ids[pc.term_base + offsets[term_channel * pc.stride + c] + offset] = id;
+            next_keys[at] = route.w;
+        } else if (route.x == CHILD_TERMINAL) {
+            term_ids[at] = id;
         }
     }
 }

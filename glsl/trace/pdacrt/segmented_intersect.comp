@@ -19,8 +19,7 @@
 // sort by ray id + segmented arg-min that follows (Algorithm 3 lines 12–13) with one
 // 64-bit atomicMin per entry into the chunk's packed closest hits: (order-preserving t
 // bits << 32 | triangle), so the smaller t wins and equal t goes to the smaller
-// triangle index, exactly the arg-min's order. unpack_best.comp turns them back into
-// the t and triangle arrays.
+// triangle index, exactly the arg-min's order (the layout is in pdacrt.glsl).
 //! variant direct: DIRECT=1
 //! variant atomic: ATOMIC=1
 //! variant direct_atomic: DIRECT=1 ATOMIC=1

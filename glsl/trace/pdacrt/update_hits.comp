@@ -4,13 +4,13 @@
 // equally close with a smaller triangle index.
 #include "grid.glsl"
 #include "geometry.glsl"
+#include "pdacrt.glsl"
 
 layout(std430, set = 0, binding = 0) readonly buffer RunRays { uint run_rays[]; };
 layout(std430, set = 0, binding = 1) readonly buffer RunT { float run_t[]; };
 layout(std430, set = 0, binding = 2) readonly buffer RunTri { uint run_tri[]; };
 layout(std430, set = 0, binding = 3) readonly buffer RunTotal { uint run_total; };
-layout(std430, set = 0, binding = 4) buffer BestT { float best_t[]; };
-layout(std430, set = 0, binding = 5) buffer BestTri { uint best_tri[]; };
+layout(std430, set = 0, binding = 4) buffer Best { uvec2 best[]; };  // see pdacrt.glsl
 layout(push_constant) uniform Push { uint max_runs; } pc;
 
 void main() {
@@ -20,8 +20,11 @@ void main() {
     float t = run_t[i];
     uint tri = run_tri[i];
     if (tri == MISS) return;
-    if (t < best_t[ray] || (t == best_t[ray] && tri < best_tri[ray])) {
-        best_t[ray] = t;
-        best_tri[ray] = tri;
+    // One run per ray: no other invocation touches this ray's record. Compared as the
+    // packed (ordered t, triangle) pair, the order of the atomic flush.
+    uvec2 old = best[ray];
+    uvec2 candidate = uvec2(tri, ordered_bits(t));
+    if (candidate.y < old.y || (candidate.y == old.y && candidate.x < old.x)) {
+        best[ray] = candidate;
     }
 }

@@ -14,6 +14,12 @@ layout(std430, set = 0, binding = 0) readonly buffer Children { Child children[]
 layout(std430, set = 0, binding = 1) readonly buffer Offsets { uint offsets[]; };
 layout(std430, set = 0, binding = 2) writeonly buffer NextNodes { Node next_nodes[]; };
 layout(std430, set = 0, binding = 3) writeonly buffer Segments { Segment segments[]; };
+// Per child, where scatter_elements.comp sends its elements: (kind, triangle delta, ray
+// delta, next-level key). An element's destination is its position in the parent list
+// (or its rank, ranked) plus the delta — the child's destination start minus its source
+// start, wrapping — so the scatter reads 4 words per child instead of the child record
+// and three prefix sums.
+layout(std430, set = 0, binding = 4) writeonly buffer Routes { uvec4 routes[]; };
 layout(push_constant) uniform Push {
     uint child_count;
     uint stride;
@@ -27,17 +33,22 @@ void main() {
     uint c = linear_invocation_id();
     if (c >= pc.child_count) return;
     Child ch = children[c];
+    uvec4 route = uvec4(ch.kind, 0u, 0u, 0u);
     if (ch.kind == CHILD_NEXT) {
-        next_nodes[offsets[CH_NEXT_FLAG * pc.stride + c]] = Node(ch.box_min, ch.box_max,
-            offsets[CH_NEXT_TRIS * pc.stride + c], ch.tri_count,
-            offsets[CH_NEXT_RAYS * pc.stride + c], ch.ray_count);
+        uint node = offsets[CH_NEXT_FLAG * pc.stride + c];
+        uint tri_start = offsets[CH_NEXT_TRIS * pc.stride + c];
+        uint ray_start = offsets[CH_NEXT_RAYS * pc.stride + c];
+        next_nodes[node] = Node(ch.box_min, ch.box_max, tri_start, ch.tri_count, ray_start, ch.ray_count);
+        route = uvec4(ch.kind, tri_start - ch.tri_src, ray_start - ch.ray_src, node << 2);
     } else if (ch.kind == CHILD_TERMINAL) {
         uint first = pc.segment_base + offsets[CH_TERM_FLAG * pc.stride + c];
         uint tri_start = pc.term_tri_base + offsets[CH_TERM_TRIS * pc.stride + c];
         uint ray_start = pc.term_ray_base + offsets[CH_TERM_RAYS * pc.stride + c];
+        route = uvec4(ch.kind, tri_start - ch.tri_src, ray_start - ch.ray_src, 0u);
         for (uint done = 0u, k = 0u; done < ch.ray_count; done += pc.max_segment_rays, ++k) {
             segments[first + k] = Segment(tri_start, ch.tri_count, ray_start + done,
                                           min(pc.max_segment_rays, ch.ray_count - done));
         }
     }
+    routes[c] = route;
 }

@@ -80,9 +80,7 @@ pub struct WriteNodesPush {
 #[repr(C)]
 pub struct ScatterPush {
     pub n: u32,
-    pub stride: u32,
     pub rays: u32,
-    pub term_base: u32,
     pub left_base: u32,
     pub right_base: u32,
 }
@@ -112,7 +110,6 @@ pub struct Kernels {
     pub scatter: ComputePipeline,
     pub segmented_intersect: ComputePipeline,
     pub update_hits: ComputePipeline,
-    pub unpack_best: ComputePipeline,
     pub finalize_hits: ComputePipeline,
 }
 
@@ -152,7 +149,7 @@ impl Kernels {
                     shaders::TRACE_PDACRT_FILTER_RAYS,
                     shaders::TRACE_PDACRT_FILTER_RAYS__RANKED,
                 ),
-                6 + ranked as u32,
+                5 + ranked as u32,
                 size_of::<FilterRaysPush>(),
                 wg,
             )?,
@@ -179,7 +176,7 @@ impl Kernels {
             )?,
             write_nodes: make(
                 shaders::TRACE_PDACRT_WRITE_NODES,
-                4,
+                5,
                 size_of::<WriteNodesPush>(),
                 wg,
             )?,
@@ -188,7 +185,7 @@ impl Kernels {
                     shaders::TRACE_PDACRT_SCATTER_ELEMENTS,
                     shaders::TRACE_PDACRT_SCATTER_ELEMENTS__RANKED,
                 ),
-                7 + ranked as u32,
+                6 + ranked as u32,
                 size_of::<ScatterPush>(),
                 wg,
             )?,
@@ -203,16 +200,15 @@ impl Kernels {
                 size_of::<IntersectPush>(),
                 &[params.intersect_workgroup, params.batch],
             )?,
-            unpack_best: make(shaders::TRACE_PDACRT_UNPACK_BEST, 3, 4, wg)?,
             update_hits: make(
                 shaders::TRACE_PDACRT_UPDATE_HITS,
-                6,
+                5,
                 size_of::<MaxRunsPush>(),
                 wg,
             )?,
             finalize_hits: make(
                 shaders::TRACE_PDACRT_FINALIZE_HITS,
-                5,
+                4,
                 size_of::<FinalizePush>(),
                 wg,
             )?,

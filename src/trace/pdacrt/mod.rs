@@ -362,10 +362,13 @@ impl PdacrtTracer {
         &self.stats
     }
 
-    /// Frees pooled memory between frames (the next trace allocates again).
-    pub fn release_memory(&mut self) {
+    /// Frees pooled memory between frames (the next trace allocates again), after
+    /// waiting for the work that may still use it.
+    pub fn release_memory(&mut self) -> vk::Result<()> {
+        self.gpu.wait_idle()?;
         self.pool.clear();
         self.scratch = Scratch::default();
+        Ok(())
     }
 
     fn sort_scratch(&mut self, n: u32) -> vk::Result<()> {
@@ -381,12 +384,15 @@ impl PdacrtTracer {
         Ok(())
     }
 
-    fn misc_scratch(&mut self, n: u32) -> vk::Result<()> {
-        let need = self
-            .reduce
-            .scratch_bytes(n)
-            .max(self.scan.scratch_bytes(n))
-            .max(self.gather.scratch_bytes(n));
+    /// Scratch for scans of up to `n` items, and with `sort_path` for the reduce-by-key
+    /// and gathers of the sort-based split and flush too (those need far more).
+    fn misc_scratch(&mut self, n: u32, sort_path: bool) -> vk::Result<()> {
+        let mut need = self.scan.scratch_bytes(n);
+        if sort_path {
+            need = need
+                .max(self.reduce.scratch_bytes(n))
+                .max(self.gather.scratch_bytes(n));
+        }
         if self.scratch.misc.as_ref().is_none_or(|b| b.size() < need) {
             let bytes = need.next_power_of_two();
             let fresh = self
@@ -453,18 +459,11 @@ impl PdacrtTracer {
         chunk: u32,
     ) -> vk::Result<()> {
         let gpu = self.gpu.clone();
-        let best_t = self.pool.take("pdacrt-best-t", n as u64 * 4)?;
-        let best_tri = self.pool.take("pdacrt-best-tri", n as u64 * 4)?;
+        // The closest hits so far, (triangle, ordered t) per ray (pdacrt.glsl): all ones
+        // is above every hit and means none yet.
+        let best = self.pool.take("pdacrt-best", n as u64 * 8)?;
         let mut rec = gpu.recorder(StreamKind::Main)?;
-        rec.fill(&best_t, f32::INFINITY.to_bits());
-        rec.fill(&best_tri, super::MISS);
-        // The atomic flush's packed closest hits: all ones is above every real hit.
-        let best_packed = (self.params.flush_reduce == FlushReduce::AtomicMin)
-            .then(|| self.pool.take("pdacrt-best-packed", n as u64 * 8))
-            .transpose()?;
-        if let Some(packed) = &best_packed {
-            rec.fill(packed, u32::MAX);
-        }
+        rec.fill(&best, u32::MAX);
         let p = self.params;
         let mut term = self.new_terminal_buffer(p.eta, p.eta)?;
         let tris = self.triangle_count;
@@ -542,7 +541,7 @@ impl PdacrtTracer {
                 offsets,
                 stride,
                 ranks,
-            } = self.filter_level(&current, rays, &best_t, &best_tri, offset, query, depth)?;
+            } = self.filter_level(&current, rays, &best, offset, query, depth)?;
             self.stats.host_round_trips += 1;
 
             // Algorithm 1 lines 7–10: flush first if this level's terminal nodes would
@@ -551,13 +550,7 @@ impl PdacrtTracer {
                 || term.rays + totals.term_rays > p.lambda
                 || term.segment_count + totals.term_nodes > term.segment_capacity;
             if flushed && term.segment_count > 0 {
-                self.flush(
-                    &mut term,
-                    rays,
-                    offset,
-                    n,
-                    (&best_t, &best_tri, best_packed.as_ref()),
-                )?;
+                self.flush(&mut term, rays, offset, n, &best)?;
             }
             if totals.term_tris > term.tri_capacity
                 || totals.term_rays > term.ray_capacity
@@ -602,6 +595,7 @@ impl PdacrtTracer {
                 })
                 .transpose()?;
             let child_count = current.node_count * 2;
+            let routes = self.pool.take("pdacrt-routes", child_count as u64 * 16)?;
             let mut rec = gpu.recorder(StreamKind::Main)?;
             let empty = &term.segments; // bound where a list is empty; never written then
             let (next_nodes, next_tri_ids, next_tri_keys, next_ray_ids, next_ray_keys) = match &next
@@ -616,6 +610,7 @@ impl PdacrtTracer {
                     (&offsets).into(),
                     next_nodes.into(),
                     (&term.segments).into(),
+                    (&routes).into(),
                 ],
                 &WriteNodesPush {
                     child_count,
@@ -627,10 +622,11 @@ impl PdacrtTracer {
                 },
                 child_count as u64,
             )?;
+            rec.barrier();
             let (tri_sides, ray_sides) = ranks.as_ref().map_or(((0, 0), (0, 0)), |r| {
                 ((r.tri_left, r.tri_right), (r.ray_left, r.ray_right))
             });
-            for (rays_list, n_list, keys, ids, next_ids, next_keys, term_ids, term_base, sides) in [
+            for (rays_list, n_list, keys, ids, next_ids, next_keys, term_ids, sides) in [
                 (
                     0,
                     current.tri_total,
@@ -639,7 +635,6 @@ impl PdacrtTracer {
                     next_tri_ids,
                     next_tri_keys,
                     &term.tri_ids,
-                    term.tris,
                     tri_sides,
                 ),
                 (
@@ -650,15 +645,13 @@ impl PdacrtTracer {
                     next_ray_ids,
                     next_ray_keys,
                     &term.ray_ids,
-                    term.rays,
                     ray_sides,
                 ),
             ] {
                 let mut bindings: Vec<BufferSlice> = vec![
                     keys.into(),
                     ids.into(),
-                    (&children).into(),
-                    (&offsets).into(),
+                    (&routes).into(),
                     next_ids.into(),
                     next_keys.into(),
                     term_ids.into(),
@@ -669,9 +662,7 @@ impl PdacrtTracer {
                     &bindings,
                     &ScatterPush {
                         n: n_list,
-                        stride,
                         rays: rays_list,
-                        term_base,
                         left_base: sides.0,
                         right_base: sides.1,
                     },
@@ -704,6 +695,7 @@ impl PdacrtTracer {
                 current.ray_keys,
                 children,
                 offsets,
+                routes,
             ] {
                 self.pool.give(b);
             }
@@ -716,13 +708,7 @@ impl PdacrtTracer {
 
         // Lines 18–20: the remaining terminal nodes.
         if term.segment_count > 0 {
-            self.flush(
-                &mut term,
-                rays,
-                offset,
-                n,
-                (&best_t, &best_tri, best_packed.as_ref()),
-            )?;
+            self.flush(&mut term, rays, offset, n, &best)?;
         }
         let mut rec = gpu.recorder(StreamKind::Main)?;
         rec.dispatch_items(
@@ -730,8 +716,7 @@ impl PdacrtTracer {
             &[
                 (&self.triangles).into(),
                 rays.into(),
-                (&best_t).into(),
-                (&best_tri).into(),
+                (&best).into(),
                 hits.into(),
             ],
             &FinalizePush {
@@ -742,11 +727,7 @@ impl PdacrtTracer {
         )?;
         rec.submit(&[])?;
         self.give_terminal(term);
-        self.pool.give(best_t);
-        self.pool.give(best_tri);
-        if let Some(packed) = best_packed {
-            self.pool.give(packed);
-        }
+        self.pool.give(best);
         Ok(())
     }
 
@@ -763,8 +744,7 @@ impl PdacrtTracer {
         &mut self,
         level: &Level,
         rays: &Buffer,
-        best_t: &Buffer,
-        best_tri: &Buffer,
+        best: &Buffer,
         ray_offset: u32,
         query: Query,
         depth: u32,
@@ -791,7 +771,7 @@ impl PdacrtTracer {
         if !ranked {
             self.sort_scratch(max_list)?;
         }
-        self.misc_scratch(max_list.max(stride).max(scan_n))?;
+        self.misc_scratch(max_list.max(stride).max(scan_n), !ranked)?;
         let children = self
             .pool
             .take("pdacrt-children", child_count as u64 * CHILD_BYTES)?;
@@ -832,8 +812,7 @@ impl PdacrtTracer {
             (&level.nodes).into(),
             (&level.ray_ids).into(),
             (&level.ray_keys).into(),
-            best_t.into(),
-            best_tri.into(),
+            best.into(),
         ];
         bindings.extend(ranks.as_ref().map(|r| BufferSlice::from(&r.buffer)));
         rec.dispatch_items(
@@ -931,6 +910,7 @@ impl PdacrtTracer {
         let done = rec.submit(&[])?;
         gpu.wait(&done)?;
         self.scratch.retired.clear();
+        self.pool.collect();
         let totals = summary.read::<LevelTotals>()?[0];
         self.pool.give(channels);
         if let Some((tri_counts, ray_counts)) = counts {
@@ -1034,16 +1014,16 @@ impl PdacrtTracer {
         rays: &Buffer,
         ray_offset: u32,
         chunk_rays: u32,
-        (best_t, best_tri, best_packed): (&Buffer, &Buffer, Option<&Buffer>),
+        best: &Buffer,
     ) -> vk::Result<()> {
         let gpu = self.gpu.clone();
         let entries = term.rays;
         self.stats.flushes += 1;
-        if let Some(packed) = best_packed {
-            return self.flush_atomic(term, rays, ray_offset, chunk_rays, best_t, best_tri, packed);
+        if self.params.flush_reduce == FlushReduce::AtomicMin {
+            return self.flush_atomic(term, rays, ray_offset, best);
         }
         self.sort_scratch(entries)?;
-        self.misc_scratch(entries)?;
+        self.misc_scratch(entries, true)?;
         let entry_t = self.pool.take("pdacrt-entry-t", entries as u64 * 4)?;
         let entry_tri = self.pool.take("pdacrt-entry-tri", entries as u64 * 4)?;
         let keys = self.pool.take("pdacrt-entry-rays", entries as u64 * 4)?;
@@ -1133,8 +1113,7 @@ impl PdacrtTracer {
                 (&entry_t).into(),
                 (&entry_tri).into(),
                 (&run_total).into(),
-                best_t.into(),
-                best_tri.into(),
+                best.into(),
             ],
             &MaxRunsPush { max_runs: entries },
             entries as u64,
@@ -1162,10 +1141,7 @@ impl PdacrtTracer {
         term: &mut TerminalBuffer,
         rays: &Buffer,
         ray_offset: u32,
-        chunk_rays: u32,
-        best_t: &Buffer,
-        best_tri: &Buffer,
-        best_packed: &Buffer,
+        best: &Buffer,
     ) -> vk::Result<()> {
         let gpu = self.gpu.clone();
         let mut rec = gpu.recorder(StreamKind::Main)?;
@@ -1179,20 +1155,13 @@ impl PdacrtTracer {
                 (&term.segments).into(),
                 (&term.tri_ids).into(),
                 (&term.ray_ids).into(),
-                best_packed.into(),
+                best.into(),
             ],
             &IntersectPush {
                 segment_count: term.segment_count,
                 ray_offset,
             },
             groups,
-        )?;
-        rec.barrier();
-        rec.dispatch_items(
-            &self.kernels.unpack_best,
-            &[best_packed.into(), best_t.into(), best_tri.into()],
-            &chunk_rays,
-            chunk_rays as u64,
         )?;
         rec.barrier();
         rec.end_scope()?;

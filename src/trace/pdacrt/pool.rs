@@ -4,7 +4,14 @@
 //!
 //! Reuse is safe without waits because every PDACRT submission goes to one in-order
 //! stream: work that takes a buffer back out of the pool runs after the work that last
-//! used it.
+//! used it. Freeing is not: a buffer the pool lets go is only retired, and dropped at
+//! the tracer's next host wait ([`BufferPool::collect`]).
+//!
+//! Peak memory is the point of the pool (the issue's < 64 MB target), so it wastes
+//! little: capacities round up by at most 1/8 (not to a power of two), and when no free
+//! buffer fits a request, the free buffers smaller than it are retired — level lists
+//! grow level by level at first, and the outgrown ones would otherwise sit idle until
+//! the frame ends.
 
 use std::collections::BTreeMap;
 
@@ -12,8 +19,19 @@ use crate::vk::{self, Buffer, Gpu, MemoryKind};
 
 pub struct BufferPool {
     gpu: Gpu,
-    /// Free buffers by capacity in bytes (powers of two).
+    /// Free buffers by capacity in bytes.
     free: BTreeMap<u64, Vec<Buffer>>,
+    /// Let go, but possibly still in use by submitted work.
+    retired: Vec<Buffer>,
+}
+
+/// `bytes` rounded up to a multiple of an eighth of the largest power of two not above
+/// it (at least 256), so that requests of similar sizes share buffers while wasting at
+/// most 12.5%.
+fn capacity_for(bytes: u64) -> u64 {
+    let bytes = bytes.max(1);
+    let floor_pow2 = 1u64 << (63 - bytes.leading_zeros());
+    bytes.next_multiple_of((floor_pow2 / 8).max(256))
 }
 
 impl BufferPool {
@@ -21,13 +39,13 @@ impl BufferPool {
         Self {
             gpu: gpu.clone(),
             free: BTreeMap::new(),
+            retired: Vec::new(),
         }
     }
 
     /// A buffer of at least `bytes` bytes (contents undefined): the smallest free one
-    /// that fits, else a new one of the next power of two.
+    /// that fits, else a new one (and the free ones too small for it are retired).
     pub fn take(&mut self, name: &str, bytes: u64) -> vk::Result<Buffer> {
-        let capacity = bytes.max(256).next_power_of_two();
         let fit = self
             .free
             .range(bytes.max(1)..)
@@ -36,9 +54,12 @@ impl BufferPool {
         if let Some(buffer) = fit.and_then(|k| self.free.get_mut(&k)).and_then(Vec::pop) {
             return Ok(buffer);
         }
+        let outgrown = self.free.split_off(&bytes.max(1));
+        let smaller = std::mem::replace(&mut self.free, outgrown);
+        self.retired.extend(smaller.into_values().flatten());
         let limit = self.gpu.info().limits.max_storage_buffer_range;
-        // Past the largest power of two a binding allows, allocate exactly.
-        let capacity = if capacity > limit { bytes } else { capacity };
+        // Past the largest size a binding allows, allocate exactly.
+        let capacity = capacity_for(bytes).min(limit).max(bytes);
         self.gpu.create_buffer(name, capacity, MemoryKind::Device)
     }
 
@@ -47,8 +68,36 @@ impl BufferPool {
         self.free.entry(buffer.size()).or_default().push(buffer);
     }
 
-    /// Frees every pooled buffer (the device memory goes back to the allocator).
+    /// Drops the retired buffers: call only after a host wait that covers all work
+    /// submitted so far.
+    pub fn collect(&mut self) {
+        self.retired.clear();
+    }
+
+    /// Frees every pooled buffer (the device memory goes back to the allocator). The
+    /// same condition as [`BufferPool::collect`] applies.
     pub fn clear(&mut self) {
         self.free.clear();
+        self.retired.clear();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::capacity_for;
+
+    #[test]
+    fn capacities_round_up_by_at_most_an_eighth() {
+        assert_eq!(capacity_for(0), 256);
+        assert_eq!(capacity_for(1), 256);
+        assert_eq!(capacity_for(256), 256);
+        assert_eq!(capacity_for(257), 512);
+        assert_eq!(capacity_for(4096), 4096);
+        assert_eq!(capacity_for(4097), 4096 + 512);
+        assert_eq!(capacity_for(8191), 8192);
+        for bytes in [1000u64, 65_537, 3_200_000, 123_456_789] {
+            let c = capacity_for(bytes);
+            assert!(c >= bytes && c <= bytes + bytes / 8 + 256, "{bytes} -> {c}");
+        }
     }
 }
