@@ -13,9 +13,11 @@
 //! every invocation's keys are one segment with its own histogram, written digit-major
 //! across all segments (`hist[digit * segments + segment]`), so the scan gives every
 //! (digit, segment) its offset directly and each invocation scatters its segment alone.
-//! With [`Tuning::sort_pairs`] key-value sorts alternate between the caller's buffers
-//! and interleaved (key, value) pairs in the scratch; an odd pass count ends with an
-//! unpack kernel.
+//! With [`Tuning::sort_pairs`] key-value sorts run through interleaved (key, value)
+//! pairs in the scratch: the first pass reads the caller's buffers and writes pairs,
+//! middle passes go from pairs to pairs (two pair buffers, alternating), and the last
+//! pass writes the caller's buffers again — no unpack or copy for any pass count above
+//! one (a single pass ends with an unpack kernel).
 
 use super::{
     args_offset, check_scratch, pipeline, region, Count, Scan, ScanKind, Setup, Tuning,
@@ -37,7 +39,8 @@ pub struct SortScratch {
     /// `max_n` u32 keys; with [`Tuning::sort_pairs`] `2 * max_n` words, which
     /// key-value sorts use as interleaved (key, value) pairs.
     pub keys: Buffer,
-    /// `max_n` u32 values (one word with [`Tuning::sort_pairs`]: values go in `keys`).
+    /// `max_n` u32 values; with [`Tuning::sort_pairs`] `2 * max_n` words, the second
+    /// buffer of interleaved pairs.
     pub values: Buffer,
     /// Header, histograms and the histogram scan's scratch: [`RadixSort::scratch_bytes`].
     pub misc: Buffer,
@@ -197,7 +200,7 @@ impl RadixSort {
     pub fn alloc_scratch(&self, gpu: &Gpu, max_n: u32) -> Result<SortScratch> {
         let bytes = max_n as u64 * 4;
         let (keys, values) = if self.pairs {
-            (2 * bytes, 4)
+            (2 * bytes, 2 * bytes)
         } else {
             (bytes, bytes)
         };
@@ -285,6 +288,9 @@ impl RadixSort {
         if self.pairs {
             let words = if pairs { 2 } else { 1 };
             check_scratch("radix sort", &scratch.keys, 0, cap as u64 * 4 * words)?;
+            if pairs && passes > 2 {
+                check_scratch("radix sort", &scratch.values, 0, cap as u64 * 8)?;
+            }
         } else {
             for b in [&scratch.keys, &scratch.values] {
                 check_scratch("radix sort", b, 0, cap as u64 * 4)?;
@@ -319,20 +325,32 @@ impl RadixSort {
 
         let with_values = values.is_some() as u32;
         if let (true, Some(vals)) = (pairs, values) {
-            let p = BufferSlice::from(&scratch.keys);
+            let pair_buffers = [
+                BufferSlice::from(&scratch.keys),
+                BufferSlice::from(&scratch.values),
+            ];
             for pass in 0..passes {
                 let shift = bits.start + pass * self.tuning.radix_bits;
-                // Even passes: keys and values -> pairs; odd passes: pairs -> keys and values.
-                let to_pairs = pass % 2 == 0;
+                // The first pass reads the caller's buffers, the last (if not also the
+                // first) writes them; everything in between is pairs to pairs.
+                let pairs_in = pass > 0;
+                let to_pairs = pass == 0 || pass + 1 < passes;
                 let push = PassPush {
                     shift,
                     bits: (bits.end - shift).min(self.tuning.radix_bits),
-                    flags: 1 | if to_pairs { 8 } else { 4 },
+                    flags: 1 | if pairs_in { 4 } else { 0 } | if to_pairs { 8 } else { 0 },
                 };
-                let (ki, vi, ko, vo) = if to_pairs {
-                    (keys, vals, p, p)
+                let (ki, vi) = if pairs_in {
+                    let p = pair_buffers[(pass as usize - 1) % 2];
+                    (p, p)
                 } else {
-                    (p, p, keys, vals)
+                    (keys, vals)
+                };
+                let (ko, vo) = if to_pairs {
+                    let p = pair_buffers[pass as usize % 2];
+                    (p, p)
+                } else {
+                    (keys, vals)
                 };
                 rec.dispatch_indirect(
                     &self.histogram,
@@ -361,7 +379,8 @@ impl RadixSort {
                 )?;
                 rec.barrier();
             }
-            if let (1, Some(unpack)) = (passes % 2, &self.unpack) {
+            if let (1, Some(unpack)) = (passes, &self.unpack) {
+                let p = pair_buffers[0];
                 rec.dispatch_indirect(unpack, &[header, p, keys, vals], &(), misc, args_offset(1))?;
                 rec.barrier();
             }
