@@ -100,8 +100,11 @@ fn tiny_render_writes_exr_png_and_stats_with_validation_on() {
         .iter()
         .map(|k| k["name"].as_str().unwrap().to_string())
         .collect();
+    // PDACRT's intersection ran and was timed (its variant depends on the device).
     assert!(
-        kernels.contains(&"trace_pdacrt_segmented_intersect".to_string()),
+        kernels
+            .iter()
+            .any(|k| k.starts_with("trace_pdacrt_segmented_intersect")),
         "{kernels:?}"
     );
 }
