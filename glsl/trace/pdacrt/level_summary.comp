@@ -12,6 +12,6 @@ layout(push_constant) uniform Push { uint child_count; uint stride; } pc;
 void main() {
     uint last = pc.child_count - 1u;
     for (uint k = 0u; k < 6u; ++k) {
-        totals[k] = offsets[k * pc.stride + last] + channels[k * pc.stride + last];
+        totals[k] = CHANNEL_OFFSET(offsets, pc.stride, k, last) + channels[k * pc.stride + last];
     }
 }

@@ -27,6 +27,12 @@
 #define CH_TERM_TRIS 4u
 #define CH_TERM_RAYS 5u
 
+// Exclusive prefix sum of channel `k` at child `c`, from the one scan that runs through
+// all channels back to back (`offsets`, `stride` words per channel): the scan's value at
+// the channel's first child is everything before the channel. Wrapping subtraction, so
+// the padding after each channel's children may hold anything.
+#define CHANNEL_OFFSET(offsets, stride, k, c) ((offsets)[(k) * (stride) + (c)] - (offsets)[(k) * (stride)])
+
 // A node of the implicit hierarchy: its box and its pivots (start, count) into the
 // level's triangle and ray id lists.
 struct Node {

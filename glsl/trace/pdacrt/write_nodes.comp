@@ -35,15 +35,15 @@ void main() {
     Child ch = children[c];
     uvec4 route = uvec4(ch.kind, 0u, 0u, 0u);
     if (ch.kind == CHILD_NEXT) {
-        uint node = offsets[CH_NEXT_FLAG * pc.stride + c];
-        uint tri_start = offsets[CH_NEXT_TRIS * pc.stride + c];
-        uint ray_start = offsets[CH_NEXT_RAYS * pc.stride + c];
+        uint node = CHANNEL_OFFSET(offsets, pc.stride, CH_NEXT_FLAG, c);
+        uint tri_start = CHANNEL_OFFSET(offsets, pc.stride, CH_NEXT_TRIS, c);
+        uint ray_start = CHANNEL_OFFSET(offsets, pc.stride, CH_NEXT_RAYS, c);
         next_nodes[node] = Node(ch.box_min, ch.box_max, tri_start, ch.tri_count, ray_start, ch.ray_count);
         route = uvec4(ch.kind, tri_start - ch.tri_src, ray_start - ch.ray_src, node << 2);
     } else if (ch.kind == CHILD_TERMINAL) {
-        uint first = pc.segment_base + offsets[CH_TERM_FLAG * pc.stride + c];
-        uint tri_start = pc.term_tri_base + offsets[CH_TERM_TRIS * pc.stride + c];
-        uint ray_start = pc.term_ray_base + offsets[CH_TERM_RAYS * pc.stride + c];
+        uint first = pc.segment_base + CHANNEL_OFFSET(offsets, pc.stride, CH_TERM_FLAG, c);
+        uint tri_start = pc.term_tri_base + CHANNEL_OFFSET(offsets, pc.stride, CH_TERM_TRIS, c);
+        uint ray_start = pc.term_ray_base + CHANNEL_OFFSET(offsets, pc.stride, CH_TERM_RAYS, c);
         route = uvec4(ch.kind, tri_start - ch.tri_src, ray_start - ch.ray_src, 0u);
         for (uint done = 0u, k = 0u; done < ch.ray_count; done += pc.max_segment_rays, ++k) {
             segments[first + k] = Segment(tri_start, ch.tri_count, ray_start + done,

@@ -786,7 +786,7 @@ impl PdacrtTracer {
         if !ranked {
             self.sort_scratch(max_list)?;
         }
-        self.misc_scratch(max_list.max(stride).max(scan_n), !ranked)?;
+        self.misc_scratch(max_list.max(6 * stride).max(scan_n), !ranked)?;
         let children = self
             .pool
             .take("pdacrt-children", child_count as u64 * CHILD_BYTES)?;
@@ -900,18 +900,18 @@ impl PdacrtTracer {
         };
         rec.barrier();
         // Algorithm 1 line 11: positions of the next level and of the terminal nodes.
+        // One scan runs through all six channels back to back; each channel's offsets
+        // come out raised by the channels before it (and by the unwritten padding up to
+        // `stride`), which the readers subtract (channel_offset in pdacrt.glsl).
         let misc = self.scratch.misc.as_ref().unwrap();
-        for k in 0..6u64 {
-            let bytes = stride as u64 * 4;
-            self.scan.record(
-                &mut rec,
-                child_count,
-                channels.slice(k * bytes, bytes),
-                offsets.slice(k * bytes, bytes),
-                ScanKind::Exclusive,
-                misc,
-            )?;
-        }
+        self.scan.record(
+            &mut rec,
+            6 * stride,
+            (&channels).into(),
+            (&offsets).into(),
+            ScanKind::Exclusive,
+            misc,
+        )?;
         rec.dispatch(
             &self.kernels.level_summary,
             &[(&channels).into(), (&offsets).into(), (&summary).into()],
