@@ -143,46 +143,72 @@ fn time_cpu(runs: usize, mut f: impl FnMut() -> f64) -> f64 {
     median((0..runs).map(|_| f()).collect())
 }
 
+/// One submission of `record` after `before` (on the host, e.g. to restore an input):
+/// (GPU ms from timestamps around it, or the wall time where there are none; wall ms).
+fn gpu_once(
+    gpu: &Gpu,
+    before: &mut impl FnMut() -> BenchResult<()>,
+    record: &impl Fn(&mut Recorder) -> crate::vk::Result<()>,
+    print_profile: bool,
+) -> BenchResult<(f64, f64)> {
+    let scope = "bench-primitive";
+    before()?;
+    gpu.wait_idle()?;
+    let _ = gpu.take_profile();
+    let mut rec = gpu.recorder(StreamKind::Main)?;
+    rec.begin_scope(scope)?;
+    record(&mut rec)?;
+    rec.end_scope()?;
+    let t0 = Instant::now();
+    let point = rec.submit(&[])?;
+    gpu.wait(&point)?;
+    let wall = t0.elapsed().as_secs_f64() * 1e3;
+    gpu.wait_idle()?;
+    let profile = gpu.take_profile();
+    if print_profile && std::env::var_os("SPLITRAY_BENCH_PROFILE").is_some() {
+        eprint!("{}", profile.table());
+    }
+    let g: f64 = profile
+        .records
+        .iter()
+        .filter(|r| r.name == scope)
+        .map(|r| r.duration_ms())
+        .sum();
+    Ok((if g > 0.0 { g } else { wall }, wall))
+}
+
 /// Runs `record` once as a warm-up, then `runs` times; returns median (gpu ms, wall ms).
 /// `before` runs on the host before each submission (e.g. to restore an input).
 fn time_gpu(
     gpu: &Gpu,
     runs: usize,
-    mut before: impl FnMut() -> BenchResult<()>,
+    before: impl FnMut() -> BenchResult<()>,
     record: impl Fn(&mut Recorder) -> crate::vk::Result<()>,
 ) -> BenchResult<(f64, f64)> {
-    let scope = "bench-primitive";
-    let mut gpu_ms = Vec::new();
-    let mut wall_ms = Vec::new();
-    for run in 0..=runs {
-        before()?;
-        gpu.wait_idle()?;
-        let _ = gpu.take_profile();
-        let mut rec = gpu.recorder(StreamKind::Main)?;
-        rec.begin_scope(scope)?;
-        record(&mut rec)?;
-        rec.end_scope()?;
-        let t0 = Instant::now();
-        let point = rec.submit(&[])?;
-        gpu.wait(&point)?;
-        let wall = t0.elapsed().as_secs_f64() * 1e3;
-        gpu.wait_idle()?;
-        let profile = gpu.take_profile();
-        if run == runs && std::env::var_os("SPLITRAY_BENCH_PROFILE").is_some() {
-            eprint!("{}", profile.table());
-        }
-        let g: f64 = profile
-            .records
-            .iter()
-            .filter(|r| r.name == scope)
-            .map(|r| r.duration_ms())
-            .sum();
-        if run > 0 {
-            gpu_ms.push(if g > 0.0 { g } else { wall });
-            wall_ms.push(wall);
-        }
+    let (g, w, _) = time_against(gpu, runs, before, record, || 0.0)?;
+    Ok((g, w))
+}
+
+/// As [`time_gpu`], with a reference measurement (`reference`, returning its ms) taken
+/// after every GPU run, so that both see the same machine: on a shared or throttled
+/// machine, timing one block of runs after the other lets a change of load decide the
+/// ratio. Returns the medians (gpu ms, wall ms, reference ms).
+fn time_against(
+    gpu: &Gpu,
+    runs: usize,
+    mut before: impl FnMut() -> BenchResult<()>,
+    record: impl Fn(&mut Recorder) -> crate::vk::Result<()>,
+    mut reference: impl FnMut() -> f64,
+) -> BenchResult<(f64, f64, f64)> {
+    gpu_once(gpu, &mut before, &record, false)?; // warm-up: LLVM compiles on first use
+    let (mut gpu_ms, mut wall_ms, mut ref_ms) = (Vec::new(), Vec::new(), Vec::new());
+    for run in 0..runs {
+        let (g, w) = gpu_once(gpu, &mut before, &record, run + 1 == runs)?;
+        gpu_ms.push(g);
+        wall_ms.push(w);
+        ref_ms.push(reference());
     }
-    Ok((median(gpu_ms), median(wall_ms)))
+    Ok((median(gpu_ms), median(wall_ms), median(ref_ms)))
 }
 
 /// As [`time_gpu`], the minimum GPU time instead of the median.
@@ -289,14 +315,22 @@ pub fn run(gpu: &Gpu, opts: &PrimitivesBenchOptions) -> BenchResult<PrimitivesRe
         Ok(())
     };
     let pairs: Vec<(u32, u32)> = keys.iter().copied().zip(values.iter().copied()).collect();
-    let single = time_cpu(runs, || {
-        let mut p = pairs.clone();
-        let t = Instant::now();
-        p.sort_unstable_by_key(|x| x.0);
-        let ms = t.elapsed().as_secs_f64() * 1e3;
-        std::hint::black_box(&p);
-        ms
-    });
+    // The target's two sides alternate run by run (see time_against).
+    let (gpu_ms, wall_ms, single) = time_against(
+        gpu,
+        runs,
+        restore,
+        |rec| record_sort(rec, 0..32),
+        || {
+            let mut p = pairs.clone();
+            let t = Instant::now();
+            p.sort_unstable_by_key(|x| x.0);
+            let ms = t.elapsed().as_secs_f64() * 1e3;
+            std::hint::black_box(&p);
+            ms
+        },
+    )?;
+    let t = (gpu_ms, wall_ms);
     let par = time_cpu(runs, || {
         let mut p = pairs.clone();
         let t = Instant::now();
@@ -305,7 +339,6 @@ pub fn run(gpu: &Gpu, opts: &PrimitivesBenchOptions) -> BenchResult<PrimitivesRe
         std::hint::black_box(&p);
         ms
     });
-    let t = time_gpu(gpu, runs, restore, |rec| record_sort(rec, 0..32))?;
     let r = row(
         "sort_pairs (32 bits)",
         n,
@@ -385,16 +418,17 @@ pub fn run(gpu: &Gpu, opts: &PrimitivesBenchOptions) -> BenchResult<PrimitivesRe
         std::hint::black_box(cpu::exclusive_scan(&data));
         t.elapsed().as_secs_f64() * 1e3
     });
-    let copy_t = time_gpu(
-        gpu,
-        runs,
-        || Ok(()),
-        |rec| {
-            rec.copy(&input, 0, &output, 0, scan_n as u64 * 4);
-            Ok(())
-        },
-    )?;
-    let t = time_gpu(gpu, runs, || Ok(()), record_scan)?;
+    // The copy and the scan alternate run by run (see time_against).
+    let copy_once = |rec: &mut Recorder| {
+        rec.copy(&input, 0, &output, 0, scan_n as u64 * 4);
+        Ok(())
+    };
+    gpu_once(gpu, &mut || Ok(()), &copy_once, false)?;
+    let (scan_gpu, scan_wall, copy_ms) = time_against(gpu, runs, || Ok(()), record_scan, || {
+        gpu_once(gpu, &mut || Ok(()), &copy_once, false).map_or(f64::NAN, |(g, _)| g)
+    })?;
+    let copy_t = (copy_ms, 0.0);
+    let t = (scan_gpu, scan_wall);
     let r = row(
         "scan (exclusive)",
         scan_n,
