@@ -15,8 +15,11 @@
 #include "geometry.glsl"
 #include "pdacrt.glsl"
 
-layout(std430, set = 0, binding = 0) restrict readonly buffer Rays { Ray rays[]; };
-layout(std430, set = 0, binding = 1) restrict readonly buffer Nodes { Node nodes[]; };
+// Rays and nodes are read through vec4 views (two and three vec4 per record): CPU
+// devices turn every lane's load into a scalar loop, so one 16-byte load beats four
+// 4-byte ones.
+layout(std430, set = 0, binding = 0) restrict readonly buffer Rays { vec4 rays4[]; };
+layout(std430, set = 0, binding = 1) restrict readonly buffer Nodes { vec4 nodes4[]; };
 layout(std430, set = 0, binding = 2) restrict readonly buffer Ids { uint ids[]; };
 layout(std430, set = 0, binding = 3) restrict buffer Keys { uint keys[]; };
 layout(std430, set = 0, binding = 4) restrict readonly buffer Best { uvec2 best[]; };  // see pdacrt.glsl
@@ -46,14 +49,16 @@ void main() {
     uint code = CODE_NONE;
     uvec2 closest = best[id];
     if (pc.occlusion == 0u || !has_hit(closest)) {
-        vec3 box_min = nodes[node].box_min.xyz;
-        vec3 box_max = nodes[node].box_max.xyz;
+        vec3 box_min = nodes4[3u * node].xyz;      // Node.box_min
+        vec3 box_max = nodes4[3u * node + 1u].xyz; // Node.box_max
         vec3 lo = box_min - pc.eps;
         vec3 hi = box_max + pc.eps;
         uint axis = split_axis(box_min, box_max);
         bvec3 on_axis = axis_mask(axis);
         float mid = split_position(box_min, box_max, axis);
-        Ray r = rays[pc.ray_offset + id];
+        vec4 origin_tmin = rays4[2u * (pc.ray_offset + id)];
+        vec4 dir_tmax = rays4[2u * (pc.ray_offset + id) + 1u];
+        Ray r = Ray(origin_tmin.xyz, origin_tmin.w, dir_tmax.xyz, dir_tmax.w);
         float t1 = min(r.tmax, hit_t(closest) + pc.eps);
         vec3 left_hi = mix(hi, vec3(mid + pc.eps), on_axis);
         vec3 right_lo = mix(lo, vec3(mid - pc.eps), on_axis);
