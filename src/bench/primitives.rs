@@ -424,9 +424,13 @@ pub fn run(gpu: &Gpu, opts: &PrimitivesBenchOptions) -> BenchResult<PrimitivesRe
         Ok(())
     };
     gpu_once(gpu, &mut || Ok(()), &copy_once, false)?;
-    let (scan_gpu, scan_wall, copy_ms) = time_against(gpu, runs, || Ok(()), record_scan, || {
-        gpu_once(gpu, &mut || Ok(()), &copy_once, false).map_or(f64::NAN, |(g, _)| g)
-    })?;
+    let (scan_gpu, scan_wall, copy_ms) = time_against(
+        gpu,
+        runs,
+        || Ok(()),
+        record_scan,
+        || gpu_once(gpu, &mut || Ok(()), &copy_once, false).map_or(f64::NAN, |(g, _)| g),
+    )?;
     let copy_t = (copy_ms, 0.0);
     let t = (scan_gpu, scan_wall);
     let r = row(

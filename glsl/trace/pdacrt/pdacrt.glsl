@@ -109,8 +109,7 @@ bvec3 axis_mask(uint axis) {
 
 // Whether the segment [t0, t1] of the ray meets the closed box [lo, hi], with the
 // reciprocal direction precomputed. Axes the ray runs parallel to (d == 0) are tested by
-// the origin alone; the select discards their NaN or infinite slab distances. The same
-// slab test as ray_meets_box below, component-wise.
+// the origin alone; the select discards their NaN or infinite slab distances.
 bool ray_meets_box_inv(vec3 o, vec3 inv, bvec3 parallel, float t0, float t1, vec3 lo, vec3 hi) {
     vec3 ta = (lo - o) * inv;
     vec3 tb = (hi - o) * inv;
@@ -120,23 +119,6 @@ bool ray_meets_box_inv(vec3 o, vec3 inv, bvec3 parallel, float t0, float t1, vec
     float enter = max(t0, max(near.x, max(near.y, near.z)));
     float leave = min(t1, min(far.x, min(far.y, far.z)));
     return !outside && enter <= leave;
-}
-
-// Whether the segment [t0, t1] of the ray meets the closed box [lo, hi]. An axis the ray
-// runs parallel to is tested by the origin alone, so no 0 × inf NaN arises.
-bool ray_meets_box(vec3 o, vec3 d, float t0, float t1, vec3 lo, vec3 hi) {
-    for (uint k = 0u; k < 3u; ++k) {
-        if (d[k] == 0.0) {
-            if (o[k] < lo[k] || o[k] > hi[k]) return false;
-        } else {
-            float inv = 1.0 / d[k];
-            float ta = (lo[k] - o[k]) * inv;
-            float tb = (hi[k] - o[k]) * inv;
-            t0 = max(t0, min(ta, tb));
-            t1 = min(t1, max(ta, tb));
-        }
-    }
-    return t0 <= t1;
 }
 
 #endif

@@ -84,9 +84,9 @@ pub enum FlushReduce {
     /// closest hit; the entries are sorted by ray id, reduced by a segmented arg-min,
     /// and the runs update the global closest hits (Algorithm 1 line 9).
     SortByRay,
-    /// Every entry lowers its ray's packed (t, triangle) with one 64-bit atomicMin (the
-    /// same order as the arg-min: t, then triangle index), then one pass unpacks the
-    /// chunk's closest hits. No per-entry arrays, no sort, no sort scratch. Needs
+    /// Every entry lowers its ray's packed closest hit (ordered t, triangle; see
+    /// pdacrt.glsl) with one 64-bit atomicMin — the arg-min's own order: t, then
+    /// triangle index. No per-entry arrays, no sort, no sort scratch. Needs
     /// shaderBufferInt64Atomics.
     AtomicMin,
 }
@@ -244,6 +244,14 @@ struct Ranks {
 }
 
 impl Ranks {
+    /// Where the (left, right) arrays of the triangle and of the ray list start; zeros
+    /// when the level is split by sorting (the kernels then ignore them).
+    fn bases(ranks: Option<&Ranks>) -> ((u32, u32), (u32, u32)) {
+        ranks.map_or(((0, 0), (0, 0)), |r| {
+            ((r.tri_left, r.tri_right), (r.ray_left, r.ray_right))
+        })
+    }
+
     /// Words in all four arrays.
     fn len(&self) -> u32 {
         2 * self.tri_right + 2 * (self.ray_right - self.ray_left)
@@ -638,9 +646,7 @@ impl PdacrtTracer {
                 child_count as u64,
             )?;
             rec.barrier();
-            let (tri_sides, ray_sides) = ranks.as_ref().map_or(((0, 0), (0, 0)), |r| {
-                ((r.tri_left, r.tri_right), (r.ray_left, r.ray_right))
-            });
+            let (tri_sides, ray_sides) = Ranks::bases(ranks.as_ref());
             for (rays_list, n_list, keys, ids, next_ids, next_keys, term_ids, sides) in [
                 (
                     0,
@@ -801,9 +807,7 @@ impl PdacrtTracer {
         let mut rec = gpu.recorder(StreamKind::Main)?;
         rec.begin_scope("pdacrt-level")?;
         // Algorithm 2 lines 2–6: status codes (and, ranked, the side flags).
-        let (tri_bases, ray_bases) = ranks.as_ref().map_or(((0, 0), (0, 0)), |r| {
-            ((r.tri_left, r.tri_right), (r.ray_left, r.ray_right))
-        });
+        let (tri_bases, ray_bases) = Ranks::bases(ranks.as_ref());
         let mut bindings: Vec<BufferSlice> = vec![
             (&self.triangles).into(),
             (&level.nodes).into(),
