@@ -185,7 +185,7 @@ fn time_gpu(
     before: impl FnMut() -> BenchResult<()>,
     record: impl Fn(&mut Recorder) -> crate::vk::Result<()>,
 ) -> BenchResult<(f64, f64)> {
-    let (g, w, _) = time_against(gpu, runs, before, record, || 0.0)?;
+    let (g, w, _) = time_against(gpu, runs, before, record, || Ok(0.0))?;
     Ok((g, w))
 }
 
@@ -198,7 +198,7 @@ fn time_against(
     runs: usize,
     mut before: impl FnMut() -> BenchResult<()>,
     record: impl Fn(&mut Recorder) -> crate::vk::Result<()>,
-    mut reference: impl FnMut() -> f64,
+    mut reference: impl FnMut() -> BenchResult<f64>,
 ) -> BenchResult<(f64, f64, f64)> {
     gpu_once(gpu, &mut before, &record, false)?; // warm-up: LLVM compiles on first use
     let (mut gpu_ms, mut wall_ms, mut ref_ms) = (Vec::new(), Vec::new(), Vec::new());
@@ -206,7 +206,7 @@ fn time_against(
         let (g, w) = gpu_once(gpu, &mut before, &record, run + 1 == runs)?;
         gpu_ms.push(g);
         wall_ms.push(w);
-        ref_ms.push(reference());
+        ref_ms.push(reference()?);
     }
     Ok((median(gpu_ms), median(wall_ms), median(ref_ms)))
 }
@@ -327,7 +327,7 @@ pub fn run(gpu: &Gpu, opts: &PrimitivesBenchOptions) -> BenchResult<PrimitivesRe
             p.sort_unstable_by_key(|x| x.0);
             let ms = t.elapsed().as_secs_f64() * 1e3;
             std::hint::black_box(&p);
-            ms
+            Ok(ms)
         },
     )?;
     let t = (gpu_ms, wall_ms);
@@ -424,14 +424,19 @@ pub fn run(gpu: &Gpu, opts: &PrimitivesBenchOptions) -> BenchResult<PrimitivesRe
         Ok(())
     };
     gpu_once(gpu, &mut || Ok(()), &copy_once, false)?;
+    let copy_walls = std::cell::RefCell::new(Vec::new());
     let (scan_gpu, scan_wall, copy_ms) = time_against(
         gpu,
         runs,
         || Ok(()),
         record_scan,
-        || gpu_once(gpu, &mut || Ok(()), &copy_once, false).map_or(f64::NAN, |(g, _)| g),
+        || {
+            let (g, w) = gpu_once(gpu, &mut || Ok(()), &copy_once, false)?;
+            copy_walls.borrow_mut().push(w);
+            Ok(g)
+        },
     )?;
-    let copy_t = (copy_ms, 0.0);
+    let copy_t = (copy_ms, median(copy_walls.into_inner()));
     let t = (scan_gpu, scan_wall);
     let r = row(
         "scan (exclusive)",
