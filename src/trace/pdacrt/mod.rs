@@ -567,31 +567,9 @@ impl PdacrtTracer {
             } = self.filter_level(&current, rays, &best, offset, query, depth)?;
             self.stats.host_round_trips += 1;
 
-            // Algorithm 1 lines 7–10: flush first if this level's terminal nodes would
-            // push the buffer past λ.
-            let flushed = term.tris + totals.term_tris > p.lambda
-                || term.rays + totals.term_rays > p.lambda
-                || term.segment_count + totals.term_nodes > term.segment_capacity;
-            if flushed && term.segment_count > 0 {
-                self.flush(&mut term, rays, offset, n, &best)?;
-            }
-            if totals.term_tris > term.tri_capacity
-                || totals.term_rays > term.ray_capacity
-                || totals.term_nodes > term.segment_capacity
-            {
-                // One level alone exceeds η: grow the (now empty) buffer to fit it.
-                let bigger = self.new_terminal_buffer(
-                    totals.term_tris.max(term.tri_capacity),
-                    totals
-                        .term_rays
-                        .max(term.ray_capacity)
-                        .max(totals.term_nodes * 4),
-                )?;
-                let old = std::mem::replace(&mut term, bigger);
-                self.give_terminal(old);
-            }
-
-            // Lines 11–15: the next level's lists, the terminal nodes into the buffer.
+            // Lines 11–15 (recorded below): the next level's lists. Taken while nothing is
+            // in flight (filter_level waited), so the buffers the pool retires to make room
+            // can go at once instead of at the next wait: peak memory.
             let next = (totals.next_nodes > 0)
                 .then(|| -> vk::Result<Level> {
                     Ok(Level {
@@ -619,6 +597,32 @@ impl PdacrtTracer {
                 .transpose()?;
             let child_count = current.node_count * 2;
             let routes = self.pool.take("pdacrt-routes", child_count as u64 * 16)?;
+            self.pool.collect();
+
+            // Algorithm 1 lines 7–10: flush first if this level's terminal nodes would
+            // push the buffer past λ.
+            let flushed = term.tris + totals.term_tris > p.lambda
+                || term.rays + totals.term_rays > p.lambda
+                || term.segment_count + totals.term_nodes > term.segment_capacity;
+            if flushed && term.segment_count > 0 {
+                self.flush(&mut term, rays, offset, n, &best)?;
+            }
+            if totals.term_tris > term.tri_capacity
+                || totals.term_rays > term.ray_capacity
+                || totals.term_nodes > term.segment_capacity
+            {
+                // One level alone exceeds η: grow the (now empty) buffer to fit it.
+                let bigger = self.new_terminal_buffer(
+                    totals.term_tris.max(term.tri_capacity),
+                    totals
+                        .term_rays
+                        .max(term.ray_capacity)
+                        .max(totals.term_nodes * 4),
+                )?;
+                let old = std::mem::replace(&mut term, bigger);
+                self.give_terminal(old);
+            }
+
             let mut rec = gpu.recorder(StreamKind::Main)?;
             let empty = &term.segments; // bound where a list is empty; never written then
             let (next_nodes, next_tri_ids, next_tri_keys, next_ray_ids, next_ray_keys) = match &next
