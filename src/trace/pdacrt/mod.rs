@@ -1060,23 +1060,12 @@ impl PdacrtTracer {
         let mut rec = gpu.recorder(StreamKind::Main)?;
         rec.begin_scope("pdacrt-flush")?;
         // Algorithm 3 lines 2–10.
-        let groups = grid_for(&gpu, term.segment_count as u64, 1);
-        rec.dispatch(
-            &self.kernels.segmented_intersect,
-            &[
-                (&self.triangles).into(),
-                rays.into(),
-                (&term.segments).into(),
-                (&term.tri_ids).into(),
-                (&term.ray_ids).into(),
-                (&entry_t).into(),
-                (&entry_tri).into(),
-            ],
-            &IntersectPush {
-                segment_count: term.segment_count,
-                ray_offset,
-            },
-            groups,
+        self.record_segmented_intersect(
+            &mut rec,
+            term,
+            rays,
+            ray_offset,
+            &[(&entry_t).into(), (&entry_tri).into()],
         )?;
         // Lines 12–13: sort the entries by ray id, then the segmented arg-min.
         rec.copy(&term.ray_ids, 0, &keys, 0, entries as u64 * 4);
@@ -1155,10 +1144,40 @@ impl PdacrtTracer {
         Ok(())
     }
 
+    /// The segmented intersection over the terminal buffer (Algorithm 3 lines 2–10): one
+    /// workgroup per segment, writing into `outputs` (the per-entry t and triangle, or
+    /// the packed closest hits for the atomic flush).
+    fn record_segmented_intersect(
+        &self,
+        rec: &mut Recorder,
+        term: &TerminalBuffer,
+        rays: &Buffer,
+        ray_offset: u32,
+        outputs: &[BufferSlice<'_>],
+    ) -> vk::Result<()> {
+        let mut bindings: Vec<BufferSlice> = vec![
+            (&self.triangles).into(),
+            rays.into(),
+            (&term.segments).into(),
+            (&term.tri_ids).into(),
+            (&term.ray_ids).into(),
+        ];
+        bindings.extend_from_slice(outputs);
+        let groups = grid_for(&self.gpu, term.segment_count as u64, 1);
+        rec.dispatch(
+            &self.kernels.segmented_intersect,
+            &bindings,
+            &IntersectPush {
+                segment_count: term.segment_count,
+                ray_offset,
+            },
+            groups,
+        )
+    }
+
     /// [`FlushReduce::AtomicMin`]: the segmented intersection lowers each ray's packed
-    /// closest hit in place (Algorithm 3 lines 2–10 with lines 12–13 folded in), then the
-    /// chunk's global closest hits are unpacked from them (Algorithm 1 line 9).
-    #[allow(clippy::too_many_arguments)]
+    /// closest hit in place (Algorithm 3 lines 2–10, with lines 12–13 and Algorithm 1
+    /// line 9 folded into its atomicMin).
     fn flush_atomic(
         &mut self,
         term: &mut TerminalBuffer,
@@ -1169,23 +1188,7 @@ impl PdacrtTracer {
         let gpu = self.gpu.clone();
         let mut rec = gpu.recorder(StreamKind::Main)?;
         rec.begin_scope("pdacrt-flush")?;
-        let groups = grid_for(&gpu, term.segment_count as u64, 1);
-        rec.dispatch(
-            &self.kernels.segmented_intersect,
-            &[
-                (&self.triangles).into(),
-                rays.into(),
-                (&term.segments).into(),
-                (&term.tri_ids).into(),
-                (&term.ray_ids).into(),
-                best.into(),
-            ],
-            &IntersectPush {
-                segment_count: term.segment_count,
-                ray_offset,
-            },
-            groups,
-        )?;
+        self.record_segmented_intersect(&mut rec, term, rays, ray_offset, &[best.into()])?;
         rec.barrier();
         rec.end_scope()?;
         rec.submit(&[])?;
