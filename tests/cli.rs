@@ -266,3 +266,49 @@ fn bench_trace_verifies_and_compares_tracers() {
         24 * 16 * 8
     );
 }
+
+/// The paper's own PDACRT steps can be chosen from the command line, the benchmark says
+/// which ran, and their hits still verify against brute force.
+#[test]
+fn bench_trace_runs_the_papers_pdacrt_steps_on_request() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = splitray(
+        &[
+            "bench",
+            "trace",
+            "cornell-box",
+            "--width",
+            "32",
+            "--height",
+            "24",
+            "--tracers",
+            "pdacrt",
+            "--alpha",
+            "4",
+            "--beta",
+            "4",
+            "--split",
+            "sort",
+            "--flush",
+            "sort",
+            "--stage-triangles",
+            "true",
+            "--json",
+            "trace.json",
+            "--validation",
+        ],
+        dir.path(),
+    );
+    assert!(out.status.success(), "{}", text(&out));
+    let t = text(&out);
+    assert!(
+        t.contains("split SortByKey, flush SortByRay, triangles staged"),
+        "{t}"
+    );
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("trace.json")).unwrap()).unwrap();
+    assert_eq!(json["pdacrt_params"]["split"], "SortByKey");
+    assert_eq!(json["pdacrt_params"]["flush_reduce"], "SortByRay");
+    assert_eq!(json["rows"][0]["mismatches"], 0);
+    assert!(json["rows"][0]["levels"].as_u64().unwrap() > 0);
+}

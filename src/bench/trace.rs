@@ -13,7 +13,8 @@ use serde::Serialize;
 use super::workloads::{self, RayBatch, Workload};
 use crate::scene::Scene;
 use crate::trace::{
-    cpu, BruteForceTracer, GpuTriangle, Hit, PdacrtTracer, Query, Ray, Tracer, TracerKind,
+    cpu, BruteForceTracer, GpuTriangle, Hit, PdacrtParams, PdacrtTracer, Query, Ray, Tracer,
+    TracerKind,
 };
 use crate::vk::{self, Buffer, Gpu};
 
@@ -89,6 +90,8 @@ pub struct TraceReport {
     pub rows: Vec<TracerRow>,
     /// PDACRT's per-level statistics of its last frame.
     pub pdacrt_levels: Vec<crate::trace::pdacrt::LevelStats>,
+    /// The PDACRT parameters it ran with (when it ran).
+    pub pdacrt_params: Option<PdacrtParams>,
     pub date: String,
 }
 
@@ -141,6 +144,23 @@ impl fmt::Display for TraceReport {
                     f,
                     "{:<12} {levels} levels, {trips} host round trips per frame",
                     ""
+                )?;
+            }
+            if let (true, Some(p)) = (r.tracer == "pdacrt", &self.pdacrt_params) {
+                writeln!(
+                    f,
+                    "{:<12} α {} β {} η {} λ {} N {} T {}, chunks of {} rays, split {:?}, flush {:?}, triangles {}",
+                    "",
+                    p.alpha,
+                    p.beta,
+                    p.eta,
+                    p.lambda,
+                    p.intersect_workgroup,
+                    p.batch,
+                    p.max_rays_per_chunk,
+                    p.split,
+                    p.flush_reduce,
+                    if p.stage_triangles { "staged" } else { "direct" }
                 )?;
             }
         }
@@ -456,6 +476,10 @@ pub fn run(
         rays: total_rays,
         rows,
         pdacrt_levels,
+        pdacrt_params: opts
+            .tracers
+            .contains(&TracerKind::Pdacrt)
+            .then(|| opts.pdacrt.unwrap_or_else(|| PdacrtParams::for_device(gpu))),
         date: super::today(),
     })
 }
