@@ -428,12 +428,15 @@ impl PdacrtTracer {
         Ok(())
     }
 
+    /// A terminal-node buffer for `tri_capacity` triangle ids, `ray_capacity` ray ids and
+    /// `segment_capacity` segments (at least 1024).
     fn new_terminal_buffer(
         &mut self,
         tri_capacity: u32,
         ray_capacity: u32,
+        segment_capacity: u32,
     ) -> vk::Result<TerminalBuffer> {
-        let segment_capacity = ray_capacity.div_ceil(4).max(1024);
+        let segment_capacity = segment_capacity.max(1024);
         Ok(TerminalBuffer {
             tri_ids: self
                 .pool
@@ -488,7 +491,9 @@ impl PdacrtTracer {
         let mut rec = gpu.recorder(StreamKind::Main)?;
         rec.fill(&best, u32::MAX);
         let p = self.params;
-        let mut term = self.new_terminal_buffer(p.eta, p.eta)?;
+        // Segments: a terminal node holds ≥ 1 ray and typically hundreds, so η/64 of them
+        // rarely bind (a full segment table flushes like a full id buffer: line 7).
+        let mut term = self.new_terminal_buffer(p.eta, p.eta, p.eta / 64)?;
         let tris = self.triangle_count;
         let root = Node {
             box_min: (self.scene_min - self.eps).extend(0.0).into(),
@@ -503,17 +508,24 @@ impl PdacrtTracer {
         let mut level = if tris == 0 {
             None // every ray misses
         } else if tris < p.alpha || n < p.beta {
-            if tris > term.tri_capacity || n > term.ray_capacity {
-                let bigger = self
-                    .new_terminal_buffer(tris.max(term.tri_capacity), n.max(term.ray_capacity))?;
+            let per = p.max_segment_rays();
+            let segment_count = n.div_ceil(per);
+            if tris > term.tri_capacity
+                || n > term.ray_capacity
+                || segment_count > term.segment_capacity
+            {
+                let bigger = self.new_terminal_buffer(
+                    tris.max(term.tri_capacity),
+                    n.max(term.ray_capacity),
+                    segment_count.max(term.segment_capacity),
+                )?;
                 let old = std::mem::replace(&mut term, bigger);
                 self.give_terminal(old);
             }
             let seg_tags = self.pool.take("pdacrt-tags", tris.max(n) as u64 * 4)?;
             self.iota(&mut rec, &term.tri_ids, &seg_tags, tris, 0, 0)?;
             self.iota(&mut rec, &term.ray_ids, &seg_tags, n, 0, 0)?;
-            let per = p.max_segment_rays();
-            let segments: Vec<Segment> = (0..n.div_ceil(per))
+            let segments: Vec<Segment> = (0..segment_count)
                 .map(|k| Segment {
                     tri_start: 0,
                     tri_count: tris,
@@ -521,8 +533,7 @@ impl PdacrtTracer {
                     ray_count: per.min(n - k * per),
                 })
                 .collect();
-            // They fit: the segment capacity is at least a quarter of the ray capacity
-            // (≥ n), and each segment holds 8N ≥ 4 rays. vkCmdUpdateBuffer takes at most 64 KiB at a time.
+            // vkCmdUpdateBuffer takes at most 64 KiB at a time.
             for (i, part) in segments.chunks(4096).enumerate() {
                 rec.update(
                     &term.segments,
@@ -614,10 +625,8 @@ impl PdacrtTracer {
                 // One level alone exceeds η: grow the (now empty) buffer to fit it.
                 let bigger = self.new_terminal_buffer(
                     totals.term_tris.max(term.tri_capacity),
-                    totals
-                        .term_rays
-                        .max(term.ray_capacity)
-                        .max(totals.term_nodes * 4),
+                    totals.term_rays.max(term.ray_capacity),
+                    totals.term_nodes.max(term.segment_capacity),
                 )?;
                 let old = std::mem::replace(&mut term, bigger);
                 self.give_terminal(old);
