@@ -6,7 +6,7 @@
 // than α triangles or β rays, at the depth limit, or too thin to split further is
 // terminal; the rest form the next level. Writes the six channels that are then
 // prefix-summed into next-level and terminal-buffer positions (CH_TERM_FLAG counts the
-// segments a terminal child becomes).
+// segments a terminal child becomes; the tile channels, the next level's tiles).
 //
 // The `ranked` variant (LevelSplit::PrefixSums) works on the unsorted lists instead: the
 // exclusive scan of the side flags (filter_*.comp) gives each child's size as the
@@ -35,6 +35,7 @@ layout(push_constant) uniform Push {
     uint last_level;  // 1: every surviving child is terminal (depth limit)
     float min_extent;
     uint max_segment_rays;
+    uint tile_items;
     // ranked: where each side-flag array starts in `ranks`
     uint tri_left_base;
     uint tri_right_base;
@@ -91,4 +92,6 @@ void main() {
     channels[CH_TERM_FLAG * pc.stride + c] = term ? (ch.ray_count + pc.max_segment_rays - 1u) / pc.max_segment_rays : 0u;
     channels[CH_TERM_TRIS * pc.stride + c] = term ? ch.tri_count : 0u;
     channels[CH_TERM_RAYS * pc.stride + c] = term ? ch.ray_count : 0u;
+    channels[CH_NEXT_TRI_TILES * pc.stride + c] = next ? (ch.tri_count + pc.tile_items - 1u) / pc.tile_items : 0u;
+    channels[CH_NEXT_RAY_TILES * pc.stride + c] = next ? (ch.ray_count + pc.tile_items - 1u) / pc.tile_items : 0u;
 }

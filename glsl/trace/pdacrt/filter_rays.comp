@@ -5,11 +5,13 @@
 // mode a ray with any hit leaves the hierarchy at once. Boxes and the segment end are
 // padded by `eps`, so rounding can only add work, never lose a hit or a tie.
 //
-// The `ranked` variant (LevelSplit::PrefixSums) also writes the element's side flags —
-// 1 where it belongs to the left (right) child — into `ranks` at left_base + i
-// (right_base + i). One exclusive scan of all flag arrays then ranks every element
-// within its child (see children.comp). Invocation n writes the zero flags that close
-// each array, so the scan's value at n is the array's total.
+// The `ranked` variant (LevelSplit::PrefixSums) works per tile (pdacrt.glsl): one
+// workgroup per tile, the node's box and split read once. It keeps the code in the id's
+// top bits and writes the element's side flags — 1 where it belongs to the left (right)
+// child — into `ranks` at left_base + i (right_base + i). One exclusive scan of all flag
+// arrays then ranks every element within its child (see children.comp). The first
+// invocation also writes the zero flags at n that close each array, so the scan's value
+// at n is the array's total.
 //! variant ranked: RANKED=1
 #include "grid.glsl"
 #include "geometry.glsl"
@@ -20,14 +22,19 @@
 // 4-byte ones.
 layout(std430, set = 0, binding = 0) restrict readonly buffer Rays { vec4 rays4[]; };
 layout(std430, set = 0, binding = 1) restrict readonly buffer Nodes { vec4 nodes4[]; };
+#ifdef RANKED
+layout(std430, set = 0, binding = 2) restrict buffer Ids { uint ids[]; };
+layout(std430, set = 0, binding = 3) restrict readonly buffer Tiles { uvec4 tiles[]; };
+#else
 layout(std430, set = 0, binding = 2) restrict readonly buffer Ids { uint ids[]; };
 layout(std430, set = 0, binding = 3) restrict buffer Keys { uint keys[]; };
+#endif
 layout(std430, set = 0, binding = 4) restrict readonly buffer Best { uvec2 best[]; };  // see pdacrt.glsl
 #ifdef RANKED
 layout(std430, set = 0, binding = 5) restrict writeonly buffer Ranks { uint ranks[]; };
 #endif
 layout(push_constant) uniform Push {
-    uint n;
+    uint n;  // list length (ranked: the tile count is the dispatch size)
     float eps;
     uint occlusion;
     uint ray_offset;
@@ -35,42 +42,51 @@ layout(push_constant) uniform Push {
     uint right_base;
 } pc;
 
+// The status code of ray `id` against the two halves of the node's box (lines 4–5).
+uint ray_code(uint id, vec3 box_min, vec3 box_max) {
+    uvec2 closest = best[id];
+    if (pc.occlusion != 0u && has_hit(closest)) return CODE_NONE;
+    vec3 lo = box_min - pc.eps;
+    vec3 hi = box_max + pc.eps;
+    uint axis = split_axis(box_min, box_max);
+    bvec3 on_axis = axis_mask(axis);
+    float mid = split_position(box_min, box_max, axis);
+    vec4 origin_tmin = rays4[2u * (pc.ray_offset + id)];
+    vec4 dir_tmax = rays4[2u * (pc.ray_offset + id) + 1u];
+    Ray r = Ray(origin_tmin.xyz, origin_tmin.w, dir_tmax.xyz, dir_tmax.w);
+    float t1 = min(r.tmax, hit_t(closest) + pc.eps);
+    vec3 left_hi = mix(hi, vec3(mid + pc.eps), on_axis);
+    vec3 right_lo = mix(lo, vec3(mid - pc.eps), on_axis);
+    bvec3 parallel = equal(r.dir, vec3(0.0));
+    vec3 inv = 1.0 / mix(r.dir, vec3(1.0), parallel);
+    bool left = ray_meets_box_inv(r.origin, inv, parallel, r.tmin, t1, lo, left_hi);
+    bool right = ray_meets_box_inv(r.origin, inv, parallel, r.tmin, t1, right_lo, hi);
+    return (left && right) ? CODE_BOTH : (left ? CODE_LEFT : (right ? CODE_RIGHT : CODE_NONE));
+}
+
 void main() {
-    uint i = linear_invocation_id();
 #ifdef RANKED
-    if (i == pc.n) {
-        ranks[pc.left_base + i] = 0u;
-        ranks[pc.right_base + i] = 0u;
+    uvec4 tile = tiles[linear_group_id()];
+    uint lid = gl_LocalInvocationID.x;
+    if (linear_group_id() == 0u && lid == 0u) {
+        ranks[pc.left_base + pc.n] = 0u;
+        ranks[pc.right_base + pc.n] = 0u;
     }
-#endif
+    vec3 box_min = nodes4[3u * tile.x].xyz;      // Node.box_min
+    vec3 box_max = nodes4[3u * tile.x + 1u].xyz; // Node.box_max
+    for (uint k = lid; k < tile.z; k += WORKGROUP_SIZE) {
+        uint i = tile.y + k;
+        uint id = ids[i] & ID_MASK;
+        uint code = ray_code(id, box_min, box_max);
+        ids[i] = id | (code << ID_BITS);
+        ranks[pc.left_base + i] = uint(code == CODE_LEFT || code == CODE_BOTH);
+        ranks[pc.right_base + i] = uint(code == CODE_RIGHT || code == CODE_BOTH);
+    }
+#else
+    uint i = linear_invocation_id();
     if (i >= pc.n) return;
     uint node = keys[i] >> 2;
-    uint id = ids[i];
-    uint code = CODE_NONE;
-    uvec2 closest = best[id];
-    if (pc.occlusion == 0u || !has_hit(closest)) {
-        vec3 box_min = nodes4[3u * node].xyz;      // Node.box_min
-        vec3 box_max = nodes4[3u * node + 1u].xyz; // Node.box_max
-        vec3 lo = box_min - pc.eps;
-        vec3 hi = box_max + pc.eps;
-        uint axis = split_axis(box_min, box_max);
-        bvec3 on_axis = axis_mask(axis);
-        float mid = split_position(box_min, box_max, axis);
-        vec4 origin_tmin = rays4[2u * (pc.ray_offset + id)];
-        vec4 dir_tmax = rays4[2u * (pc.ray_offset + id) + 1u];
-        Ray r = Ray(origin_tmin.xyz, origin_tmin.w, dir_tmax.xyz, dir_tmax.w);
-        float t1 = min(r.tmax, hit_t(closest) + pc.eps);
-        vec3 left_hi = mix(hi, vec3(mid + pc.eps), on_axis);
-        vec3 right_lo = mix(lo, vec3(mid - pc.eps), on_axis);
-        bvec3 parallel = equal(r.dir, vec3(0.0));
-        vec3 inv = 1.0 / mix(r.dir, vec3(1.0), parallel);
-        bool left = ray_meets_box_inv(r.origin, inv, parallel, r.tmin, t1, lo, left_hi);
-        bool right = ray_meets_box_inv(r.origin, inv, parallel, r.tmin, t1, right_lo, hi);
-        code = (left && right) ? CODE_BOTH : (left ? CODE_LEFT : (right ? CODE_RIGHT : CODE_NONE));
-    }
+    uint code = ray_code(ids[i], nodes4[3u * node].xyz, nodes4[3u * node + 1u].xyz);
     keys[i] = (node << 2) | code;
-#ifdef RANKED
-    ranks[pc.left_base + i] = uint(code == CODE_LEFT || code == CODE_BOTH);
-    ranks[pc.right_base + i] = uint(code == CODE_RIGHT || code == CODE_BOTH);
 #endif
 }

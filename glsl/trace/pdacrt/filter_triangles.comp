@@ -7,11 +7,13 @@
 // on the other axes, which the triangle already overlaps. Boxes are padded by `eps` so
 // rounding can only add work, never lose a hit.
 //
-// The `ranked` variant (LevelSplit::PrefixSums) also writes the element's side flags —
-// 1 where it belongs to the left (right) child — into `ranks` at left_base + i
-// (right_base + i). One exclusive scan of all flag arrays then ranks every element
-// within its child (see children.comp). Invocation n writes the zero flags that close
-// each array, so the scan's value at n is the array's total.
+// The `ranked` variant (LevelSplit::PrefixSums) works per tile (pdacrt.glsl): one
+// workgroup per tile, the node's split read once. It keeps the code in the id's top
+// bits and writes the element's side flags — 1 where it belongs to the left (right)
+// child — into `ranks` at left_base + i (right_base + i). One exclusive scan of all flag
+// arrays then ranks every element within its child (see children.comp). The first
+// invocation also writes the zero flags at n that close each array, so the scan's value
+// at n is the array's total.
 //! variant ranked: RANKED=1
 #include "grid.glsl"
 #include "geometry.glsl"
@@ -19,36 +21,54 @@
 
 layout(std430, set = 0, binding = 0) readonly buffer Triangles { Triangle triangles[]; };
 layout(std430, set = 0, binding = 1) readonly buffer Nodes { Node nodes[]; };
+#ifdef RANKED
+layout(std430, set = 0, binding = 2) buffer Ids { uint ids[]; };
+layout(std430, set = 0, binding = 3) readonly buffer Tiles { uvec4 tiles[]; };
+layout(std430, set = 0, binding = 4) writeonly buffer Ranks { uint ranks[]; };
+#else
 layout(std430, set = 0, binding = 2) readonly buffer Ids { uint ids[]; };
 layout(std430, set = 0, binding = 3) buffer Keys { uint keys[]; };
-#ifdef RANKED
-layout(std430, set = 0, binding = 4) writeonly buffer Ranks { uint ranks[]; };
 #endif
+// n: list length (ranked: the tile count is the dispatch size)
 layout(push_constant) uniform Push { uint n; float eps; uint left_base; uint right_base; } pc;
 
+// The status code of triangle `id` against the split of the node's box (lines 4–5).
+uint triangle_code(uint id, uint axis, float mid) {
+    Triangle t = triangles[id];
+    float a = component(t.v0.xyz, axis);
+    float b = a + component(t.e1.xyz, axis);
+    float c = a + component(t.e2.xyz, axis);
+    bool left = min(a, min(b, c)) - pc.eps <= mid;
+    bool right = max(a, max(b, c)) + pc.eps >= mid;
+    return (left && right) ? CODE_BOTH : (left ? CODE_LEFT : CODE_RIGHT);
+}
+
 void main() {
-    uint i = linear_invocation_id();
 #ifdef RANKED
-    if (i == pc.n) {
-        ranks[pc.left_base + i] = 0u;
-        ranks[pc.right_base + i] = 0u;
+    uvec4 tile = tiles[linear_group_id()];
+    uint lid = gl_LocalInvocationID.x;
+    if (linear_group_id() == 0u && lid == 0u) {
+        ranks[pc.left_base + pc.n] = 0u;
+        ranks[pc.right_base + pc.n] = 0u;
     }
-#endif
+    Node nd = nodes[tile.x];
+    uint axis = split_axis(nd.box_min.xyz, nd.box_max.xyz);
+    float mid = split_position(nd.box_min.xyz, nd.box_max.xyz, axis);
+    for (uint k = lid; k < tile.z; k += WORKGROUP_SIZE) {
+        uint i = tile.y + k;
+        uint id = ids[i] & ID_MASK;
+        uint code = triangle_code(id, axis, mid);
+        ids[i] = id | (code << ID_BITS);
+        ranks[pc.left_base + i] = uint(code != CODE_RIGHT);
+        ranks[pc.right_base + i] = uint(code != CODE_LEFT);
+    }
+#else
+    uint i = linear_invocation_id();
     if (i >= pc.n) return;
     uint node = keys[i] >> 2;
     Node nd = nodes[node];
     uint axis = split_axis(nd.box_min.xyz, nd.box_max.xyz);
     float mid = split_position(nd.box_min.xyz, nd.box_max.xyz, axis);
-    Triangle t = triangles[ids[i]];
-    float a = t.v0[axis];
-    float b = a + t.e1[axis];
-    float c = a + t.e2[axis];
-    bool left = min(a, min(b, c)) - pc.eps <= mid;
-    bool right = max(a, max(b, c)) + pc.eps >= mid;
-    uint code = (left && right) ? CODE_BOTH : (left ? CODE_LEFT : CODE_RIGHT);
-    keys[i] = (node << 2) | code;
-#ifdef RANKED
-    ranks[pc.left_base + i] = uint(code != CODE_RIGHT);
-    ranks[pc.right_base + i] = uint(code != CODE_LEFT);
+    keys[i] = (node << 2) | triangle_code(ids[i], axis, mid);
 #endif
 }

@@ -26,6 +26,18 @@
 #define CH_TERM_FLAG 3u
 #define CH_TERM_TRIS 4u
 #define CH_TERM_RAYS 5u
+#define CH_NEXT_TRI_TILES 6u
+#define CH_NEXT_RAY_TILES 7u
+#define CHANNELS 8u
+
+// Tiles (LevelSplit::PrefixSums): a level's lists are cut into tiles of at most
+// `tile_items` elements of one node, (node, first element, count, 0), one workgroup
+// each. The node is then uniform in the workgroup: its box and routes are loaded once
+// per tile instead of once per element, and no per-element key names it.
+// The ranked kernels also keep each element's status code in the top two bits of its
+// id (ids stay below 2^30: see PdacrtTracer::with_params).
+#define ID_BITS 30u
+#define ID_MASK ((1u << ID_BITS) - 1u)
 
 // Exclusive prefix sum of channel `k` at child `c`, from the one scan that runs through
 // all channels back to back (`offsets`, `stride` words per channel): the scan's value at
@@ -96,9 +108,14 @@ uint split_axis(vec3 lo, vec3 hi) {
     return (e.x >= e.y && e.x >= e.z) ? 0u : (e.y >= e.z ? 1u : 2u);
 }
 
+// v[axis] by selects: CPU devices may lower dynamic component indexing to a local
+// array in memory.
+float component(vec3 v, uint axis) {
+    return axis == 0u ? v.x : (axis == 1u ? v.y : v.z);
+}
+
 float split_position(vec3 lo, vec3 hi, uint axis) {
-    vec3 m = lo + hi;  // selects rather than m[axis]: see axis_mask
-    return 0.5 * (axis == 0u ? m.x : (axis == 1u ? m.y : m.z));
+    return 0.5 * component(lo + hi, axis);
 }
 
 // The split axis as a component mask, for selects instead of dynamic component indexing

@@ -6,21 +6,29 @@
 // offset within the child's range of the sorted parent list (one add: the child's
 // route from write_nodes.comp holds new start − source start).
 //
-// The `ranked` variant (LevelSplit::PrefixSums) takes unsorted lists: the offset within
-// the child is the element's rank among its parent's elements on that side (the scanned
-// side flags of filter_*.comp), minus the child's source rank (children.comp).
+// The `ranked` variant (LevelSplit::PrefixSums) takes unsorted lists, per tile: the
+// node and its two routes are read once per tile, the code comes from the id's top bits
+// (filter_*.comp), and the offset within the child is the element's rank among its
+// parent's elements on that side (the scanned side flags), minus the child's source
+// rank (children.comp). The next level needs no keys: its tiles name the nodes.
 //! variant ranked: RANKED=1
 #include "grid.glsl"
 #include "pdacrt.glsl"
 
+#ifdef RANKED
+layout(std430, set = 0, binding = 0) readonly buffer Tiles { uvec4 tiles[]; };
+layout(std430, set = 0, binding = 1) readonly buffer Ids { uint ids[]; };
+layout(std430, set = 0, binding = 2) readonly buffer Routes { uvec4 routes[]; };  // write_nodes.comp
+layout(std430, set = 0, binding = 3) writeonly buffer NextIds { uint next_ids[]; };
+layout(std430, set = 0, binding = 4) writeonly buffer TermIds { uint term_ids[]; };
+layout(std430, set = 0, binding = 5) readonly buffer Ranks { uint ranks[]; };
+#else
 layout(std430, set = 0, binding = 0) readonly buffer Keys { uint keys[]; };
 layout(std430, set = 0, binding = 1) readonly buffer Ids { uint ids[]; };
 layout(std430, set = 0, binding = 2) readonly buffer Routes { uvec4 routes[]; };  // write_nodes.comp
 layout(std430, set = 0, binding = 3) writeonly buffer NextIds { uint next_ids[]; };
 layout(std430, set = 0, binding = 4) writeonly buffer NextKeys { uint next_keys[]; };
 layout(std430, set = 0, binding = 5) writeonly buffer TermIds { uint term_ids[]; };
-#ifdef RANKED
-layout(std430, set = 0, binding = 6) readonly buffer Ranks { uint ranks[]; };
 #endif
 layout(push_constant) uniform Push {
     uint n;
@@ -29,28 +37,41 @@ layout(push_constant) uniform Push {
     uint right_base;
 } pc;
 
+// Element at `position` (its place in the parent list, or its rank on that side)
+// goes where `route` sends it.
+void send(uvec4 route, uint position, uint id) {
+    uint at = position + (pc.rays != 0u ? route.z : route.y);  // wrapping, see Routes
+    if (route.x == CHILD_NEXT) {
+        next_ids[at] = id;
+#ifndef RANKED
+        next_keys[at] = route.w;
+#endif
+    } else if (route.x == CHILD_TERMINAL) {
+        term_ids[at] = id;
+    }
+}
+
 void main() {
+#ifdef RANKED
+    uvec4 tile = tiles[linear_group_id()];
+    uvec4 left_route = routes[2u * tile.x];
+    uvec4 right_route = routes[2u * tile.x + 1u];
+    for (uint k = gl_LocalInvocationID.x; k < tile.z; k += WORKGROUP_SIZE) {
+        uint j = tile.y + k;
+        uint raw = ids[j];
+        uint code = raw >> ID_BITS;
+        uint id = raw & ID_MASK;
+        if (code == CODE_LEFT || code == CODE_BOTH) send(left_route, ranks[pc.left_base + j], id);
+        if (code == CODE_RIGHT || code == CODE_BOTH) send(right_route, ranks[pc.right_base + j], id);
+    }
+#else
     uint j = linear_invocation_id();
     if (j >= pc.n) return;
     uint key = keys[j];
     uint node = key >> 2;
     uint code = key & 3u;
-    if (code == CODE_NONE) return;
     uint id = ids[j];
-    for (uint side = 0u; side < 2u; ++side) {
-        if ((side == 0u && code == CODE_RIGHT) || (side == 1u && code == CODE_LEFT)) continue;
-        uvec4 route = routes[2u * node + side];
-#ifdef RANKED
-        uint position = ranks[(side == 0u ? pc.left_base : pc.right_base) + j];
-#else
-        uint position = j;
+    if (code == CODE_LEFT || code == CODE_BOTH) send(routes[2u * node], j, id);
+    if (code == CODE_RIGHT || code == CODE_BOTH) send(routes[2u * node + 1u], j, id);
 #endif
-        uint at = position + (pc.rays != 0u ? route.z : route.y);  // wrapping, see Routes
-        if (route.x == CHILD_NEXT) {
-            next_ids[at] = id;
-            next_keys[at] = route.w;
-        } else if (route.x == CHILD_TERMINAL) {
-            term_ids[at] = id;
-        }
-    }
 }

@@ -7,6 +7,10 @@
 // and the paper's N-thread blocks assume nodes below β rays — a node that is terminal
 // for its few triangles may hold a whole image's rays (the root of a small scene does),
 // which one workgroup would trace alone.
+//
+// The `ranked` variant (LevelSplit::PrefixSums) also cuts each next-level node's lists
+// into tiles (pdacrt.glsl) for the next level's filters and scatter.
+//! variant ranked: RANKED=1
 #include "grid.glsl"
 #include "pdacrt.glsl"
 
@@ -20,6 +24,10 @@ layout(std430, set = 0, binding = 3) writeonly buffer Segments { Segment segment
 // start, wrapping — so the scatter reads 4 words per child instead of the child record
 // and three prefix sums.
 layout(std430, set = 0, binding = 4) writeonly buffer Routes { uvec4 routes[]; };
+#ifdef RANKED
+layout(std430, set = 0, binding = 5) writeonly buffer TriTiles { uvec4 tri_tiles[]; };
+layout(std430, set = 0, binding = 6) writeonly buffer RayTiles { uvec4 ray_tiles[]; };
+#endif
 layout(push_constant) uniform Push {
     uint child_count;
     uint stride;
@@ -27,6 +35,7 @@ layout(push_constant) uniform Push {
     uint term_tri_base;
     uint term_ray_base;
     uint max_segment_rays;
+    uint tile_items;
 } pc;
 
 void main() {
@@ -40,6 +49,16 @@ void main() {
         uint ray_start = CHANNEL_OFFSET(offsets, pc.stride, CH_NEXT_RAYS, c);
         next_nodes[node] = Node(ch.box_min, ch.box_max, tri_start, ch.tri_count, ray_start, ch.ray_count);
         route = uvec4(ch.kind, tri_start - ch.tri_src, ray_start - ch.ray_src, node << 2);
+#ifdef RANKED
+        uint tile = CHANNEL_OFFSET(offsets, pc.stride, CH_NEXT_TRI_TILES, c);
+        for (uint done = 0u; done < ch.tri_count; done += pc.tile_items) {
+            tri_tiles[tile++] = uvec4(node, tri_start + done, min(pc.tile_items, ch.tri_count - done), 0u);
+        }
+        tile = CHANNEL_OFFSET(offsets, pc.stride, CH_NEXT_RAY_TILES, c);
+        for (uint done = 0u; done < ch.ray_count; done += pc.tile_items) {
+            ray_tiles[tile++] = uvec4(node, ray_start + done, min(pc.tile_items, ch.ray_count - done), 0u);
+        }
+#endif
     } else if (ch.kind == CHILD_TERMINAL) {
         uint first = pc.segment_base + CHANNEL_OFFSET(offsets, pc.stride, CH_TERM_FLAG, c);
         uint tri_start = pc.term_tri_base + CHANNEL_OFFSET(offsets, pc.stride, CH_TERM_TRIS, c);

@@ -52,6 +52,7 @@ pub struct ChildrenPush {
     pub last_level: u32,
     pub min_extent: f32,
     pub max_segment_rays: u32,
+    pub tile_items: u32,
     pub tri_left_base: u32,
     pub tri_right_base: u32,
     pub ray_left_base: u32,
@@ -74,6 +75,7 @@ pub struct WriteNodesPush {
     pub term_tri_base: u32,
     pub term_ray_base: u32,
     pub max_segment_rays: u32,
+    pub tile_items: u32,
 }
 
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -101,6 +103,7 @@ pub struct FinalizePush {
 
 pub struct Kernels {
     pub iota: ComputePipeline,
+    pub iota_ids: ComputePipeline,
     pub filter_triangles: ComputePipeline,
     pub filter_rays: ComputePipeline,
     pub child_counts: ComputePipeline,
@@ -135,12 +138,18 @@ impl Kernels {
         let atomic = params.flush_reduce == FlushReduce::AtomicMin;
         Ok(Self {
             iota: make(shaders::TRACE_PDACRT_IOTA, 2, size_of::<IotaPush>(), wg)?,
+            iota_ids: make(
+                shaders::TRACE_PDACRT_IOTA__IDS_ONLY,
+                1,
+                size_of::<IotaPush>(),
+                wg,
+            )?,
             filter_triangles: make(
                 pick(
                     shaders::TRACE_PDACRT_FILTER_TRIANGLES,
                     shaders::TRACE_PDACRT_FILTER_TRIANGLES__RANKED,
                 ),
-                4 + ranked as u32,
+                4 + ranked as u32, // ranked: tiles for keys, and the ranks
                 size_of::<FilterTrianglesPush>(),
                 wg,
             )?,
@@ -175,8 +184,11 @@ impl Kernels {
                 &[],
             )?,
             write_nodes: make(
-                shaders::TRACE_PDACRT_WRITE_NODES,
-                5,
+                pick(
+                    shaders::TRACE_PDACRT_WRITE_NODES,
+                    shaders::TRACE_PDACRT_WRITE_NODES__RANKED,
+                ),
+                5 + 2 * ranked as u32, // ranked: the next level's triangle and ray tiles
                 size_of::<WriteNodesPush>(),
                 wg,
             )?,
@@ -185,7 +197,7 @@ impl Kernels {
                     shaders::TRACE_PDACRT_SCATTER_ELEMENTS,
                     shaders::TRACE_PDACRT_SCATTER_ELEMENTS__RANKED,
                 ),
-                6 + ranked as u32,
+                6, // ranked: tiles for keys, ranks for the next level's keys
                 size_of::<ScatterPush>(),
                 wg,
             )?,

@@ -30,7 +30,9 @@
 //! the tests check that they give the same hits:
 //! - [`LevelSplit`]: the paper's sort by status key + reduce-by-key, or one prefix scan
 //!   of side flags (the default: the lists are already grouped by node, so the sort
-//!   only partitions within nodes, which a scan does directly).
+//!   only partitions within nodes, which a scan does directly). The prefix-sum levels
+//!   are also cut into tiles of one node each (pdacrt.glsl), so no per-id key is kept
+//!   and a node's box and routes are read once per tile.
 //! - [`FlushReduce`]: the paper's sort by ray id + segmented arg-min, or one 64-bit
 //!   atomicMin per entry (the default where the device has 64-bit buffer atomics).
 //! - `stage_triangles`: the paper's shared-memory batches of T triangles, or direct
@@ -48,7 +50,7 @@ use serde::Serialize;
 
 use self::kernels::*;
 use self::pool::BufferPool;
-use self::types::{LevelTotals, Node, Segment, CHILD_BYTES};
+use self::types::{LevelTotals, Node, Segment, Tile, CHANNELS, CHILD_BYTES, MAX_IDS, TILE_ITEMS};
 use super::{GpuTriangle, Query, Tracer};
 use crate::primitives::{
     gather::Direction,
@@ -73,7 +75,8 @@ pub enum LevelSplit {
     /// difference of two ranks. Same child lists (each in the parent list's order
     /// rather than code order, which no result depends on: ties go to the smaller
     /// triangle id), at the cost of one scan instead of a multi-pass radix sort and a
-    /// reduce-by-key per list.
+    /// reduce-by-key per list. Lists are processed in tiles of one node (pdacrt.glsl):
+    /// no per-id keys, and the status code rides in the top two bits of each id.
     PrefixSums,
 }
 
@@ -190,6 +193,9 @@ impl PdacrtParams {
         if self.batch == 0 || self.intersect_workgroup == 0 || self.max_rays_per_chunk == 0 {
             return bad("T, N and the chunk size must be at least 1");
         }
+        if self.max_rays_per_chunk >= MAX_IDS {
+            return bad("the chunk size must be below 2^30 rays");
+        }
         Ok(())
     }
 }
@@ -226,11 +232,26 @@ struct Level {
     nodes: Buffer,
     node_count: u32,
     tri_ids: Buffer,
-    tri_keys: Buffer,
+    /// Which node owns each triangle id: per-id keys (node << 2 | code) when the level is
+    /// split by sorting, `tri_tiles` tiles (pdacrt.glsl) when by prefix sums.
+    tri_owner: Buffer,
+    tri_tiles: u32,
     tri_total: u32,
     ray_ids: Buffer,
-    ray_keys: Buffer,
+    /// As `tri_owner`, for the ray ids.
+    ray_owner: Buffer,
+    ray_tiles: u32,
     ray_total: u32,
+}
+
+/// The tiles of one node's `count` elements from `start` (pdacrt.glsl).
+fn node_tiles(node: u32, start: u32, count: u32) -> impl Iterator<Item = Tile> {
+    (0..count.div_ceil(TILE_ITEMS)).map(move |k| Tile {
+        node,
+        start: start + k * TILE_ITEMS,
+        count: TILE_ITEMS.min(count - k * TILE_ITEMS),
+        pad: 0,
+    })
 }
 
 /// The side-flag ranks of a level split by prefix sums: four arrays (triangles left and
@@ -332,6 +353,18 @@ fn scene_box(triangles: &[GpuTriangle]) -> (Vec3, Vec3, f32) {
     (lo, hi, extent * 1e-5)
 }
 
+/// Triangle and chunk-local ray ids must stay below 2^30: the ranked kernels keep a
+/// status code in the top two bits of each id.
+fn check_id_range(triangles: usize) -> vk::Result<()> {
+    if triangles >= MAX_IDS as usize {
+        return Err(vk::VkError::Usage(format!(
+            "PDACRT traces at most {} triangles, not {triangles}",
+            MAX_IDS - 1
+        )));
+    }
+    Ok(())
+}
+
 fn bits_for(count: u32) -> u32 {
     32 - count.saturating_sub(1).leading_zeros()
 }
@@ -347,6 +380,7 @@ impl PdacrtTracer {
         params: PdacrtParams,
     ) -> vk::Result<Self> {
         params.validate()?;
+        check_id_range(triangles.len())?;
         if params.flush_reduce == FlushReduce::AtomicMin
             && !gpu.info().capabilities.buffer_int64_atomics
         {
@@ -474,6 +508,16 @@ impl PdacrtTracer {
         )
     }
 
+    /// `ids[i] = i` for `i < n`.
+    fn iota_ids(&self, rec: &mut Recorder, ids: &Buffer, n: u32) -> vk::Result<()> {
+        rec.dispatch_items(
+            &self.kernels.iota_ids,
+            &[ids.into()],
+            &IotaPush { n, base: 0, tag: 0 },
+            n as u64,
+        )
+    }
+
     /// Traces rays `offset..offset + n` of `rays` into the same slots of `hits`.
     fn trace_chunk(
         &mut self,
@@ -494,6 +538,15 @@ impl PdacrtTracer {
         // Segments: a terminal node holds ≥ 1 ray and typically hundreds, so η/64 of them
         // rarely bind (a full segment table flushes like a full id buffer: line 7).
         let mut term = self.new_terminal_buffer(p.eta, p.eta, p.eta / 64)?;
+        // Levels split by prefix sums are cut into tiles; sorted ones carry per-id keys.
+        let tiled = p.split == LevelSplit::PrefixSums;
+        let owner_bytes = |count: u32, tiles: u32| {
+            if tiled {
+                tiles as u64 * size_of::<Tile>() as u64
+            } else {
+                count as u64 * 4
+            }
+        };
         let tris = self.triangle_count;
         let root = Node {
             box_min: (self.scene_min - self.eps).extend(0.0).into(),
@@ -548,19 +601,43 @@ impl PdacrtTracer {
             self.pool.give(seg_tags);
             None
         } else {
+            let (tri_tiles, ray_tiles) = if tiled {
+                (tris.div_ceil(TILE_ITEMS), n.div_ceil(TILE_ITEMS))
+            } else {
+                (0, 0)
+            };
             let level = Level {
                 nodes: self.pool.take("pdacrt-nodes", size_of::<Node>() as u64)?,
                 node_count: 1,
                 tri_ids: self.pool.take("pdacrt-tri-ids", tris as u64 * 4)?,
-                tri_keys: self.pool.take("pdacrt-tri-keys", tris as u64 * 4)?,
+                tri_owner: self
+                    .pool
+                    .take("pdacrt-tri-owner", owner_bytes(tris, tri_tiles))?,
+                tri_tiles,
                 tri_total: tris,
                 ray_ids: self.pool.take("pdacrt-ray-ids", n as u64 * 4)?,
-                ray_keys: self.pool.take("pdacrt-ray-keys", n as u64 * 4)?,
+                ray_owner: self
+                    .pool
+                    .take("pdacrt-ray-owner", owner_bytes(n, ray_tiles))?,
+                ray_tiles,
                 ray_total: n,
             };
             rec.update(&level.nodes, 0, &[root])?;
-            self.iota(&mut rec, &level.tri_ids, &level.tri_keys, tris, 0, 0)?;
-            self.iota(&mut rec, &level.ray_ids, &level.ray_keys, n, 0, 0)?;
+            for (ids, owner, count) in [
+                (&level.tri_ids, &level.tri_owner, tris),
+                (&level.ray_ids, &level.ray_owner, n),
+            ] {
+                if tiled {
+                    self.iota_ids(&mut rec, ids, count)?;
+                    let tiles: Vec<Tile> = node_tiles(0, 0, count).collect();
+                    // vkCmdUpdateBuffer takes at most 64 KiB at a time.
+                    for (i, part) in tiles.chunks(4096).enumerate() {
+                        rec.update(owner, (i * 4096 * size_of::<Tile>()) as u64, part)?;
+                    }
+                } else {
+                    self.iota(&mut rec, ids, owner, count, 0, 0)?;
+                }
+            }
             rec.barrier();
             Some(level)
         };
@@ -592,16 +669,20 @@ impl PdacrtTracer {
                         tri_ids: self
                             .pool
                             .take("pdacrt-tri-ids", totals.next_tris as u64 * 4)?,
-                        tri_keys: self
-                            .pool
-                            .take("pdacrt-tri-keys", totals.next_tris as u64 * 4)?,
+                        tri_owner: self.pool.take(
+                            "pdacrt-tri-owner",
+                            owner_bytes(totals.next_tris, totals.next_tri_tiles),
+                        )?,
+                        tri_tiles: if tiled { totals.next_tri_tiles } else { 0 },
                         tri_total: totals.next_tris,
                         ray_ids: self
                             .pool
                             .take("pdacrt-ray-ids", totals.next_rays as u64 * 4)?,
-                        ray_keys: self
-                            .pool
-                            .take("pdacrt-ray-keys", totals.next_rays as u64 * 4)?,
+                        ray_owner: self.pool.take(
+                            "pdacrt-ray-owner",
+                            owner_bytes(totals.next_rays, totals.next_ray_tiles),
+                        )?,
+                        ray_tiles: if tiled { totals.next_ray_tiles } else { 0 },
                         ray_total: totals.next_rays,
                     })
                 })
@@ -634,20 +715,28 @@ impl PdacrtTracer {
 
             let mut rec = gpu.recorder(StreamKind::Main)?;
             let empty = &term.segments; // bound where a list is empty; never written then
-            let (next_nodes, next_tri_ids, next_tri_keys, next_ray_ids, next_ray_keys) = match &next
-            {
-                Some(l) => (&l.nodes, &l.tri_ids, &l.tri_keys, &l.ray_ids, &l.ray_keys),
-                None => (empty, empty, empty, empty, empty),
-            };
+            let (next_nodes, next_tri_ids, next_tri_owner, next_ray_ids, next_ray_owner) =
+                match &next {
+                    Some(l) => (&l.nodes, &l.tri_ids, &l.tri_owner, &l.ray_ids, &l.ray_owner),
+                    None => (empty, empty, empty, empty, empty),
+                };
+            let mut bindings: Vec<BufferSlice> = vec![
+                (&children).into(),
+                (&offsets).into(),
+                next_nodes.into(),
+                (&term.segments).into(),
+                (&routes).into(),
+            ];
+            if tiled {
+                // The next level's tiles (its keys are written by the scatter instead).
+                bindings.extend([
+                    BufferSlice::from(next_tri_owner),
+                    BufferSlice::from(next_ray_owner),
+                ]);
+            }
             rec.dispatch_items(
                 &self.kernels.write_nodes,
-                &[
-                    (&children).into(),
-                    (&offsets).into(),
-                    next_nodes.into(),
-                    (&term.segments).into(),
-                    (&routes).into(),
-                ],
+                &bindings,
                 &WriteNodesPush {
                     child_count,
                     stride,
@@ -655,53 +744,71 @@ impl PdacrtTracer {
                     term_tri_base: term.tris,
                     term_ray_base: term.rays,
                     max_segment_rays: p.max_segment_rays(),
+                    tile_items: TILE_ITEMS,
                 },
                 child_count as u64,
             )?;
             rec.barrier();
             let (tri_sides, ray_sides) = Ranks::bases(ranks.as_ref());
-            for (rays_list, n_list, keys, ids, next_ids, next_keys, term_ids, sides) in [
+            for (rays_list, n_list, tiles, owner, ids, next_ids, next_owner, term_ids, sides) in [
                 (
                     0,
                     current.tri_total,
-                    &current.tri_keys,
+                    current.tri_tiles,
+                    &current.tri_owner,
                     &current.tri_ids,
                     next_tri_ids,
-                    next_tri_keys,
+                    next_tri_owner,
                     &term.tri_ids,
                     tri_sides,
                 ),
                 (
                     1,
                     current.ray_total,
-                    &current.ray_keys,
+                    current.ray_tiles,
+                    &current.ray_owner,
                     &current.ray_ids,
                     next_ray_ids,
-                    next_ray_keys,
+                    next_ray_owner,
                     &term.ray_ids,
                     ray_sides,
                 ),
             ] {
-                let mut bindings: Vec<BufferSlice> = vec![
-                    keys.into(),
-                    ids.into(),
-                    (&routes).into(),
-                    next_ids.into(),
-                    next_keys.into(),
-                    term_ids.into(),
-                ];
-                bindings.extend(ranks.as_ref().map(|r| BufferSlice::from(&r.buffer)));
-                rec.dispatch_items(
-                    &self.kernels.scatter,
-                    &bindings,
-                    &ScatterPush {
-                        n: n_list,
-                        rays: rays_list,
-                        left_base: sides.0,
-                        right_base: sides.1,
-                    },
-                    n_list as u64,
-                )?;
+                let push = ScatterPush {
+                    n: n_list,
+                    rays: rays_list,
+                    left_base: sides.0,
+                    right_base: sides.1,
+                };
+                match &ranks {
+                    // One workgroup per tile.
+                    Some(ranks) => rec.dispatch(
+                        &self.kernels.scatter,
+                        &[
+                            owner.into(),
+                            ids.into(),
+                            (&routes).into(),
+                            next_ids.into(),
+                            term_ids.into(),
+                            (&ranks.buffer).into(),
+                        ],
+                        &push,
+                        grid_for(&gpu, tiles as u64, 1),
+                    )?,
+                    None => rec.dispatch_items(
+                        &self.kernels.scatter,
+                        &[
+                            owner.into(),
+                            ids.into(),
+                            (&routes).into(),
+                            next_ids.into(),
+                            next_owner.into(),
+                            term_ids.into(),
+                        ],
+                        &push,
+                        n_list as u64,
+                    )?,
+                }
             }
             rec.barrier();
             rec.submit(&[])?;
@@ -724,9 +831,9 @@ impl PdacrtTracer {
             for b in [
                 current.nodes,
                 current.tri_ids,
-                current.tri_keys,
+                current.tri_owner,
                 current.ray_ids,
-                current.ray_keys,
+                current.ray_owner,
                 children,
                 offsets,
                 routes,
@@ -805,12 +912,16 @@ impl PdacrtTracer {
         if !ranked {
             self.sort_scratch(max_list)?;
         }
-        self.misc_scratch(max_list.max(6 * stride).max(scan_n), !ranked)?;
+        self.misc_scratch(max_list.max(CHANNELS * stride).max(scan_n), !ranked)?;
         let children = self
             .pool
             .take("pdacrt-children", child_count as u64 * CHILD_BYTES)?;
-        let channels = self.pool.take("pdacrt-channels", stride as u64 * 6 * 4)?;
-        let offsets = self.pool.take("pdacrt-offsets", stride as u64 * 6 * 4)?;
+        let channels = self
+            .pool
+            .take("pdacrt-channels", (stride * CHANNELS) as u64 * 4)?;
+        let offsets = self
+            .pool
+            .take("pdacrt-offsets", (stride * CHANNELS) as u64 * 4)?;
         let summary = gpu.create_buffer(
             "pdacrt-level-totals",
             size_of::<LevelTotals>() as u64,
@@ -825,10 +936,18 @@ impl PdacrtTracer {
             (&self.triangles).into(),
             (&level.nodes).into(),
             (&level.tri_ids).into(),
-            (&level.tri_keys).into(),
+            (&level.tri_owner).into(),
         ];
         bindings.extend(ranks.as_ref().map(|r| BufferSlice::from(&r.buffer)));
-        rec.dispatch_items(
+        // Ranked: one workgroup per tile; sorted: one invocation per id.
+        let groups = |items: u32, tiles: u32, pipeline: &vk::ComputePipeline| {
+            if ranked {
+                grid_for(&gpu, tiles as u64, 1)
+            } else {
+                grid_for(&gpu, items as u64, pipeline.workgroup_size())
+            }
+        };
+        rec.dispatch(
             &self.kernels.filter_triangles,
             &bindings,
             &FilterTrianglesPush {
@@ -837,17 +956,21 @@ impl PdacrtTracer {
                 left_base: tri_bases.0,
                 right_base: tri_bases.1,
             },
-            level.tri_total as u64 + ranked as u64,
+            groups(
+                level.tri_total,
+                level.tri_tiles,
+                &self.kernels.filter_triangles,
+            ),
         )?;
         let mut bindings: Vec<BufferSlice> = vec![
             rays.into(),
             (&level.nodes).into(),
             (&level.ray_ids).into(),
-            (&level.ray_keys).into(),
+            (&level.ray_owner).into(),
             best.into(),
         ];
         bindings.extend(ranks.as_ref().map(|r| BufferSlice::from(&r.buffer)));
-        rec.dispatch_items(
+        rec.dispatch(
             &self.kernels.filter_rays,
             &bindings,
             &FilterRaysPush {
@@ -858,7 +981,7 @@ impl PdacrtTracer {
                 left_base: ray_bases.0,
                 right_base: ray_bases.1,
             },
-            level.ray_total as u64 + ranked as u64,
+            groups(level.ray_total, level.ray_tiles, &self.kernels.filter_rays),
         )?;
         let min_extent = self.eps * 4.0;
         let push = ChildrenPush {
@@ -869,6 +992,7 @@ impl PdacrtTracer {
             last_level: (depth + 1 >= self.params.max_depth) as u32,
             min_extent,
             max_segment_rays: self.params.max_segment_rays(),
+            tile_items: TILE_ITEMS,
             tri_left_base: tri_bases.0,
             tri_right_base: tri_bases.1,
             ray_left_base: ray_bases.0,
@@ -917,13 +1041,13 @@ impl PdacrtTracer {
         };
         rec.barrier();
         // Algorithm 1 line 11: positions of the next level and of the terminal nodes.
-        // One scan runs through all six channels back to back; each channel's offsets
+        // One scan runs through all the channels back to back; each channel's offsets
         // come out raised by the channels before it (and by the unwritten padding up to
         // `stride`), which the readers subtract (channel_offset in pdacrt.glsl).
         let misc = self.scratch.misc.as_ref().unwrap();
         self.scan.record(
             &mut rec,
-            6 * stride,
+            CHANNELS * stride,
             (&channels).into(),
             (&offsets).into(),
             ScanKind::Exclusive,
@@ -987,13 +1111,13 @@ impl PdacrtTracer {
         for (list_n, keys, ids, counts) in [
             (
                 level.tri_total,
-                &level.tri_keys,
+                &level.tri_owner,
                 &level.tri_ids,
                 &tri_counts,
             ),
             (
                 level.ray_total,
-                &level.ray_keys,
+                &level.ray_owner,
                 &level.ray_ids,
                 &ray_counts,
             ),
@@ -1219,6 +1343,7 @@ impl Tracer for PdacrtTracer {
 
     /// PDACRT builds nothing: new geometry is an upload and a new scene box.
     fn set_geometry(&mut self, triangles: &[GpuTriangle]) -> vk::Result<()> {
+        check_id_range(triangles.len())?;
         self.gpu.wait_idle()?;
         let (lo, hi, eps) = scene_box(triangles);
         self.triangles = self.gpu.upload("pdacrt-triangles", triangles)?;

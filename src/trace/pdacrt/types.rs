@@ -37,8 +37,31 @@ pub struct LevelTotals {
     pub term_nodes: u32,
     pub term_tris: u32,
     pub term_rays: u32,
+    pub next_tri_tiles: u32,
+    pub next_ray_tiles: u32,
 }
+
+/// Channels prefix-summed per level (CH_* in pdacrt.glsl), one `LevelTotals` field each.
+pub const CHANNELS: u32 = 8;
+
+/// Elements per tile of a level list at most (LevelSplit::PrefixSums; pdacrt.glsl): one
+/// workgroup per tile, so a tile should give each of its invocations several elements.
+pub const TILE_ITEMS: u32 = 1024;
+
+/// A tile of a level list: elements `start .. start + count` of one node.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+#[repr(C)]
+pub struct Tile {
+    pub node: u32,
+    pub start: u32,
+    pub count: u32,
+    pub pad: u32,
+}
+
+/// Ids stay below 2^30 so the ranked kernels can keep a status code in the top two bits.
+pub const MAX_IDS: u32 = 1 << 30;
 
 const _: () = assert!(size_of::<Node>() == 48);
 const _: () = assert!(size_of::<Segment>() == 16);
-const _: () = assert!(size_of::<LevelTotals>() == 24);
+const _: () = assert!(size_of::<LevelTotals>() == 4 * CHANNELS as usize);
+const _: () = assert!(size_of::<Tile>() == 16);
