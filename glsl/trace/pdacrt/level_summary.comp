@@ -1,7 +1,7 @@
 #version 460
 // The eight totals of a level (next-level nodes, triangle ids, ray ids; terminal nodes,
 // triangle ids, ray ids; next-level triangle and ray tiles): exclusive sum at the last child plus its own value. The host
-// reads these 24 bytes once per level to size the next level (Algorithm 1 line 11) and
+// reads these 32 bytes once per level to size the next level (Algorithm 1 line 11) and
 // to decide whether the terminal-node buffer must be flushed first (line 7).
 #include "pdacrt.glsl"
 layout(local_size_x = 1) in;

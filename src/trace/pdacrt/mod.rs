@@ -3,12 +3,13 @@
 //!
 //! No acceleration structure is built. The host drives Algorithm 1 as an explicit loop
 //! over the levels of an implicit k-d hierarchy; each level is a handful of GPU passes
-//! over linear id lists (filter → sort by status key → run-length counts → child pivots
-//! → prefix sums → gather into the next level or the terminal-node buffer). Terminal
-//! nodes are intersected in batches by the segmented brute-force kernel of Algorithm 3,
-//! followed by a sort by ray id and a segmented arg-min into the global closest hits.
+//! over linear id lists (filter → split by status code (a sort by key and run-length
+//! counts, or a prefix scan) → child pivots → prefix sums → gather into the next level
+//! or the terminal-node buffer). Terminal nodes are intersected in batches by the
+//! segmented brute-force kernel of Algorithm 3, whose per-ray minima then reach the
+//! global closest hits (a sort by ray id and a segmented arg-min, or atomics).
 //!
-//! Host round trips: one 24-byte readback per level (the level's totals, needed to size
+//! Host round trips: one 32-byte readback per level (the level's totals, needed to size
 //! the next level's lists and to decide a flush, Algorithm 1 lines 7 and 11); everything
 //! else is chained on the GPU without waiting.
 //!
