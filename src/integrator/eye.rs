@@ -10,7 +10,7 @@ use crate::scene::CameraFrame;
 use crate::shaders;
 use crate::trace::{GpuTriangle, Hit, Query, Ray, Tracer};
 use crate::vk::{
-    self, Buffer, ComputePipeline, Gpu, MemoryKind, PipelineDesc, Recorder, StreamKind,
+    self, Buffer, BufferSlice, ComputePipeline, Gpu, MemoryKind, Recorder, StreamKind,
     TimelinePoint,
 };
 
@@ -78,14 +78,12 @@ struct Pipelines {
 impl Pipelines {
     fn new(gpu: &Gpu) -> vk::Result<Self> {
         let make = |kernel, bindings| {
-            ComputePipeline::new(
+            vk::compute_pipeline(
                 gpu,
-                &PipelineDesc {
-                    kernel,
-                    bindings,
-                    push_constant_bytes: size_of::<FrameParams>() as u32,
-                    spec: &[WORKGROUP],
-                },
+                kernel,
+                bindings,
+                size_of::<FrameParams>() as u32,
+                &[WORKGROUP],
             )
         };
         Ok(Self {
@@ -289,34 +287,58 @@ impl Stage<'_> {
         rec.submit(&[traced])
     }
 
-    fn ambient_occlusion(
+    /// The secondary-ray step every workload shares: `generate` writes `count` rays per
+    /// camera hit into the slot's secondary rays (after `traced`), and the tracer casts
+    /// them into the slot's secondary hits. Returns when those hits are ready.
+    #[allow(clippy::too_many_arguments)]
+    fn trace_secondary(
         &self,
         mut rec: Recorder,
+        frame: &FrameParams,
+        traced: &TimelinePoint,
+        tracer: &mut dyn Tracer,
+        (pipeline, bindings): (&ComputePipeline, &[BufferSlice<'_>]),
+        count: u32,
+        query: Query,
+    ) -> vk::Result<TimelinePoint> {
+        rec.dispatch_items(pipeline, bindings, frame, self.count as u64)?;
+        let generated = rec.submit(&[traced])?;
+        let s = self.slot;
+        tracer.trace(
+            &s.secondary_rays,
+            &s.secondary_hits,
+            count,
+            query,
+            &[&generated],
+        )
+    }
+
+    fn ambient_occlusion(
+        &self,
+        rec: Recorder,
         frame: &FrameParams,
         traced: &TimelinePoint,
         tracer: &mut dyn Tracer,
     ) -> vk::Result<(TimelinePoint, u64)> {
         let s = self.slot;
         let n = self.count as u64;
-        rec.dispatch_items(
-            &self.pipelines.ao_rays,
-            &[
-                (&s.rays).into(),
-                (&s.hits).into(),
-                self.triangles.into(),
-                (&s.secondary_rays).into(),
-            ],
-            frame,
-            n,
-        )?;
-        let generated = rec.submit(&[traced])?;
         let ao_count = self.count * frame.ao_rays;
-        let occluded = tracer.trace(
-            &s.secondary_rays,
-            &s.secondary_hits,
+        let occluded = self.trace_secondary(
+            rec,
+            frame,
+            traced,
+            tracer,
+            (
+                &self.pipelines.ao_rays,
+                &[
+                    (&s.rays).into(),
+                    (&s.hits).into(),
+                    self.triangles.into(),
+                    (&s.secondary_rays).into(),
+                ],
+            ),
             ao_count,
             Query::Occlusion,
-            &[&generated],
         )?;
         let mut rec = self.gpu.recorder(StreamKind::Main)?;
         rec.dispatch_items(
@@ -334,34 +356,32 @@ impl Stage<'_> {
 
     fn shadow(
         &self,
-        mut rec: Recorder,
+        rec: Recorder,
         frame: &FrameParams,
         traced: &TimelinePoint,
         tracer: &mut dyn Tracer,
     ) -> vk::Result<(TimelinePoint, u64)> {
         let s = self.slot;
         let n = self.count as u64;
-        rec.dispatch_items(
-            &self.pipelines.shadow_rays,
-            &[
-                (&s.rays).into(),
-                (&s.hits).into(),
-                self.triangles.into(),
-                self.triangle_material.into(),
-                self.materials.into(),
-                (&s.secondary_rays).into(),
-                (&s.state).into(),
-            ],
+        let occluded = self.trace_secondary(
+            rec,
             frame,
-            n,
-        )?;
-        let generated = rec.submit(&[traced])?;
-        let occluded = tracer.trace(
-            &s.secondary_rays,
-            &s.secondary_hits,
+            traced,
+            tracer,
+            (
+                &self.pipelines.shadow_rays,
+                &[
+                    (&s.rays).into(),
+                    (&s.hits).into(),
+                    self.triangles.into(),
+                    self.triangle_material.into(),
+                    self.materials.into(),
+                    (&s.secondary_rays).into(),
+                    (&s.state).into(),
+                ],
+            ),
             self.count,
             Query::Occlusion,
-            &[&generated],
         )?;
         let mut rec = self.gpu.recorder(StreamKind::Main)?;
         rec.dispatch_items(
@@ -379,31 +399,29 @@ impl Stage<'_> {
 
     fn reflection(
         &self,
-        mut rec: Recorder,
+        rec: Recorder,
         frame: &FrameParams,
         traced: &TimelinePoint,
         tracer: &mut dyn Tracer,
     ) -> vk::Result<(TimelinePoint, u64)> {
         let s = self.slot;
         let n = self.count as u64;
-        rec.dispatch_items(
-            &self.pipelines.reflect_rays,
-            &[
-                (&s.rays).into(),
-                (&s.hits).into(),
-                self.triangles.into(),
-                (&s.secondary_rays).into(),
-            ],
+        let reflected = self.trace_secondary(
+            rec,
             frame,
-            n,
-        )?;
-        let generated = rec.submit(&[traced])?;
-        let reflected = tracer.trace(
-            &s.secondary_rays,
-            &s.secondary_hits,
+            traced,
+            tracer,
+            (
+                &self.pipelines.reflect_rays,
+                &[
+                    (&s.rays).into(),
+                    (&s.hits).into(),
+                    self.triangles.into(),
+                    (&s.secondary_rays).into(),
+                ],
+            ),
             self.count,
             Query::ClosestHit,
-            &[&generated],
         )?;
         // Eye-light shading of what the mirror shows, seen along the reflected ray.
         let mut rec = self.gpu.recorder(StreamKind::Main)?;

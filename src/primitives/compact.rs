@@ -3,11 +3,10 @@
 //! to a GPU buffer (readable by the host).
 
 use super::{
-    args_offset, check_scratch, pipeline, region, Count, Scan, ScanKind, Setup, Tuning,
-    HEADER_BYTES,
+    args_offset, check_scratch, region, Count, Scan, ScanKind, Setup, Tuning, HEADER_BYTES,
 };
 use crate::shaders;
-use crate::vk::{Buffer, BufferSlice, ComputePipeline, Gpu, Recorder, Result};
+use crate::vk::{compute_pipeline, Buffer, BufferSlice, ComputePipeline, Gpu, Recorder, Result};
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
@@ -35,7 +34,7 @@ impl Compact {
     pub fn new(gpu: &Gpu, tuning: &Tuning) -> Result<Self> {
         Ok(Self {
             setup: Setup::new(gpu)?,
-            scatter: pipeline(
+            scatter: compute_pipeline(
                 gpu,
                 shaders::PRIMITIVES_COMPACT_SCATTER,
                 6,

@@ -1,8 +1,8 @@
 //! Gather (`out[i] = src[idx[i]]`) and scatter (`out[idx[i]] = src[i]`) of u32 by index.
 
-use super::{args_offset, check_scratch, pipeline, Count, Setup, Tuning, HEADER_BYTES};
+use super::{args_offset, check_scratch, Count, Setup, Tuning, HEADER_BYTES};
 use crate::shaders;
-use crate::vk::{Buffer, BufferSlice, ComputePipeline, Gpu, Recorder, Result};
+use crate::vk::{compute_pipeline, Buffer, BufferSlice, ComputePipeline, Gpu, Recorder, Result};
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
@@ -31,7 +31,7 @@ impl Gather {
     pub fn new(gpu: &Gpu, tuning: &Tuning) -> Result<Self> {
         Ok(Self {
             setup: Setup::new(gpu)?,
-            kernel: pipeline(
+            kernel: compute_pipeline(
                 gpu,
                 shaders::PRIMITIVES_GATHER,
                 4,

@@ -37,9 +37,8 @@ pub use reduce_by_key::ReduceByKey;
 pub use scan::{Scan, ScanKind};
 pub use tuning::Tuning;
 
-use crate::shaders::Kernel;
 use crate::vk::{
-    Buffer, BufferSlice, ComputePipeline, Gpu, PipelineDesc, Recorder, Result, VkError,
+    compute_pipeline, Buffer, BufferSlice, ComputePipeline, Gpu, Recorder, Result, VkError,
 };
 
 /// Bytes of the scratch header that the setup kernel writes (n, group counts, indirect
@@ -105,7 +104,7 @@ impl Setup {
             )));
         }
         Ok(Self {
-            pipeline: pipeline(gpu, crate::shaders::PRIMITIVES_SETUP, 3, 40, &[1])?,
+            pipeline: compute_pipeline(gpu, crate::shaders::PRIMITIVES_SETUP, 3, 40, &[1])?,
         })
     }
 
@@ -159,25 +158,6 @@ impl Setup {
         rec.barrier();
         Ok(())
     }
-}
-
-/// Creates a primitive's pipeline.
-pub(crate) fn pipeline(
-    gpu: &Gpu,
-    kernel: Kernel,
-    bindings: u32,
-    push_constant_bytes: u32,
-    spec: &[u32],
-) -> Result<ComputePipeline> {
-    ComputePipeline::new(
-        gpu,
-        &PipelineDesc {
-            kernel,
-            bindings,
-            push_constant_bytes,
-            spec,
-        },
-    )
 }
 
 /// Checks that a caller's scratch buffer is big enough.

@@ -20,11 +20,13 @@
 //! one (a single pass ends with an unpack kernel).
 
 use super::{
-    args_offset, check_scratch, pipeline, region, Count, Scan, ScanKind, Setup, Tuning,
-    HEADER_BYTES,
+    args_offset, check_scratch, region, Count, Scan, ScanKind, Setup, Tuning, HEADER_BYTES,
 };
 use crate::shaders;
-use crate::vk::{Buffer, BufferSlice, ComputePipeline, Gpu, MemoryKind, Recorder, Result, VkError};
+use crate::vk::{
+    compute_pipeline, Buffer, BufferSlice, ComputePipeline, Gpu, MemoryKind, Recorder, Result,
+    VkError,
+};
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
@@ -111,13 +113,13 @@ impl RadixSort {
         );
         Ok(Self {
             setup: Setup::new(gpu)?,
-            histogram: pipeline(gpu, histogram, if segments { 3 } else { 4 }, 12, &spec)?,
-            scatter: pipeline(gpu, scatter, if segments { 6 } else { 7 }, 12, &spec)?,
+            histogram: compute_pipeline(gpu, histogram, if segments { 3 } else { 4 }, 12, &spec)?,
+            scatter: compute_pipeline(gpu, scatter, if segments { 6 } else { 7 }, 12, &spec)?,
             rows,
             segments,
             pairs: segments && tuning.sort_pairs,
             unpack: if segments && tuning.sort_pairs {
-                Some(pipeline(
+                Some(compute_pipeline(
                     gpu,
                     shaders::PRIMITIVES_SORT_UNPACK,
                     4,
@@ -127,7 +129,7 @@ impl RadixSort {
             } else {
                 None
             },
-            copy: pipeline(
+            copy: compute_pipeline(
                 gpu,
                 shaders::PRIMITIVES_COPY_PAIRS,
                 5,

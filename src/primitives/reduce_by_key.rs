@@ -11,11 +11,10 @@
 //! closest hit of PDACRT Algorithm 3.
 
 use super::{
-    args_offset, check_scratch, pipeline, region, Count, Scan, ScanKind, Setup, Tuning,
-    HEADER_BYTES,
+    args_offset, check_scratch, region, Count, Scan, ScanKind, Setup, Tuning, HEADER_BYTES,
 };
 use crate::shaders;
-use crate::vk::{Buffer, BufferSlice, ComputePipeline, Gpu, Recorder, Result};
+use crate::vk::{compute_pipeline, Buffer, BufferSlice, ComputePipeline, Gpu, Recorder, Result};
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
@@ -63,10 +62,10 @@ impl ReduceByKey {
         let spec = [tuning.workgroup_size, tuning.items_per_invocation];
         Ok(Self {
             setup: Setup::new(gpu)?,
-            flags: pipeline(gpu, shaders::PRIMITIVES_RBK_FLAGS, 3, 0, &spec)?,
-            init: pipeline(gpu, shaders::PRIMITIVES_RBK_INIT, 7, 4, &spec)?,
-            reduce: pipeline(gpu, shaders::PRIMITIVES_RBK_REDUCE, 6, 4, &spec)?,
-            finish: pipeline(gpu, shaders::PRIMITIVES_RBK_FINISH, 4, 0, &spec)?,
+            flags: compute_pipeline(gpu, shaders::PRIMITIVES_RBK_FLAGS, 3, 0, &spec)?,
+            init: compute_pipeline(gpu, shaders::PRIMITIVES_RBK_INIT, 7, 4, &spec)?,
+            reduce: compute_pipeline(gpu, shaders::PRIMITIVES_RBK_REDUCE, 6, 4, &spec)?,
+            finish: compute_pipeline(gpu, shaders::PRIMITIVES_RBK_FINISH, 4, 0, &spec)?,
             scan: Scan::new(gpu, tuning)?,
             tuning: *tuning,
         })

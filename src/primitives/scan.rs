@@ -4,9 +4,9 @@
 //! [`Tuning::scan_segment`] (CPU devices) the sums are per invocation instead of per
 //! workgroup, so neither big pass has a barrier or a subgroup operation.
 
-use super::{args_offset, check_scratch, pipeline, region, Count, Setup, Tuning, HEADER_BYTES};
+use super::{args_offset, check_scratch, region, Count, Setup, Tuning, HEADER_BYTES};
 use crate::shaders;
-use crate::vk::{Buffer, BufferSlice, ComputePipeline, Gpu, Recorder, Result};
+use crate::vk::{compute_pipeline, Buffer, BufferSlice, ComputePipeline, Gpu, Recorder, Result};
 
 /// Exclusive (`out[i] = x[0] + .. + x[i-1]`) or inclusive (`.. + x[i]`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -47,15 +47,15 @@ impl Scan {
         );
         Ok(Self {
             setup: Setup::new(gpu)?,
-            reduce: pipeline(gpu, Self::reduce_kernel(tuning), 3, 4, &spec)?,
-            block_sums: pipeline(
+            reduce: compute_pipeline(gpu, Self::reduce_kernel(tuning), 3, 4, &spec)?,
+            block_sums: compute_pipeline(
                 gpu,
                 shaders::PRIMITIVES_SCAN_BLOCK_SUMS,
                 2,
                 0,
                 &[tuning.workgroup_size],
             )?,
-            downsweep: pipeline(gpu, Self::downsweep_kernel(gpu, tuning), 4, 4, &spec)?,
+            downsweep: compute_pipeline(gpu, Self::downsweep_kernel(gpu, tuning), 4, 4, &spec)?,
             tuning: *tuning,
         })
     }

@@ -2,7 +2,7 @@
 
 use super::{GpuTriangle, Query, Tracer};
 use crate::shaders;
-use crate::vk::{self, Buffer, ComputePipeline, Gpu, PipelineDesc, StreamKind, TimelinePoint};
+use crate::vk::{self, Buffer, ComputePipeline, Gpu, StreamKind, TimelinePoint};
 
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
@@ -57,14 +57,12 @@ impl BruteForceTracer {
         tuning: BruteForceTuning,
     ) -> vk::Result<Self> {
         let pipeline = |kernel| {
-            ComputePipeline::new(
+            vk::compute_pipeline(
                 gpu,
-                &PipelineDesc {
-                    kernel,
-                    bindings: 3,
-                    push_constant_bytes: size_of::<Push>() as u32,
-                    spec: &[tuning.workgroup_size, tuning.batch],
-                },
+                kernel,
+                3,
+                size_of::<Push>() as u32,
+                &[tuning.workgroup_size, tuning.batch],
             )
         };
         Ok(Self {

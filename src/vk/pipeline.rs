@@ -38,6 +38,26 @@ pub struct ComputePipeline {
     workgroup_size: u32,
 }
 
+/// [`ComputePipeline::new`] with the description's fields as arguments: the form every
+/// kernel owner uses.
+pub fn compute_pipeline(
+    gpu: &Gpu,
+    kernel: Kernel,
+    bindings: u32,
+    push_constant_bytes: u32,
+    spec: &[u32],
+) -> Result<ComputePipeline> {
+    ComputePipeline::new(
+        gpu,
+        &PipelineDesc {
+            kernel,
+            bindings,
+            push_constant_bytes,
+            spec,
+        },
+    )
+}
+
 impl std::fmt::Debug for ComputePipeline {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("ComputePipeline")

@@ -46,7 +46,7 @@ use crate::primitives::{Compact, RadixSort, Tuning};
 use crate::scene::{CameraFrame, Scene};
 use crate::shaders;
 use crate::trace::{GpuTriangle, Hit, Query, Ray, Tracer};
-use crate::vk::{self, Buffer, ComputePipeline, Gpu, MemoryKind, PipelineDesc, StreamKind};
+use crate::vk::{self, Buffer, ComputePipeline, Gpu, MemoryKind, StreamKind};
 
 const WORKGROUP: u32 = 64;
 
@@ -202,14 +202,12 @@ struct Pipelines {
 impl Pipelines {
     fn new(gpu: &Gpu) -> vk::Result<Self> {
         let make = |kernel, bindings| {
-            ComputePipeline::new(
+            vk::compute_pipeline(
                 gpu,
-                &PipelineDesc {
-                    kernel,
-                    bindings,
-                    push_constant_bytes: size_of::<PtParams>() as u32,
-                    spec: &[WORKGROUP],
-                },
+                kernel,
+                bindings,
+                size_of::<PtParams>() as u32,
+                &[WORKGROUP],
             )
         };
         Ok(Self {

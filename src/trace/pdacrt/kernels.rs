@@ -4,7 +4,7 @@ use bytemuck::{Pod, Zeroable};
 
 use super::{FlushReduce, LevelSplit, PdacrtParams};
 use crate::shaders;
-use crate::vk::{self, ComputePipeline, Gpu, PipelineDesc};
+use crate::vk::{self, ComputePipeline, Gpu};
 
 const WORKGROUP: u32 = 64;
 
@@ -120,15 +120,7 @@ impl Kernels {
     /// N, T and the staging choice of `params` shape the segmented intersection.
     pub fn new(gpu: &Gpu, params: &PdacrtParams) -> vk::Result<Self> {
         let make = |kernel, bindings, push: usize, spec: &[u32]| {
-            ComputePipeline::new(
-                gpu,
-                &PipelineDesc {
-                    kernel,
-                    bindings,
-                    push_constant_bytes: push as u32,
-                    spec,
-                },
-            )
+            vk::compute_pipeline(gpu, kernel, bindings, push as u32, spec)
         };
         let wg = &[WORKGROUP];
         // The prefix-sum split binds the rank array to the filters and the scatter
