@@ -184,7 +184,9 @@ impl Gpu {
         // SAFETY: memory and offset come from the allocator for this buffer's requirements.
         unsafe { device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) }
             .call("vkBindBufferMemory")?;
-        self.0.memory.add(allocation.size());
+        let now = self.0.memory.add(allocation.size());
+        // `RUST_LOG=splitray::vk=trace` lists every allocation: what makes up a peak.
+        log::trace!("alloc {name} {} bytes, {now} in all", allocation.size());
         self.set_object_name(raw, name);
         Ok(Buffer {
             gpu: self.clone(),
@@ -330,7 +332,12 @@ impl Buffer {
 impl Drop for Buffer {
     fn drop(&mut self) {
         if let Some(allocation) = self.allocation.take() {
-            self.gpu.0.memory.sub(allocation.size());
+            let now = self.gpu.0.memory.sub(allocation.size());
+            log::trace!(
+                "free {} {} bytes, {now} in all",
+                self.name,
+                allocation.size()
+            );
             let _ = self.gpu.0.allocator.lock().unwrap().free(allocation);
         }
         // SAFETY: the caller guarantees the GPU no longer uses this buffer.

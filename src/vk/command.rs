@@ -465,6 +465,32 @@ impl Recorder {
         Ok(())
     }
 
+    /// Fills `size` bytes of `buffer` from `offset` with a repeated u32.
+    pub fn fill_range(
+        &mut self,
+        buffer: &Buffer,
+        offset: u64,
+        size: u64,
+        value: u32,
+    ) -> Result<()> {
+        if size == 0 {
+            return Ok(());
+        }
+        if offset % 4 != 0 || size % 4 != 0 || offset + size > buffer.size() {
+            return Err(VkError::Usage(format!(
+                "fill of {size} bytes at {offset} into '{}' ({} bytes): needs 4-byte alignment, in range",
+                buffer.name(),
+                buffer.size()
+            )));
+        }
+        // SAFETY: recording; alignment and range checked above.
+        unsafe {
+            self.device()
+                .cmd_fill_buffer(self.cmd, buffer.raw, offset, size, value)
+        };
+        Ok(())
+    }
+
     /// Fills the whole buffer with a repeated u32.
     pub fn fill(&mut self, buffer: &Buffer, value: u32) {
         // SAFETY: recording; the Vulkan buffer size is a multiple of 4.

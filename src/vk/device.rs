@@ -32,12 +32,15 @@ pub(crate) struct MemoryCounters {
 }
 
 impl MemoryCounters {
-    pub(crate) fn add(&self, bytes: u64) {
+    /// Counts an allocation; returns the bytes allocated now.
+    pub(crate) fn add(&self, bytes: u64) -> u64 {
         let now = self.current.fetch_add(bytes, Ordering::Relaxed) + bytes;
         self.peak.fetch_max(now, Ordering::Relaxed);
+        now
     }
-    pub(crate) fn sub(&self, bytes: u64) {
-        self.current.fetch_sub(bytes, Ordering::Relaxed);
+    /// Counts a release; returns the bytes allocated now.
+    pub(crate) fn sub(&self, bytes: u64) -> u64 {
+        self.current.fetch_sub(bytes, Ordering::Relaxed) - bytes
     }
 }
 

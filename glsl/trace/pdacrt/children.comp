@@ -9,9 +9,10 @@
 // segments a terminal child becomes; the tile channels, the next level's tiles).
 //
 // The `ranked` variant (LevelSplit::PrefixSums) works on the unsorted lists instead: the
-// exclusive scan of the side flags (filter_*.comp) gives each child's size as the
-// difference of the ranks at the node's end and start, and the rank at the start serves
-// as the child's source offset (scatter_elements.comp subtracts it).
+// exclusive scan of the tiles' side counts (filter_*.comp) gives each child's size as
+// the difference of the ranks at the node's end (the tile after its last) and start
+// (its first tile), and the rank at the start serves as the child's source offset
+// (scatter_elements.comp subtracts it).
 //! variant ranked: RANKED=1
 #include "grid.glsl"
 #include "pdacrt.glsl"
@@ -53,10 +54,12 @@ void main() {
 #ifdef RANKED
     uint tri_base = right ? pc.tri_right_base : pc.tri_left_base;
     uint ray_base = right ? pc.ray_right_base : pc.ray_left_base;
-    ch.tri_src = ranks[tri_base + nd.tri_start];
-    ch.ray_src = ranks[ray_base + nd.ray_start];
-    ch.tri_count = ranks[tri_base + nd.tri_start + nd.tri_count] - ch.tri_src;
-    ch.ray_count = ranks[ray_base + nd.ray_start + nd.ray_count] - ch.ray_src;
+    uint tri_end = nd.first_tri_tile + (nd.tri_count + pc.tile_items - 1u) / pc.tile_items;
+    uint ray_end = nd.first_ray_tile + (nd.ray_count + pc.tile_items - 1u) / pc.tile_items;
+    ch.tri_src = ranks[tri_base + nd.first_tri_tile];
+    ch.ray_src = ranks[ray_base + nd.first_ray_tile];
+    ch.tri_count = ranks[tri_base + tri_end] - ch.tri_src;
+    ch.ray_count = ranks[ray_base + ray_end] - ch.ray_src;
 #else
     uvec3 tc = uvec3(tri_counts[4u * p + CODE_LEFT], tri_counts[4u * p + CODE_BOTH], tri_counts[4u * p + CODE_RIGHT]);
     uvec3 rc = uvec3(ray_counts[4u * p + CODE_LEFT], ray_counts[4u * p + CODE_BOTH], ray_counts[4u * p + CODE_RIGHT]);
@@ -65,10 +68,10 @@ void main() {
     ch.tri_src = nd.tri_start + (right ? tc.x : 0u);
     ch.ray_src = nd.ray_start + (right ? rc.x : 0u);
 #endif
-    uint axis = split_axis(nd.box_min.xyz, nd.box_max.xyz);
-    float mid = split_position(nd.box_min.xyz, nd.box_max.xyz, axis);
-    ch.box_min = nd.box_min;
-    ch.box_max = nd.box_max;
+    uint axis = split_axis(nd.box_min, nd.box_max);
+    float mid = split_position(nd.box_min, nd.box_max, axis);
+    ch.box_min = vec4(nd.box_min, 0.0);
+    ch.box_max = vec4(nd.box_max, 0.0);
     if (right) ch.box_min[axis] = mid; else ch.box_max[axis] = mid;
     float extent = ch.box_max[axis] - ch.box_min[axis];
     if (ch.tri_count == 0u || ch.ray_count == 0u) {

@@ -7,15 +7,19 @@
 //
 // The `ranked` variant (LevelSplit::PrefixSums) works per tile (pdacrt.glsl): one
 // workgroup per tile, the node's box and split read once. It keeps the code in the id's
-// top bits and writes the element's side flags — 1 where it belongs to the left (right)
-// child — into `ranks` at left_base + i (right_base + i). One exclusive scan of all flag
-// arrays then ranks every element within its child (see children.comp). The first
-// invocation also writes the zero flags at n that close each array, so the scan's value
-// at n is the array's total.
+// top bits and writes the tile's side counts — how many of its rays belong to the left
+// (right) child — into `ranks` at left_base + tile (right_base + tile). One exclusive
+// scan of all count arrays then ranks every tile within its child (see children.comp;
+// scatter_elements.comp ranks the elements within their tile). The first workgroup also
+// writes the zero counts at n (the tile count) that close each array, so the scan's
+// value at n is the array's total.
 //! variant ranked: RANKED=1
 #include "grid.glsl"
 #include "geometry.glsl"
 #include "pdacrt.glsl"
+#ifdef RANKED
+#include "tile_lanes.glsl"
+#endif
 
 // Rays and nodes are read through vec4 views (two and three vec4 per record): CPU
 // devices turn every lane's load into a scalar loop, so one 16-byte load beats four
@@ -29,12 +33,13 @@ layout(std430, set = 0, binding = 3) restrict readonly buffer Tiles { uvec4 tile
 layout(std430, set = 0, binding = 2) restrict readonly buffer Ids { uint ids[]; };
 layout(std430, set = 0, binding = 3) restrict buffer Keys { uint keys[]; };
 #endif
-layout(std430, set = 0, binding = 4) restrict readonly buffer Best { uvec2 best[]; };  // see pdacrt.glsl
+// The hit buffer, holding the closest hits so far (BEST_SLOT in pdacrt.glsl).
+layout(std430, set = 0, binding = 4) restrict readonly buffer Best { uvec2 best[]; };
 #ifdef RANKED
 layout(std430, set = 0, binding = 5) restrict writeonly buffer Ranks { uint ranks[]; };
 #endif
 layout(push_constant) uniform Push {
-    uint n;  // list length (ranked: the tile count is the dispatch size)
+    uint n;  // list length (ranked: the tile count, also the dispatch size)
     float eps;
     uint occlusion;
     uint ray_offset;
@@ -44,7 +49,7 @@ layout(push_constant) uniform Push {
 
 // The status code of ray `id` against the two halves of the node's box (lines 4–5).
 uint ray_code(uint id, vec3 box_min, vec3 box_max) {
-    uvec2 closest = best[id];
+    uvec2 closest = best[BEST_SLOT(pc.ray_offset + id)];
     if (pc.occlusion != 0u && has_hit(closest)) return CODE_NONE;
     vec3 lo = box_min - pc.eps;
     vec3 hi = box_max + pc.eps;
@@ -66,21 +71,27 @@ uint ray_code(uint id, vec3 box_min, vec3 box_max) {
 
 void main() {
 #ifdef RANKED
-    uvec4 tile = tiles[linear_group_id()];
+    uint tile_index = linear_group_id();
+    uvec4 tile = tiles[tile_index];
     uint lid = gl_LocalInvocationID.x;
-    if (linear_group_id() == 0u && lid == 0u) {
-        ranks[pc.left_base + pc.n] = 0u;
-        ranks[pc.right_base + pc.n] = 0u;
-    }
     vec3 box_min = nodes4[3u * tile.x].xyz;      // Node.box_min
     vec3 box_max = nodes4[3u * tile.x + 1u].xyz; // Node.box_max
+    uvec2 counts = uvec2(0u);
     for (uint k = lid; k < tile.z; k += WORKGROUP_SIZE) {
         uint i = tile.y + k;
         uint id = ids[i] & ID_MASK;
         uint code = ray_code(id, box_min, box_max);
         ids[i] = id | (code << ID_BITS);
-        ranks[pc.left_base + i] = uint(code == CODE_LEFT || code == CODE_BOTH);
-        ranks[pc.right_base + i] = uint(code == CODE_RIGHT || code == CODE_BOTH);
+        counts += side_flags(code);
+    }
+    counts = tile_sum(counts);
+    if (lid == 0u) {
+        ranks[pc.left_base + tile_index] = counts.x;
+        ranks[pc.right_base + tile_index] = counts.y;
+        if (tile_index == 0u) {
+            ranks[pc.left_base + pc.n] = 0u;
+            ranks[pc.right_base + pc.n] = 0u;
+        }
     }
 #else
     uint i = linear_invocation_id();

@@ -9,15 +9,19 @@
 //
 // The `ranked` variant (LevelSplit::PrefixSums) works per tile (pdacrt.glsl): one
 // workgroup per tile, the node's split read once. It keeps the code in the id's top
-// bits and writes the element's side flags — 1 where it belongs to the left (right)
-// child — into `ranks` at left_base + i (right_base + i). One exclusive scan of all flag
-// arrays then ranks every element within its child (see children.comp). The first
-// invocation also writes the zero flags at n that close each array, so the scan's value
-// at n is the array's total.
+// bits and writes the tile's side counts — how many of its elements belong to the left
+// (right) child — into `ranks` at left_base + tile (right_base + tile). One exclusive
+// scan of all count arrays then ranks every tile within its child (see children.comp;
+// scatter_elements.comp ranks the elements within their tile). The first workgroup also
+// writes the zero counts at n (the tile count) that close each array, so the scan's
+// value at n is the array's total.
 //! variant ranked: RANKED=1
 #include "grid.glsl"
 #include "geometry.glsl"
 #include "pdacrt.glsl"
+#ifdef RANKED
+#include "tile_lanes.glsl"
+#endif
 
 layout(std430, set = 0, binding = 0) readonly buffer Triangles { Triangle triangles[]; };
 layout(std430, set = 0, binding = 1) readonly buffer Nodes { Node nodes[]; };
@@ -29,7 +33,7 @@ layout(std430, set = 0, binding = 4) writeonly buffer Ranks { uint ranks[]; };
 layout(std430, set = 0, binding = 2) readonly buffer Ids { uint ids[]; };
 layout(std430, set = 0, binding = 3) buffer Keys { uint keys[]; };
 #endif
-// n: list length (ranked: the tile count is the dispatch size)
+// n: list length (ranked: the tile count, also the dispatch size)
 layout(push_constant) uniform Push { uint n; float eps; uint left_base; uint right_base; } pc;
 
 // The status code of triangle `id` against the split of the node's box (lines 4–5).
@@ -45,30 +49,36 @@ uint triangle_code(uint id, uint axis, float mid) {
 
 void main() {
 #ifdef RANKED
-    uvec4 tile = tiles[linear_group_id()];
+    uint tile_index = linear_group_id();
+    uvec4 tile = tiles[tile_index];
     uint lid = gl_LocalInvocationID.x;
-    if (linear_group_id() == 0u && lid == 0u) {
-        ranks[pc.left_base + pc.n] = 0u;
-        ranks[pc.right_base + pc.n] = 0u;
-    }
     Node nd = nodes[tile.x];
-    uint axis = split_axis(nd.box_min.xyz, nd.box_max.xyz);
-    float mid = split_position(nd.box_min.xyz, nd.box_max.xyz, axis);
+    uint axis = split_axis(nd.box_min, nd.box_max);
+    float mid = split_position(nd.box_min, nd.box_max, axis);
+    uvec2 counts = uvec2(0u);
     for (uint k = lid; k < tile.z; k += WORKGROUP_SIZE) {
         uint i = tile.y + k;
         uint id = ids[i] & ID_MASK;
         uint code = triangle_code(id, axis, mid);
         ids[i] = id | (code << ID_BITS);
-        ranks[pc.left_base + i] = uint(code != CODE_RIGHT);
-        ranks[pc.right_base + i] = uint(code != CODE_LEFT);
+        counts += side_flags(code);
+    }
+    counts = tile_sum(counts);
+    if (lid == 0u) {
+        ranks[pc.left_base + tile_index] = counts.x;
+        ranks[pc.right_base + tile_index] = counts.y;
+        if (tile_index == 0u) {
+            ranks[pc.left_base + pc.n] = 0u;
+            ranks[pc.right_base + pc.n] = 0u;
+        }
     }
 #else
     uint i = linear_invocation_id();
     if (i >= pc.n) return;
     uint node = keys[i] >> 2;
     Node nd = nodes[node];
-    uint axis = split_axis(nd.box_min.xyz, nd.box_max.xyz);
-    float mid = split_position(nd.box_min.xyz, nd.box_max.xyz, axis);
+    uint axis = split_axis(nd.box_min, nd.box_max);
+    float mid = split_position(nd.box_min, nd.box_max, axis);
     keys[i] = (node << 2) | triangle_code(ids[i], axis, mid);
 #endif
 }

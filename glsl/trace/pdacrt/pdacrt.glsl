@@ -46,10 +46,13 @@
 #define CHANNEL_OFFSET(offsets, stride, k, c) ((offsets)[(k) * (stride) + (c)] - (offsets)[(k) * (stride)])
 
 // A node of the implicit hierarchy: its box and its pivots (start, count) into the
-// level's triangle and ray id lists.
+// level's triangle and ray id lists; with LevelSplit::PrefixSums also its first tile in
+// each list (a node's lists are cut into consecutive tiles), else zero.
 struct Node {
-    vec4 box_min;
-    vec4 box_max;
+    vec3 box_min;
+    uint first_tri_tile;
+    vec3 box_max;
+    uint first_ray_tile;
     uint tri_start;
     uint tri_count;
     uint ray_start;
@@ -94,6 +97,12 @@ float from_ordered_bits(uint o) {
 // ordered_bits(t) << 32 | triangle, so one 64-bit atomicMin keeps the smaller t and,
 // for equal t, the smaller triangle (segmented_intersect.comp, atomic variants). The
 // initial all-ones value is above every hit and means no hit yet.
+//
+// They live in the caller's hit buffer, not in memory of their own (peak memory): ray
+// i's pair is the first 8 bytes of its 16-byte hit record, that is uvec2 (or uint64)
+// element BEST_SLOT(i) of the buffer, until finalize_hits.comp turns each into the hit
+// record in place. `i` counts from the batch's first ray, not the chunk's.
+#define BEST_SLOT(i) (2u * (i))
 bool has_hit(uvec2 best) {
     return best.x != MISS;
 }

@@ -9,11 +9,17 @@
 // The `ranked` variant (LevelSplit::PrefixSums) takes unsorted lists, per tile: the
 // node and its two routes are read once per tile, the code comes from the id's top bits
 // (filter_*.comp), and the offset within the child is the element's rank among its
-// parent's elements on that side (the scanned side flags), minus the child's source
-// rank (children.comp). The next level needs no keys: its tiles name the nodes.
+// parent's elements on that side, minus the child's source rank (children.comp). That
+// rank is the tile's (the scanned tile counts) plus the element's within the tile: each
+// invocation takes a contiguous run of the tile, counts its run's sides, and the
+// workgroup scans the counts (tile_lanes.glsl), so the child lists keep the parent's
+// order. The next level needs no keys: its tiles name the nodes.
 //! variant ranked: RANKED=1
 #include "grid.glsl"
 #include "pdacrt.glsl"
+#ifdef RANKED
+#include "tile_lanes.glsl"
+#endif
 
 #ifdef RANKED
 layout(std430, set = 0, binding = 0) readonly buffer Tiles { uvec4 tiles[]; };
@@ -33,7 +39,7 @@ layout(std430, set = 0, binding = 5) writeonly buffer TermIds { uint term_ids[];
 layout(push_constant) uniform Push {
     uint n;
     uint rays;       // 0: triangle lists, 1: ray lists
-    uint left_base;  // ranked: where this list's side ranks start in `ranks`
+    uint left_base;  // ranked: where this list's scanned tile counts start in `ranks`
     uint right_base;
 } pc;
 
@@ -53,16 +59,24 @@ void send(uvec4 route, uint position, uint id) {
 
 void main() {
 #ifdef RANKED
-    uvec4 tile = tiles[linear_group_id()];
+    uint tile_index = linear_group_id();
+    uvec4 tile = tiles[tile_index];
     uvec4 left_route = routes[2u * tile.x];
     uvec4 right_route = routes[2u * tile.x + 1u];
-    for (uint k = gl_LocalInvocationID.x; k < tile.z; k += WORKGROUP_SIZE) {
-        uint j = tile.y + k;
+    uint run = (tile.z + WORKGROUP_SIZE - 1u) / WORKGROUP_SIZE;
+    uint begin = tile.y + min(gl_LocalInvocationID.x * run, tile.z);
+    uint end = tile.y + min((gl_LocalInvocationID.x + 1u) * run, tile.z);
+    uvec2 counts = uvec2(0u);
+    for (uint j = begin; j < end; ++j) counts += side_flags(ids[j] >> ID_BITS);
+    uvec2 rank = tile_exclusive_scan(counts)
+               + uvec2(ranks[pc.left_base + tile_index], ranks[pc.right_base + tile_index]);
+    for (uint j = begin; j < end; ++j) {
         uint raw = ids[j];
-        uint code = raw >> ID_BITS;
+        uvec2 sides = side_flags(raw >> ID_BITS);
         uint id = raw & ID_MASK;
-        if (code == CODE_LEFT || code == CODE_BOTH) send(left_route, ranks[pc.left_base + j], id);
-        if (code == CODE_RIGHT || code == CODE_BOTH) send(right_route, ranks[pc.right_base + j], id);
+        if (sides.x != 0u) send(left_route, rank.x, id);
+        if (sides.y != 0u) send(right_route, rank.y, id);
+        rank += sides;
     }
 #else
     uint j = linear_invocation_id();

@@ -37,6 +37,7 @@ layout(std430, set = 0, binding = 4) readonly buffer TermRays { uint term_rays[]
 layout(push_constant) uniform Push { uint segment_count; uint ray_offset; } pc;
 
 #ifdef ATOMIC
+// The hit buffer, holding the closest hits so far (BEST_SLOT in pdacrt.glsl).
 layout(std430, set = 0, binding = 5) buffer Best { uint64_t best_packed[]; };
 
 // A closest hit packed for 64-bit atomicMin: smaller t first, then smaller triangle.
@@ -46,7 +47,7 @@ uint64_t pack_hit(float t, uint tri) {
 
 // Records entry `entry` (ray `ray` of the chunk): its closest hit within the segment.
 void record(uint entry, uint ray, float t, uint tri) {
-    if (tri != MISS) atomicMin(best_packed[ray], pack_hit(t, tri));
+    if (tri != MISS) atomicMin(best_packed[BEST_SLOT(pc.ray_offset + ray)], pack_hit(t, tri));
 }
 #else
 layout(std430, set = 0, binding = 5) writeonly buffer EntryT { float entry_t[]; };

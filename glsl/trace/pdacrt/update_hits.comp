@@ -10,8 +10,9 @@ layout(std430, set = 0, binding = 0) readonly buffer RunRays { uint run_rays[]; 
 layout(std430, set = 0, binding = 1) readonly buffer RunT { float run_t[]; };
 layout(std430, set = 0, binding = 2) readonly buffer RunTri { uint run_tri[]; };
 layout(std430, set = 0, binding = 3) readonly buffer RunTotal { uint run_total; };
-layout(std430, set = 0, binding = 4) buffer Best { uvec2 best[]; };  // see pdacrt.glsl
-layout(push_constant) uniform Push { uint max_runs; } pc;
+// The hit buffer, holding the closest hits so far (BEST_SLOT in pdacrt.glsl).
+layout(std430, set = 0, binding = 4) buffer Best { uvec2 best[]; };
+layout(push_constant) uniform Push { uint max_runs; uint ray_offset; } pc;
 
 void main() {
     uint i = linear_invocation_id();
@@ -22,9 +23,10 @@ void main() {
     if (tri == MISS) return;
     // One run per ray: no other invocation touches this ray's record. Compared as the
     // packed (ordered t, triangle) pair, the order of the atomic flush.
-    uvec2 old = best[ray];
+    uint slot = BEST_SLOT(pc.ray_offset + ray);
+    uvec2 old = best[slot];
     uvec2 candidate = uvec2(tri, ordered_bits(t));
     if (candidate.y < old.y || (candidate.y == old.y && candidate.x < old.x)) {
-        best[ray] = candidate;
+        best[slot] = candidate;
     }
 }

@@ -47,14 +47,22 @@ void main() {
         uint node = CHANNEL_OFFSET(offsets, pc.stride, CH_NEXT_FLAG, c);
         uint tri_start = CHANNEL_OFFSET(offsets, pc.stride, CH_NEXT_TRIS, c);
         uint ray_start = CHANNEL_OFFSET(offsets, pc.stride, CH_NEXT_RAYS, c);
-        next_nodes[node] = Node(ch.box_min, ch.box_max, tri_start, ch.tri_count, ray_start, ch.ray_count);
         route = uvec4(ch.kind, tri_start - ch.tri_src, ray_start - ch.ray_src, node << 2);
 #ifdef RANKED
-        uint tile = CHANNEL_OFFSET(offsets, pc.stride, CH_NEXT_TRI_TILES, c);
+        uint first_tri_tile = CHANNEL_OFFSET(offsets, pc.stride, CH_NEXT_TRI_TILES, c);
+        uint first_ray_tile = CHANNEL_OFFSET(offsets, pc.stride, CH_NEXT_RAY_TILES, c);
+#else
+        uint first_tri_tile = 0u;
+        uint first_ray_tile = 0u;
+#endif
+        next_nodes[node] = Node(ch.box_min.xyz, first_tri_tile, ch.box_max.xyz, first_ray_tile,
+                                tri_start, ch.tri_count, ray_start, ch.ray_count);
+#ifdef RANKED
+        uint tile = first_tri_tile;
         for (uint done = 0u; done < ch.tri_count; done += pc.tile_items) {
             tri_tiles[tile++] = uvec4(node, tri_start + done, min(pc.tile_items, ch.tri_count - done), 0u);
         }
-        tile = CHANNEL_OFFSET(offsets, pc.stride, CH_NEXT_RAY_TILES, c);
+        tile = first_ray_tile;
         for (uint done = 0u; done < ch.ray_count; done += pc.tile_items) {
             ray_tiles[tile++] = uvec4(node, ray_start + done, min(pc.tile_items, ch.ray_count - done), 0u);
         }

@@ -44,6 +44,13 @@ pub struct MaxRunsPush {
 
 #[derive(Clone, Copy, Pod, Zeroable)]
 #[repr(C)]
+pub struct UpdateHitsPush {
+    pub max_runs: u32,
+    pub ray_offset: u32,
+}
+
+#[derive(Clone, Copy, Pod, Zeroable)]
+#[repr(C)]
 pub struct ChildrenPush {
     pub child_count: u32,
     pub stride: u32,
@@ -207,12 +214,12 @@ impl Kernels {
             update_hits: make(
                 shaders::TRACE_PDACRT_UPDATE_HITS,
                 5,
-                size_of::<MaxRunsPush>(),
+                size_of::<UpdateHitsPush>(),
                 wg,
             )?,
             finalize_hits: make(
                 shaders::TRACE_PDACRT_FINALIZE_HITS,
-                4,
+                3,
                 size_of::<FinalizePush>(),
                 wg,
             )?,

@@ -29,11 +29,12 @@
 //! Where splitray departs from the paper's steps by default, both ways are kept and
 //! selectable ([`PdacrtParams`]; `bench trace --split/--flush/--stage-triangles`), and
 //! the tests check that they give the same hits:
-//! - [`LevelSplit`]: the paper's sort by status key + reduce-by-key, or one prefix scan
-//!   of side flags (the default: the lists are already grouped by node, so the sort
-//!   only partitions within nodes, which a scan does directly). The prefix-sum levels
-//!   are also cut into tiles of one node each (pdacrt.glsl), so no per-id key is kept
-//!   and a node's box and routes are read once per tile.
+//! - [`LevelSplit`]: the paper's sort by status key + reduce-by-key, or prefix sums of
+//!   side flags (the default: the lists are already grouped by node, so the sort only
+//!   partitions within nodes, which a scan does directly). The prefix-sum levels are
+//!   cut into tiles of one node each (pdacrt.glsl), so no per-id key is kept, a node's
+//!   box and routes are read once per tile, and only the tiles' side counts are
+//!   scanned (a few words per 1024 elements instead of two per element).
 //! - [`FlushReduce`]: the paper's sort by ray id + segmented arg-min, or one 64-bit
 //!   atomicMin per entry (the default where the device has 64-bit buffer atomics).
 //! - `stage_triangles`: the paper's shared-memory batches of T triangles, or direct
@@ -52,7 +53,10 @@ use serde::Serialize;
 use self::kernels::*;
 use self::pool::BufferPool;
 use self::types::{LevelTotals, Node, Segment, Tile, CHANNELS, CHILD_BYTES, MAX_IDS, TILE_ITEMS};
-use super::{GpuTriangle, Query, Tracer};
+use super::{GpuTriangle, Hit, Query, Tracer};
+
+/// Bytes of a hit record: PDACRT keeps each ray's closest hit so far in its first half.
+const HIT_BYTES: u64 = size_of::<Hit>() as u64;
 use crate::primitives::{
     gather::Direction,
     reduce_by_key::{Reduction, RunOutputs},
@@ -69,15 +73,17 @@ pub enum LevelSplit {
     /// code), run-length encode the sorted keys into per-node, per-code counts, and
     /// read each child's range off the sorted list.
     SortByKey,
-    /// One exclusive scan over the side flags of every element (left child: code left
-    /// or both; right child: both or right). A list is already grouped by node, so the
-    /// sort only ever reorders elements within a node; the scanned flags give each
-    /// element its place within its child directly, and each child's size as a
-    /// difference of two ranks. Same child lists (each in the parent list's order
-    /// rather than code order, which no result depends on: ties go to the smaller
-    /// triangle id), at the cost of one scan instead of a multi-pass radix sort and a
-    /// reduce-by-key per list. Lists are processed in tiles of one node (pdacrt.glsl):
-    /// no per-id keys, and the status code rides in the top two bits of each id.
+    /// Ranks by prefix sums of the side flags (left child: code left or both; right
+    /// child: both or right). A list is already grouped by node, so the sort only ever
+    /// reorders elements within a node; ranks on each side give each element its place
+    /// within its child directly, and each child's size as a difference of two ranks.
+    /// Same child lists (each in the parent list's order rather than code order, which
+    /// no result depends on: ties go to the smaller triangle id), at the cost of one
+    /// small scan instead of a multi-pass radix sort and a reduce-by-key per list.
+    /// Lists are processed in tiles of one node (pdacrt.glsl): no per-id keys, the
+    /// status code rides in the top two bits of each id, the filters count each tile's
+    /// sides, one exclusive scan runs over the tile counts, and the scatter ranks the
+    /// elements within their tile (tile_lanes.glsl).
     PrefixSums,
 }
 
@@ -159,6 +165,11 @@ impl PdacrtParams {
     /// - CPU devices read triangles directly in the segmented intersection instead of
     ///   staging them through shared memory: the barriers cost more than the staging
     ///   saves there (848 → 215 ms of intersection per bunny frame, docs/PERFORMANCE.md).
+    /// - CPU devices halve the terminal-node buffer (η = 2¹⁸, λ = ¾η): its 4 MiB at the
+    ///   paper-sized η were the difference between the bunny's 62.0 MiB peak and the
+    ///   issue's 64 MB (61.0 MiB) target, and on lavapipe the more frequent flushes cost
+    ///   nothing measurable (they clip rays to their hits sooner; docs/PERFORMANCE.md).
+    ///   GPUs keep η = 2¹⁹: a flush there is one wide launch and should stay wide.
     /// - The batch must fit shared memory (48 + 4 bytes per staged triangle).
     pub fn for_device(gpu: &Gpu) -> Self {
         let mut p = Self::default();
@@ -171,6 +182,8 @@ impl PdacrtParams {
         if gpu.info().is_cpu() {
             p.alpha = 64;
             p.stage_triangles = false;
+            p.eta = 1 << 18;
+            p.lambda = 3 << 16;
         } else {
             p.intersect_workgroup = 128;
         }
@@ -255,8 +268,9 @@ fn node_tiles(node: u32, start: u32, count: u32) -> impl Iterator<Item = Tile> {
     })
 }
 
-/// The side-flag ranks of a level split by prefix sums: four arrays (triangles left and
-/// right, rays left and right) of list length + 1 in one buffer, scanned together.
+/// The side counts of a level split by prefix sums, per tile: four arrays (triangles
+/// left and right, rays left and right) of tile count + 1 in one buffer, scanned
+/// together into each tile's rank within its child.
 struct Ranks {
     buffer: Buffer,
     tri_left: u32,
@@ -530,11 +544,16 @@ impl PdacrtTracer {
         chunk: u32,
     ) -> vk::Result<()> {
         let gpu = self.gpu.clone();
-        // The closest hits so far, (triangle, ordered t) per ray (pdacrt.glsl): all ones
-        // is above every hit and means none yet.
-        let best = self.pool.take("pdacrt-best", n as u64 * 8)?;
+        // The closest hits so far, (triangle, ordered t) per ray, kept in the chunk's own
+        // hit records (BEST_SLOT in pdacrt.glsl): all ones is above every hit and means
+        // none yet.
         let mut rec = gpu.recorder(StreamKind::Main)?;
-        rec.fill(&best, u32::MAX);
+        rec.fill_range(
+            hits,
+            offset as u64 * HIT_BYTES,
+            n as u64 * HIT_BYTES,
+            u32::MAX,
+        )?;
         let p = self.params;
         // Segments: a terminal node holds ≥ 1 ray and typically hundreds, so η/64 of them
         // rarely bind (a full segment table flushes like a full id buffer: line 7).
@@ -550,8 +569,10 @@ impl PdacrtTracer {
         };
         let tris = self.triangle_count;
         let root = Node {
-            box_min: (self.scene_min - self.eps).extend(0.0).into(),
-            box_max: (self.scene_max + self.eps).extend(0.0).into(),
+            box_min: (self.scene_min - self.eps).into(),
+            first_tri_tile: 0,
+            box_max: (self.scene_max + self.eps).into(),
+            first_ray_tile: 0,
             tri_start: 0,
             tri_count: tris,
             ray_start: 0,
@@ -653,7 +674,7 @@ impl PdacrtTracer {
                 offsets,
                 stride,
                 ranks,
-            } = self.filter_level(&current, rays, &best, offset, query, depth)?;
+            } = self.filter_level(&current, rays, hits, offset, query, depth)?;
             self.stats.host_round_trips += 1;
 
             // Lines 11–15 (recorded below): the next level's lists. Taken while nothing is
@@ -661,25 +682,27 @@ impl PdacrtTracer {
             // can go at once instead of at the next wait: peak memory.
             let next = (totals.next_nodes > 0)
                 .then(|| -> vk::Result<Level> {
+                    // Largest first (see take_while_idle).
+                    let pool = &mut self.pool;
+                    let ray_ids =
+                        pool.take_while_idle("pdacrt-ray-ids", totals.next_rays as u64 * 4)?;
+                    let tri_ids =
+                        pool.take_while_idle("pdacrt-tri-ids", totals.next_tris as u64 * 4)?;
                     Ok(Level {
-                        nodes: self.pool.take(
+                        nodes: pool.take_while_idle(
                             "pdacrt-nodes",
                             totals.next_nodes as u64 * size_of::<Node>() as u64,
                         )?,
                         node_count: totals.next_nodes,
-                        tri_ids: self
-                            .pool
-                            .take("pdacrt-tri-ids", totals.next_tris as u64 * 4)?,
-                        tri_owner: self.pool.take(
+                        tri_ids,
+                        tri_owner: pool.take_while_idle(
                             "pdacrt-tri-owner",
                             owner_bytes(totals.next_tris, totals.next_tri_tiles),
                         )?,
                         tri_tiles: if tiled { totals.next_tri_tiles } else { 0 },
                         tri_total: totals.next_tris,
-                        ray_ids: self
-                            .pool
-                            .take("pdacrt-ray-ids", totals.next_rays as u64 * 4)?,
-                        ray_owner: self.pool.take(
+                        ray_ids,
+                        ray_owner: pool.take_while_idle(
                             "pdacrt-ray-owner",
                             owner_bytes(totals.next_rays, totals.next_ray_tiles),
                         )?,
@@ -689,8 +712,10 @@ impl PdacrtTracer {
                 })
                 .transpose()?;
             let child_count = current.node_count * 2;
-            let routes = self.pool.take("pdacrt-routes", child_count as u64 * 16)?;
-            self.pool.collect();
+            let routes = self
+                .pool
+                .take_while_idle("pdacrt-routes", child_count as u64 * 16)?;
+            self.pool.clear();
 
             // Algorithm 1 lines 7–10: flush first if this level's terminal nodes would
             // push the buffer past λ.
@@ -698,7 +723,7 @@ impl PdacrtTracer {
                 || term.rays + totals.term_rays > p.lambda
                 || term.segment_count + totals.term_nodes > term.segment_capacity;
             if flushed && term.segment_count > 0 {
-                self.flush(&mut term, rays, offset, n, &best)?;
+                self.flush(&mut term, rays, offset, n, hits)?;
             }
             if totals.term_tris > term.tri_capacity
                 || totals.term_rays > term.ray_capacity
@@ -850,17 +875,12 @@ impl PdacrtTracer {
 
         // Lines 18–20: the remaining terminal nodes.
         if term.segment_count > 0 {
-            self.flush(&mut term, rays, offset, n, &best)?;
+            self.flush(&mut term, rays, offset, n, hits)?;
         }
         let mut rec = gpu.recorder(StreamKind::Main)?;
         rec.dispatch_items(
             &self.kernels.finalize_hits,
-            &[
-                (&self.triangles).into(),
-                rays.into(),
-                (&best).into(),
-                hits.into(),
-            ],
+            &[(&self.triangles).into(), rays.into(), hits.into()],
             &FinalizePush {
                 n,
                 ray_offset: offset,
@@ -869,7 +889,6 @@ impl PdacrtTracer {
         )?;
         rec.submit(&[])?;
         self.give_terminal(term);
-        self.pool.give(best);
         Ok(())
     }
 
@@ -886,7 +905,7 @@ impl PdacrtTracer {
         &mut self,
         level: &Level,
         rays: &Buffer,
-        best: &Buffer,
+        hits: &Buffer,
         ray_offset: u32,
         query: Query,
         depth: u32,
@@ -899,7 +918,7 @@ impl PdacrtTracer {
         let ranked = self.params.split == LevelSplit::PrefixSums;
         let ranks = ranked
             .then(|| -> vk::Result<Ranks> {
-                let (t, r) = (level.tri_total + 1, level.ray_total + 1);
+                let (t, r) = (level.tri_tiles + 1, level.ray_tiles + 1);
                 Ok(Ranks {
                     buffer: self.pool.take("pdacrt-ranks", 2 * (t + r) as u64 * 4)?,
                     tri_left: 0,
@@ -913,7 +932,8 @@ impl PdacrtTracer {
         if !ranked {
             self.sort_scratch(max_list)?;
         }
-        self.misc_scratch(max_list.max(CHANNELS * stride).max(scan_n), !ranked)?;
+        let scanned = if ranked { scan_n } else { max_list };
+        self.misc_scratch(scanned.max(CHANNELS * stride), !ranked)?;
         let children = self
             .pool
             .take("pdacrt-children", child_count as u64 * CHILD_BYTES)?;
@@ -952,7 +972,11 @@ impl PdacrtTracer {
             &self.kernels.filter_triangles,
             &bindings,
             &FilterTrianglesPush {
-                n: level.tri_total,
+                n: if ranked {
+                    level.tri_tiles
+                } else {
+                    level.tri_total
+                },
                 eps: self.eps,
                 left_base: tri_bases.0,
                 right_base: tri_bases.1,
@@ -968,14 +992,18 @@ impl PdacrtTracer {
             (&level.nodes).into(),
             (&level.ray_ids).into(),
             (&level.ray_owner).into(),
-            best.into(),
+            hits.into(),
         ];
         bindings.extend(ranks.as_ref().map(|r| BufferSlice::from(&r.buffer)));
         rec.dispatch(
             &self.kernels.filter_rays,
             &bindings,
             &FilterRaysPush {
-                n: level.ray_total,
+                n: if ranked {
+                    level.ray_tiles
+                } else {
+                    level.ray_total
+                },
                 eps: self.eps,
                 occlusion: (query == Query::Occlusion) as u32,
                 ray_offset,
@@ -1002,7 +1030,7 @@ impl PdacrtTracer {
         let counts = match &ranks {
             Some(ranks) => {
                 rec.barrier();
-                // Every side-flag array in one exclusive scan: each array's ranks come
+                // Every tile-count array in one exclusive scan: each array's ranks come
                 // out offset by the arrays before it, which cancels in every use (a
                 // child's size and an element's offset are differences of ranks).
                 let misc = self.scratch.misc.as_ref().unwrap();
@@ -1171,13 +1199,13 @@ impl PdacrtTracer {
         rays: &Buffer,
         ray_offset: u32,
         chunk_rays: u32,
-        best: &Buffer,
+        hits: &Buffer,
     ) -> vk::Result<()> {
         let gpu = self.gpu.clone();
         let entries = term.rays;
         self.stats.flushes += 1;
         if self.params.flush_reduce == FlushReduce::AtomicMin {
-            return self.flush_atomic(term, rays, ray_offset, best);
+            return self.flush_atomic(term, rays, ray_offset, hits);
         }
         self.sort_scratch(entries)?;
         self.misc_scratch(entries, true)?;
@@ -1259,9 +1287,12 @@ impl PdacrtTracer {
                 (&entry_t).into(),
                 (&entry_tri).into(),
                 (&run_total).into(),
-                best.into(),
+                hits.into(),
             ],
-            &MaxRunsPush { max_runs: entries },
+            &UpdateHitsPush {
+                max_runs: entries,
+                ray_offset,
+            },
             entries as u64,
         )?;
         rec.barrier();
@@ -1317,12 +1348,12 @@ impl PdacrtTracer {
         term: &mut TerminalBuffer,
         rays: &Buffer,
         ray_offset: u32,
-        best: &Buffer,
+        hits: &Buffer,
     ) -> vk::Result<()> {
         let gpu = self.gpu.clone();
         let mut rec = gpu.recorder(StreamKind::Main)?;
         rec.begin_scope("pdacrt-flush")?;
-        self.record_segmented_intersect(&mut rec, term, rays, ray_offset, &[best.into()])?;
+        self.record_segmented_intersect(&mut rec, term, rays, ray_offset, &[hits.into()])?;
         rec.barrier();
         rec.end_scope()?;
         rec.submit(&[])?;
@@ -1347,7 +1378,17 @@ impl Tracer for PdacrtTracer {
         check_id_range(triangles.len())?;
         self.gpu.wait_idle()?;
         let (lo, hi, eps) = scene_box(triangles);
-        self.triangles = self.gpu.upload("pdacrt-triangles", triangles)?;
+        // In place where the old buffer fits (a dynamic scene's usual case), else the old
+        // buffer goes before the new one comes: never both at once (peak memory).
+        let bytes = std::mem::size_of_val(triangles) as u64;
+        if bytes > self.triangles.size() {
+            self.triangles = self
+                .gpu
+                .create_buffer("pdacrt-triangles", 4, MemoryKind::Device)?;
+            self.triangles = self.gpu.upload("pdacrt-triangles", triangles)?;
+        } else {
+            self.triangles.write(triangles)?;
+        }
         self.triangle_count = triangles.len() as u32;
         (self.scene_min, self.scene_max, self.eps) = (lo, hi, eps);
         Ok(())

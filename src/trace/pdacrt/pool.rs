@@ -34,6 +34,14 @@ fn capacity_for(bytes: u64) -> u64 {
     bytes.next_multiple_of((floor_pow2 / 8).max(256))
 }
 
+/// The largest free buffer that may serve a request of `bytes`.
+fn largest_to_serve(bytes: u64) -> u64 {
+    (2 * bytes).max(SMALL)
+}
+
+/// Buffers this small are shared by requests of any size up to them.
+const SMALL: u64 = 64 << 10;
+
 impl BufferPool {
     pub fn new(gpu: &Gpu) -> Self {
         Self {
@@ -44,19 +52,38 @@ impl BufferPool {
     }
 
     /// A buffer of at least `bytes` bytes (contents undefined): the smallest free one
-    /// that fits, else a new one (and the free ones too small for it are retired).
+    /// that fits and is at most twice as large (or small), else a new one (and the free
+    /// ones too small for it are retired).
     pub fn take(&mut self, name: &str, bytes: u64) -> vk::Result<Buffer> {
+        self.take_inner(name, bytes, false)
+    }
+
+    /// As [`BufferPool::take`], for a caller that knows no submitted work still uses a
+    /// pooled buffer (right after a host wait): when no free buffer serves the request,
+    /// every free and retired buffer is freed before the new one is allocated instead of
+    /// beside it (take the largest requests first, so that the others can still reuse).
+    pub fn take_while_idle(&mut self, name: &str, bytes: u64) -> vk::Result<Buffer> {
+        self.take_inner(name, bytes, true)
+    }
+
+    fn take_inner(&mut self, name: &str, bytes: u64, idle: bool) -> vk::Result<Buffer> {
+        // A free buffer serves requests down to half its size: a small request must not
+        // hold a level's big list, which the next level would then allocate anew.
         let fit = self
             .free
-            .range(bytes.max(1)..)
+            .range(bytes.max(1)..=largest_to_serve(bytes))
             .find(|(_, v)| !v.is_empty())
             .map(|(k, _)| *k);
         if let Some(buffer) = fit.and_then(|k| self.free.get_mut(&k)).and_then(Vec::pop) {
             return Ok(buffer);
         }
-        let outgrown = self.free.split_off(&bytes.max(1));
-        let smaller = std::mem::replace(&mut self.free, outgrown);
-        self.retired.extend(smaller.into_values().flatten());
+        if idle {
+            self.clear();
+        } else {
+            let outgrown = self.free.split_off(&bytes.max(1));
+            let smaller = std::mem::replace(&mut self.free, outgrown);
+            self.retired.extend(smaller.into_values().flatten());
+        }
         let limit = self.gpu.info().limits.max_storage_buffer_range;
         // Past the largest size a binding allows, allocate exactly.
         let capacity = capacity_for(bytes).min(limit).max(bytes);

@@ -2,12 +2,15 @@
 
 use bytemuck::{Pod, Zeroable};
 
-/// A node of the implicit hierarchy: its box and its pivots into the level's id lists.
+/// A node of the implicit hierarchy: its box and its pivots into the level's id lists,
+/// and with [`LevelSplit::PrefixSums`](super::LevelSplit) its first tile in each list.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 #[repr(C)]
 pub struct Node {
-    pub box_min: [f32; 4],
-    pub box_max: [f32; 4],
+    pub box_min: [f32; 3],
+    pub first_tri_tile: u32,
+    pub box_max: [f32; 3],
+    pub first_ray_tile: u32,
     pub tri_start: u32,
     pub tri_count: u32,
     pub ray_start: u32,
