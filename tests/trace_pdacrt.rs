@@ -291,6 +291,22 @@ fn results_do_not_depend_on_the_parameters() {
             intersect_workgroup: 3, // segments of 24 rays: 8 per invocation, some partial
             ..deep()
         },
+        // Tiles per workgroup of one invocation, of a non-power of two, and of more
+        // invocations than most tiles have elements.
+        PdacrtParams {
+            split: LevelSplit::PrefixSums,
+            tile_workgroup: 1,
+            ..deep()
+        },
+        PdacrtParams {
+            split: LevelSplit::PrefixSums,
+            tile_workgroup: 3,
+            ..deep()
+        },
+        PdacrtParams {
+            tile_workgroup: 256,
+            ..PdacrtParams::for_device(&gpu)
+        },
         PdacrtParams {
             split: LevelSplit::SortByKey,
             ..PdacrtParams::for_device(&gpu)

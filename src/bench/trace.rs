@@ -149,7 +149,7 @@ impl fmt::Display for TraceReport {
             if let (true, Some(p)) = (r.tracer == "pdacrt", &self.pdacrt_params) {
                 writeln!(
                     f,
-                    "{:<12} α {} β {} η {} λ {} N {} T {}, chunks of {} rays, split {:?}, flush {:?}, triangles {}",
+                    "{:<12} α {} β {} η {} λ {} N {} T {}, chunks of {} rays, split {:?} (tiles per {} invocations), flush {:?}, triangles {}",
                     "",
                     p.alpha,
                     p.beta,
@@ -159,6 +159,7 @@ impl fmt::Display for TraceReport {
                     p.batch,
                     p.max_rays_per_chunk,
                     p.split,
+                    p.tile_workgroup,
                     p.flush_reduce,
                     if p.stage_triangles { "staged" } else { "direct" }
                 )?;

@@ -104,6 +104,10 @@ enum BenchCommand {
         /// PDACRT N: workgroup size of the segmented intersection.
         #[arg(long)]
         intersect_workgroup: Option<u32>,
+        /// PDACRT: invocations per workgroup (one tile each) of the prefix-sum split's
+        /// filters and scatter.
+        #[arg(long)]
+        tile_workgroup: Option<u32>,
         /// PDACRT: rays per chunk of the level loop.
         #[arg(long)]
         chunk: Option<u32>,
@@ -224,6 +228,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             lambda,
             batch,
             intersect_workgroup,
+            tile_workgroup,
             chunk,
             stage_triangles,
             split,
@@ -238,6 +243,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             params.lambda = lambda.unwrap_or(params.lambda.min(params.eta));
             params.batch = batch.unwrap_or(params.batch);
             params.intersect_workgroup = intersect_workgroup.unwrap_or(params.intersect_workgroup);
+            params.tile_workgroup = tile_workgroup.unwrap_or(params.tile_workgroup);
             params.max_rays_per_chunk = chunk.unwrap_or(params.max_rays_per_chunk);
             params.stage_triangles = stage_triangles.unwrap_or(params.stage_triangles);
             if let Some(split) = split {

@@ -134,6 +134,13 @@ impl Kernels {
         // instead of the per-node count tables to `children` (see the `ranked` variants).
         let ranked = params.split == LevelSplit::PrefixSums;
         let pick = |sorted, ranked_variant| if ranked { ranked_variant } else { sorted };
+        // The ranked filters and scatter take a tile per workgroup; the sorted ones an
+        // element per invocation.
+        let tile_wg = &[if ranked {
+            params.tile_workgroup
+        } else {
+            WORKGROUP
+        }];
         let atomic = params.flush_reduce == FlushReduce::AtomicMin;
         Ok(Self {
             iota: make(shaders::TRACE_PDACRT_IOTA, 2, size_of::<IotaPush>(), wg)?,
@@ -150,7 +157,7 @@ impl Kernels {
                 ),
                 4 + ranked as u32, // ranked: tiles for keys, and the ranks
                 size_of::<FilterTrianglesPush>(),
-                wg,
+                tile_wg,
             )?,
             filter_rays: make(
                 pick(
@@ -159,7 +166,7 @@ impl Kernels {
                 ),
                 5 + ranked as u32,
                 size_of::<FilterRaysPush>(),
-                wg,
+                tile_wg,
             )?,
             child_counts: make(
                 shaders::TRACE_PDACRT_CHILD_COUNTS,
@@ -198,7 +205,7 @@ impl Kernels {
                 ),
                 6, // ranked: tiles for keys, ranks for the next level's keys
                 size_of::<ScatterPush>(),
-                wg,
+                tile_wg,
             )?,
             segmented_intersect: make(
                 match (params.stage_triangles, atomic) {

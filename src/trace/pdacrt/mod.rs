@@ -116,6 +116,9 @@ pub struct PdacrtParams {
     pub batch: u32,
     /// N: invocations per workgroup (one terminal node each) in the segmented intersection.
     pub intersect_workgroup: u32,
+    /// Invocations per workgroup (one tile each) of the filters and the scatter of
+    /// [`LevelSplit::PrefixSums`].
+    pub tile_workgroup: u32,
     /// Stage triangles through shared memory in batches of T (Algorithm 3 line 5), or
     /// read them straight from the triangle buffer (no barriers; for CPU devices).
     pub stage_triangles: bool,
@@ -138,6 +141,7 @@ impl Default for PdacrtParams {
             lambda: 3 << 17,
             batch: 256,
             intersect_workgroup: 64,
+            tile_workgroup: 64,
             stage_triangles: true,
             max_rays_per_chunk: 1 << 19,
             max_depth: 28,
@@ -170,6 +174,13 @@ impl PdacrtParams {
     ///   issue's 64 MB (61.0 MiB) target, and on lavapipe the more frequent flushes cost
     ///   nothing measurable (they clip rays to their hits sooner; docs/PERFORMANCE.md).
     ///   GPUs keep η = 2¹⁹: a flush there is one wide launch and should stay wide.
+    /// - CPU devices give each tile one subgroup (lavapipe: 8 invocations) instead of 64
+    ///   invocations: a workgroup wider than the SIMD width makes lavapipe switch
+    ///   between its subgroups at every barrier, and the tile kernels have one or two.
+    ///   On the bunny this halved the ray filter (188 → 98 ms per 1024² frame) and cut
+    ///   the scatter from 108 to 58 ms (docs/PERFORMANCE.md). The segmented
+    ///   intersection too runs one subgroup per segment there (N = 8 on lavapipe, so
+    ///   segments of at most 64 rays): 212–219 → 172–187 ms per frame.
     /// - The batch must fit shared memory (48 + 4 bytes per staged triangle).
     pub fn for_device(gpu: &Gpu) -> Self {
         let mut p = Self::default();
@@ -184,6 +195,8 @@ impl PdacrtParams {
             p.stage_triangles = false;
             p.eta = 1 << 18;
             p.lambda = 3 << 16;
+            p.tile_workgroup = gpu.info().limits.subgroup_size.max(1);
+            p.intersect_workgroup = p.tile_workgroup;
         } else {
             p.intersect_workgroup = 128;
         }
@@ -204,8 +217,12 @@ impl PdacrtParams {
         if self.lambda == 0 || self.lambda > self.eta {
             return bad("λ must be in 1..=η");
         }
-        if self.batch == 0 || self.intersect_workgroup == 0 || self.max_rays_per_chunk == 0 {
-            return bad("T, N and the chunk size must be at least 1");
+        if self.batch == 0
+            || self.intersect_workgroup == 0
+            || self.tile_workgroup == 0
+            || self.max_rays_per_chunk == 0
+        {
+            return bad("T, N, the tile workgroup and the chunk size must be at least 1");
         }
         if self.max_rays_per_chunk >= MAX_IDS {
             return bad("the chunk size must be below 2^30 rays");
