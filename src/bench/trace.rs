@@ -13,8 +13,8 @@ use serde::Serialize;
 use super::workloads::{self, RayBatch, Workload};
 use crate::scene::Scene;
 use crate::trace::{
-    cpu, BruteForceTracer, GpuTriangle, Hit, PdacrtParams, PdacrtTracer, Query, Ray, Tracer,
-    TracerKind,
+    cpu, BruteForceTracer, GpuTriangle, Hit, LevelSplit, PdacrtParams, PdacrtTracer, Query, Ray,
+    Tracer, TracerKind,
 };
 use crate::vk::{self, Buffer, Gpu};
 
@@ -149,7 +149,7 @@ impl fmt::Display for TraceReport {
             if let (true, Some(p)) = (r.tracer == "pdacrt", &self.pdacrt_params) {
                 writeln!(
                     f,
-                    "{:<12} α {} β {} η {} λ {} N {} T {}, chunks of {} rays, split {:?} (tiles per {} invocations), flush {:?}, triangles {}",
+                    "{:<12} α {} β {} η {} λ {} N {} T {}, chunks of {} rays, split {}, flush {:?}, triangles {}",
                     "",
                     p.alpha,
                     p.beta,
@@ -158,8 +158,11 @@ impl fmt::Display for TraceReport {
                     p.intersect_workgroup,
                     p.batch,
                     p.max_rays_per_chunk,
-                    p.split,
-                    p.tile_workgroup,
+                    match p.split {
+                        LevelSplit::PrefixSums =>
+                            format!("PrefixSums (tiles per {} invocations)", p.tile_workgroup),
+                        split => format!("{split:?}"),
+                    },
                     p.flush_reduce,
                     if p.stage_triangles { "staged" } else { "direct" }
                 )?;

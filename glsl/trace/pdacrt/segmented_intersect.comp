@@ -13,7 +13,10 @@
 // The `direct` variant reads each triangle straight from the triangle buffer instead of
 // staging it (no shared memory, no barrier). Workgroup barriers are very slow on CPU
 // devices (lavapipe), where shared memory is no nearer than any other memory; the
-// tracer picks the variant per device (PdacrtParams::stage_triangles).
+// tracer picks the variant per device (PdacrtParams::stage_triangles). Free of
+// barriers, it can also stop early in occlusion mode: an invocation leaves a segment's
+// triangles once each of its rays has some hit (the staged variant's invocations must
+// keep meeting at its barriers).
 //
 // The `atomic` variants (FlushReduce::AtomicMin) replace the per-entry outputs and the
 // sort by ray id + segmented arg-min that follows (Algorithm 3 lines 12–13) with one
@@ -34,7 +37,8 @@ layout(std430, set = 0, binding = 1) readonly buffer Rays { Ray rays[]; };
 layout(std430, set = 0, binding = 2) readonly buffer Segments { Segment segments[]; };
 layout(std430, set = 0, binding = 3) readonly buffer TermTris { uint term_tris[]; };
 layout(std430, set = 0, binding = 4) readonly buffer TermRays { uint term_rays[]; };
-layout(push_constant) uniform Push { uint segment_count; uint ray_offset; } pc;
+// occlusion: 1 in occlusion mode (any hit will do; see the direct variant).
+layout(push_constant) uniform Push { uint segment_count; uint ray_offset; uint occlusion; } pc;
 
 #ifdef ATOMIC
 // The hit buffer, holding the closest hits so far (BEST_SLOT in pdacrt.glsl).
@@ -94,6 +98,11 @@ void main() {
         }
         if (mine == 0u) break;
         for (uint j = 0u; j < s.tri_count; ++j) {
+            if (pc.occlusion != 0u) {
+                bool all_hit = true;
+                for (uint m = 0u; m < mine; ++m) all_hit = all_hit && best[m] != MISS;
+                if (all_hit) break;
+            }
             uint id = term_tris[s.tri_start + j];
             Triangle tri = triangles[id];
             for (uint m = 0u; m < RAYS_PER_INVOCATION; ++m) {

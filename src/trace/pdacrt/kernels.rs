@@ -99,6 +99,8 @@ pub struct ScatterPush {
 pub struct IntersectPush {
     pub segment_count: u32,
     pub ray_offset: u32,
+    /// 1 in occlusion mode.
+    pub occlusion: u32,
 }
 
 #[derive(Clone, Copy, Pod, Zeroable)]

@@ -311,6 +311,20 @@ impl Ranks {
     }
 }
 
+/// The rays of one chunk and where their hits go.
+#[derive(Clone, Copy)]
+struct Chunk<'a> {
+    rays: &'a Buffer,
+    /// The hit buffer; the chunk's records double as its closest hits so far
+    /// (BEST_SLOT in pdacrt.glsl).
+    hits: &'a Buffer,
+    /// The chunk's first ray in `rays` (and hit in `hits`).
+    offset: u32,
+    /// Rays in the chunk.
+    n: u32,
+    query: Query,
+}
+
 /// What filtering a level leaves for building the next one.
 struct Filtered {
     totals: LevelTotals,
@@ -551,15 +565,14 @@ impl PdacrtTracer {
     }
 
     /// Traces rays `offset..offset + n` of `rays` into the same slots of `hits`.
-    fn trace_chunk(
-        &mut self,
-        rays: &Buffer,
-        hits: &Buffer,
-        offset: u32,
-        n: u32,
-        query: Query,
-        chunk: u32,
-    ) -> vk::Result<()> {
+    fn trace_chunk(&mut self, chunk: Chunk<'_>, index: u32) -> vk::Result<()> {
+        let Chunk {
+            rays,
+            hits,
+            offset,
+            n,
+            ..
+        } = chunk;
         let gpu = self.gpu.clone();
         // The closest hits so far, (triangle, ordered t) per ray, kept in the chunk's own
         // hit records (BEST_SLOT in pdacrt.glsl): all ones is above every hit and means
@@ -691,7 +704,7 @@ impl PdacrtTracer {
                 offsets,
                 stride,
                 ranks,
-            } = self.filter_level(&current, rays, hits, offset, query, depth)?;
+            } = self.filter_level(&current, &chunk, depth)?;
             self.stats.host_round_trips += 1;
 
             // Lines 11–15 (recorded below): the next level's lists. Taken while nothing is
@@ -740,7 +753,7 @@ impl PdacrtTracer {
                 || term.rays + totals.term_rays > p.lambda
                 || term.segment_count + totals.term_nodes > term.segment_capacity;
             if flushed && term.segment_count > 0 {
-                self.flush(&mut term, rays, offset, n, hits)?;
+                self.flush(&mut term, &chunk)?;
             }
             if totals.term_tris > term.tri_capacity
                 || totals.term_rays > term.ray_capacity
@@ -860,7 +873,7 @@ impl PdacrtTracer {
             term.segment_count += totals.term_nodes;
 
             self.stats.levels.push(LevelStats {
-                chunk,
+                chunk: index,
                 level: depth,
                 nodes: current.node_count,
                 triangles: current.tri_total,
@@ -892,7 +905,7 @@ impl PdacrtTracer {
 
         // Lines 18–20: the remaining terminal nodes.
         if term.segment_count > 0 {
-            self.flush(&mut term, rays, offset, n, hits)?;
+            self.flush(&mut term, &chunk)?;
         }
         let mut rec = gpu.recorder(StreamKind::Main)?;
         rec.dispatch_items(
@@ -917,16 +930,19 @@ impl PdacrtTracer {
 
     /// Filters one level (Algorithm 1 lines 4–6, Algorithm 2) and reads its totals back:
     /// the loop's one host round trip per level.
-    #[allow(clippy::too_many_arguments)]
     fn filter_level(
         &mut self,
         level: &Level,
-        rays: &Buffer,
-        hits: &Buffer,
-        ray_offset: u32,
-        query: Query,
+        chunk: &Chunk<'_>,
         depth: u32,
     ) -> vk::Result<Filtered> {
+        let &Chunk {
+            rays,
+            hits,
+            offset: ray_offset,
+            query,
+            ..
+        } = chunk;
         let gpu = self.gpu.clone();
         let max_list = level.tri_total.max(level.ray_total);
         let child_count = level.node_count * 2;
@@ -1210,20 +1226,19 @@ impl PdacrtTracer {
 
     /// Processes the terminal-node buffer (Algorithm 3) and updates the global closest
     /// hits (Algorithm 1 line 9). Recorded without a host wait.
-    fn flush(
-        &mut self,
-        term: &mut TerminalBuffer,
-        rays: &Buffer,
-        ray_offset: u32,
-        chunk_rays: u32,
-        hits: &Buffer,
-    ) -> vk::Result<()> {
+    fn flush(&mut self, term: &mut TerminalBuffer, chunk: &Chunk<'_>) -> vk::Result<()> {
         let gpu = self.gpu.clone();
         let entries = term.rays;
         self.stats.flushes += 1;
         if self.params.flush_reduce == FlushReduce::AtomicMin {
-            return self.flush_atomic(term, rays, ray_offset, hits);
+            return self.flush_atomic(term, chunk);
         }
+        let &Chunk {
+            offset: ray_offset,
+            n: chunk_rays,
+            hits,
+            ..
+        } = chunk;
         self.sort_scratch(entries)?;
         self.misc_scratch(entries, true)?;
         let entry_t = self.pool.take("pdacrt-entry-t", entries as u64 * 4)?;
@@ -1242,8 +1257,7 @@ impl PdacrtTracer {
         self.record_segmented_intersect(
             &mut rec,
             term,
-            rays,
-            ray_offset,
+            chunk,
             &[(&entry_t).into(), (&entry_tri).into()],
         )?;
         // Lines 12–13: sort the entries by ray id, then the segmented arg-min.
@@ -1333,13 +1347,12 @@ impl PdacrtTracer {
         &self,
         rec: &mut Recorder,
         term: &TerminalBuffer,
-        rays: &Buffer,
-        ray_offset: u32,
+        chunk: &Chunk<'_>,
         outputs: &[BufferSlice<'_>],
     ) -> vk::Result<()> {
         let mut bindings: Vec<BufferSlice> = vec![
             (&self.triangles).into(),
-            rays.into(),
+            chunk.rays.into(),
             (&term.segments).into(),
             (&term.tri_ids).into(),
             (&term.ray_ids).into(),
@@ -1351,7 +1364,8 @@ impl PdacrtTracer {
             &bindings,
             &IntersectPush {
                 segment_count: term.segment_count,
-                ray_offset,
+                ray_offset: chunk.offset,
+                occlusion: (chunk.query == Query::Occlusion) as u32,
             },
             groups,
         )
@@ -1360,17 +1374,11 @@ impl PdacrtTracer {
     /// [`FlushReduce::AtomicMin`]: the segmented intersection lowers each ray's packed
     /// closest hit in place (Algorithm 3 lines 2–10, with lines 12–13 and Algorithm 1
     /// line 9 folded into its atomicMin).
-    fn flush_atomic(
-        &mut self,
-        term: &mut TerminalBuffer,
-        rays: &Buffer,
-        ray_offset: u32,
-        hits: &Buffer,
-    ) -> vk::Result<()> {
+    fn flush_atomic(&mut self, term: &mut TerminalBuffer, chunk: &Chunk<'_>) -> vk::Result<()> {
         let gpu = self.gpu.clone();
         let mut rec = gpu.recorder(StreamKind::Main)?;
         rec.begin_scope("pdacrt-flush")?;
-        self.record_segmented_intersect(&mut rec, term, rays, ray_offset, &[hits.into()])?;
+        self.record_segmented_intersect(&mut rec, term, chunk, &[chunk.hits.into()])?;
         rec.barrier();
         rec.end_scope()?;
         rec.submit(&[])?;
@@ -1427,7 +1435,14 @@ impl Tracer for PdacrtTracer {
         let mut offset = 0;
         while offset < ray_count {
             let n = chunk.min(ray_count - offset);
-            self.trace_chunk(rays, hits, offset, n, query, self.stats.chunks)?;
+            let chunk = Chunk {
+                rays,
+                hits,
+                offset,
+                n,
+                query,
+            };
+            self.trace_chunk(chunk, self.stats.chunks)?;
             self.stats.chunks += 1;
             offset += n;
         }
