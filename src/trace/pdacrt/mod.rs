@@ -708,8 +708,9 @@ impl PdacrtTracer {
             self.stats.host_round_trips += 1;
 
             // Lines 11–15 (recorded below): the next level's lists. Taken while nothing is
-            // in flight (filter_level waited), so the buffers the pool retires to make room
-            // can go at once instead of at the next wait: peak memory.
+            // in flight (filter_level waited), so the buffers the pool lets go to make room
+            // go at once instead of at the next wait, and whatever stays free after these
+            // takes is freed too (the next level allocates what it misses): peak memory.
             let next = (totals.next_nodes > 0)
                 .then(|| -> vk::Result<Level> {
                     // Largest first (see take_while_idle).
@@ -745,7 +746,7 @@ impl PdacrtTracer {
             let routes = self
                 .pool
                 .take_while_idle("pdacrt-routes", child_count as u64 * 16)?;
-            self.pool.clear();
+            self.pool.clear(); // only free buffers: the taken ones are not in the pool
 
             // Algorithm 1 lines 7–10: flush first if this level's terminal nodes would
             // push the buffer past λ.

@@ -111,7 +111,7 @@ impl BufferPool {
 
 #[cfg(test)]
 mod tests {
-    use super::capacity_for;
+    use super::{capacity_for, largest_to_serve, SMALL};
 
     #[test]
     fn capacities_round_up_by_at_most_an_eighth() {
@@ -126,5 +126,13 @@ mod tests {
             let c = capacity_for(bytes);
             assert!(c >= bytes && c <= bytes + bytes / 8 + 256, "{bytes} -> {c}");
         }
+    }
+
+    #[test]
+    fn big_buffers_serve_only_requests_of_at_least_half_their_size() {
+        assert_eq!(largest_to_serve(3 << 20), 6 << 20);
+        assert_eq!(largest_to_serve(1), SMALL);
+        assert_eq!(largest_to_serve(SMALL / 2), SMALL);
+        assert_eq!(largest_to_serve(SMALL), 2 * SMALL);
     }
 }
