@@ -54,9 +54,6 @@ use self::kernels::*;
 use self::pool::BufferPool;
 use self::types::{LevelTotals, Node, Segment, Tile, CHANNELS, CHILD_BYTES, MAX_IDS, TILE_ITEMS};
 use super::{GpuTriangle, Hit, Query, Tracer};
-
-/// Bytes of a hit record: PDACRT keeps each ray's closest hit so far in its first half.
-const HIT_BYTES: u64 = size_of::<Hit>() as u64;
 use crate::primitives::{
     gather::Direction,
     reduce_by_key::{Reduction, RunOutputs},
@@ -65,6 +62,9 @@ use crate::primitives::{
 use crate::vk::{
     self, grid_for, Buffer, BufferSlice, Gpu, MemoryKind, Recorder, StreamKind, TimelinePoint,
 };
+
+/// Bytes of a hit record: PDACRT keeps each ray's closest hit so far in its first half.
+const HIT_BYTES: u64 = size_of::<Hit>() as u64;
 
 /// How a level's lists are split into the children's lists.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
