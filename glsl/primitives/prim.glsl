@@ -18,4 +18,20 @@ uint f32_unorder(uint o) {
     return (o & 0x80000000u) != 0u ? (o & 0x7FFFFFFFu) : ~o;
 }
 
+// For four digits handled together (the sort's counters, four keys at a time): how many
+// of the earlier ones in the quad equal each. The four counter loads can then be issued
+// together and the four stores after them, instead of four dependent load-store pairs:
+// the key at c takes counter + earlier_equal(d)[c], and storing that + 1 in quad order
+// leaves each counter past its last key (the later store of a shared counter is the
+// larger). On lavapipe, where every lane's shared-memory access is a scalar access,
+// this took the 4M-pair sort from 71.6 to 67.0 ms and from 74.6 to 68.5 ms (two
+// tuning sweeps, minima of 5 interleaved rounds); eight keys at a time measured 5%
+// slower than four.
+uvec4 earlier_equal(uvec4 d) {
+    return uvec4(0u,
+                 uint(d.y == d.x),
+                 uint(d.z == d.x) + uint(d.z == d.y),
+                 uint(d.w == d.x) + uint(d.w == d.y) + uint(d.w == d.z));
+}
+
 #endif

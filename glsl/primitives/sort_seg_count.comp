@@ -19,6 +19,16 @@ layout(push_constant) uniform Push { uint shift; uint bits; uint flags; } pc;
 
 shared uint counts[RADIX * WORKGROUP_SIZE];
 
+// Counts four digits (counter indices `d`): the loads together, then the stores in
+// order (earlier_equal in prim.glsl).
+void count4(uvec4 d) {
+    uvec4 c = uvec4(counts[d.x], counts[d.y], counts[d.z], counts[d.w]) + earlier_equal(d);
+    counts[d.x] = c.x + 1u;
+    counts[d.y] = c.y + 1u;
+    counts[d.z] = c.z + 1u;
+    counts[d.w] = c.w + 1u;
+}
+
 void main() {
     uint g = linear_group_id();
     uint tiles = hdr[HDR_GROUPS + 1u];
@@ -36,10 +46,9 @@ void main() {
     uint i = begin;
     if ((pc.flags & 4u) != 0u) {
         // Two pairs per uvec4; begin is a multiple of 4, so each read is aligned.
-        for (; i + 2u <= end; i += 2u) {
-            uvec2 k = (keys4[i / 2u].xz >> pc.shift) & mask;
-            counts[k.x * WORKGROUP_SIZE + lid] += 1u;
-            counts[k.y * WORKGROUP_SIZE + lid] += 1u;
+        for (; i + 4u <= end; i += 4u) {
+            uvec4 k = uvec4(keys4[i / 2u].xz, keys4[i / 2u + 1u].xz);
+            count4(((k >> pc.shift) & mask) * WORKGROUP_SIZE + lid);
         }
         for (; i < end; ++i) {
             uint d = (keys[2u * i] >> pc.shift) & mask;
@@ -47,11 +56,7 @@ void main() {
         }
     }
     for (; i + 4u <= end; i += 4u) {
-        uvec4 k = (keys4[i / 4u] >> pc.shift) & mask;
-        counts[k.x * WORKGROUP_SIZE + lid] += 1u;
-        counts[k.y * WORKGROUP_SIZE + lid] += 1u;
-        counts[k.z * WORKGROUP_SIZE + lid] += 1u;
-        counts[k.w * WORKGROUP_SIZE + lid] += 1u;
+        count4(((keys4[i / 4u] >> pc.shift) & mask) * WORKGROUP_SIZE + lid);
     }
     for (; i < end; ++i) {
         uint d = (keys[i] >> pc.shift) & mask;

@@ -26,6 +26,17 @@ layout(push_constant) uniform Push { uint shift; uint bits; uint flags; } pc;
 
 shared uint counts[RADIX * WORKGROUP_SIZE];
 
+// Output positions of four keys with counter indices `d`, in order (stable), and the
+// counters advanced past them (earlier_equal in prim.glsl).
+uvec4 take4(uvec4 d) {
+    uvec4 pos = uvec4(counts[d.x], counts[d.y], counts[d.z], counts[d.w]) + earlier_equal(d);
+    counts[d.x] = pos.x + 1u;
+    counts[d.y] = pos.y + 1u;
+    counts[d.z] = pos.z + 1u;
+    counts[d.w] = pos.w + 1u;
+    return pos;
+}
+
 void main() {
     uint g = linear_group_id();
     uint tiles = hdr[HDR_GROUPS + 1u];
@@ -58,14 +69,13 @@ void main() {
                 v = vals_in4[i / 4u];
             }
             uvec4 d = ((k >> pc.shift) & mask) * WORKGROUP_SIZE + lid;
+            uvec4 pos = take4(d);
             for (uint c = 0u; c < 4u; ++c) {
-                uint pos = counts[d[c]];
-                counts[d[c]] = pos + 1u;
                 if (to_pairs) {
-                    pairs_out[pos] = uvec2(k[c], v[c]);
+                    pairs_out[pos[c]] = uvec2(k[c], v[c]);
                 } else {
-                    keys_out[pos] = k[c];
-                    vals_out[pos] = v[c];
+                    keys_out[pos[c]] = k[c];
+                    vals_out[pos[c]] = v[c];
                 }
             }
         }
@@ -88,23 +98,17 @@ void main() {
         for (; i + 4u <= end; i += 4u) {
             uvec4 k = keys_in4[i / 4u];
             uvec4 v = vals_in4[i / 4u];
-            uvec4 d = ((k >> pc.shift) & mask) * WORKGROUP_SIZE + lid;
+            uvec4 pos = take4(((k >> pc.shift) & mask) * WORKGROUP_SIZE + lid);
             for (uint c = 0u; c < 4u; ++c) {
-                uint pos = counts[d[c]];
-                counts[d[c]] = pos + 1u;
-                keys_out[pos] = k[c];
-                vals_out[pos] = v[c];
+                keys_out[pos[c]] = k[c];
+                vals_out[pos[c]] = v[c];
             }
         }
     } else {
         for (; i + 4u <= end; i += 4u) {
             uvec4 k = keys_in4[i / 4u];
-            uvec4 d = ((k >> pc.shift) & mask) * WORKGROUP_SIZE + lid;
-            for (uint c = 0u; c < 4u; ++c) {
-                uint pos = counts[d[c]];
-                counts[d[c]] = pos + 1u;
-                keys_out[pos] = k[c];
-            }
+            uvec4 pos = take4(((k >> pc.shift) & mask) * WORKGROUP_SIZE + lid);
+            for (uint c = 0u; c < 4u; ++c) keys_out[pos[c]] = k[c];
         }
     }
     for (; i < end; ++i) {
