@@ -10,7 +10,7 @@
 //! - [`trace`]: the `Tracer` interface and its implementations.
 //! - [`integrator`]: what is computed along the rays.
 //! - [`render`]: ties a scene, a tracer and an integrator into a film.
-//! - [`bench`]: the measurements behind `splitray bench`.
+//! - [`bench`](mod@bench): the measurements behind `splitray bench`.
 
 pub mod bench;
 pub mod bsdf;

@@ -22,7 +22,7 @@ pub fn luminance(c: Vec3) -> f32 {
 #[derive(Clone, Debug, Default)]
 pub struct LightTable {
     pub lights: Vec<GpuLight>,
-    /// cdf[k] = P(choice ≤ k); the last entry is exactly 1.
+    /// `cdf[k]` = P(choice ≤ k); the last entry is exactly 1.
     pub cdf: Vec<f32>,
     /// Probability of choosing each triangle (0 for non-emitters).
     pub tri_pmf: Vec<f32>,
