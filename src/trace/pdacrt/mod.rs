@@ -262,17 +262,64 @@ pub struct TraceStats {
 struct Level {
     nodes: Buffer,
     node_count: u32,
-    tri_ids: Buffer,
-    /// Which node owns each triangle id: per-id keys (node << 2 | code) when the level is
-    /// split by sorting, `tri_tiles` tiles (pdacrt.glsl) when by prefix sums.
-    tri_owner: Buffer,
-    tri_tiles: u32,
-    tri_total: u32,
-    ray_ids: Buffer,
-    /// As `tri_owner`, for the ray ids.
-    ray_owner: Buffer,
-    ray_tiles: u32,
-    ray_total: u32,
+    tris: IdList,
+    rays: IdList,
+}
+
+/// One of a level's two id lists and which node owns each id.
+struct IdList {
+    ids: Buffer,
+    /// Per-id keys (node << 2 | code) when the level is split by sorting, `tiles` tiles
+    /// (pdacrt.glsl) when by prefix sums.
+    owner: Buffer,
+    /// Tiles of the list (prefix-sum split; else 0).
+    tiles: u32,
+    /// Ids in the list.
+    total: u32,
+}
+
+/// Which of a level's lists: names its buffers.
+#[derive(Clone, Copy)]
+enum ListKind {
+    Triangles,
+    Rays,
+}
+
+impl IdList {
+    /// The buffers of a list of `total` ids, cut into `tiles` tiles when the level is
+    /// split by prefix sums (`None`: per-id keys). `idle`: taken right after a host
+    /// wait ([`BufferPool::take_while_idle`]).
+    fn take(
+        pool: &mut BufferPool,
+        kind: ListKind,
+        total: u32,
+        tiles: Option<u32>,
+        idle: bool,
+    ) -> vk::Result<Self> {
+        let (ids_name, owner_name) = match kind {
+            ListKind::Triangles => ("pdacrt-tri-ids", "pdacrt-tri-owner"),
+            ListKind::Rays => ("pdacrt-ray-ids", "pdacrt-ray-owner"),
+        };
+        let owner_bytes = tiles.map_or(total as u64 * 4, |t| t as u64 * size_of::<Tile>() as u64);
+        let mut take = |name, bytes| {
+            if idle {
+                pool.take_while_idle(name, bytes)
+            } else {
+                pool.take(name, bytes)
+            }
+        };
+        Ok(Self {
+            ids: take(ids_name, total as u64 * 4)?,
+            owner: take(owner_name, owner_bytes)?,
+            tiles: tiles.unwrap_or(0),
+            total,
+        })
+    }
+
+    fn give(self, pool: &mut BufferPool) {
+        pool.give(self.ids);
+        pool.give(self.owner);
+    }
 }
 
 /// The tiles of one node's `count` elements from `start` (pdacrt.glsl).
@@ -590,13 +637,6 @@ impl PdacrtTracer {
         let mut term = self.new_terminal_buffer(p.eta, p.eta, p.eta / 64)?;
         // Levels split by prefix sums are cut into tiles; sorted ones carry per-id keys.
         let tiled = p.split == LevelSplit::PrefixSums;
-        let owner_bytes = |count: u32, tiles: u32| {
-            if tiled {
-                tiles as u64 * size_of::<Tile>() as u64
-            } else {
-                count as u64 * 4
-            }
-        };
         let tris = self.triangle_count;
         let root = Node {
             box_min: (self.scene_min - self.eps).into(),
@@ -653,31 +693,18 @@ impl PdacrtTracer {
             self.pool.give(seg_tags);
             None
         } else {
-            let (tri_tiles, ray_tiles) = if tiled {
-                (tris.div_ceil(TILE_ITEMS), n.div_ceil(TILE_ITEMS))
-            } else {
-                (0, 0)
-            };
+            let pool = &mut self.pool;
+            let tiles = |count: u32| tiled.then(|| count.div_ceil(TILE_ITEMS));
             let level = Level {
-                nodes: self.pool.take("pdacrt-nodes", size_of::<Node>() as u64)?,
+                nodes: pool.take("pdacrt-nodes", size_of::<Node>() as u64)?,
                 node_count: 1,
-                tri_ids: self.pool.take("pdacrt-tri-ids", tris as u64 * 4)?,
-                tri_owner: self
-                    .pool
-                    .take("pdacrt-tri-owner", owner_bytes(tris, tri_tiles))?,
-                tri_tiles,
-                tri_total: tris,
-                ray_ids: self.pool.take("pdacrt-ray-ids", n as u64 * 4)?,
-                ray_owner: self
-                    .pool
-                    .take("pdacrt-ray-owner", owner_bytes(n, ray_tiles))?,
-                ray_tiles,
-                ray_total: n,
+                tris: IdList::take(pool, ListKind::Triangles, tris, tiles(tris), false)?,
+                rays: IdList::take(pool, ListKind::Rays, n, tiles(n), false)?,
             };
             rec.update(&level.nodes, 0, &[root])?;
             for (ids, owner, count) in [
-                (&level.tri_ids, &level.tri_owner, tris),
-                (&level.ray_ids, &level.ray_owner, n),
+                (&level.tris.ids, &level.tris.owner, tris),
+                (&level.rays.ids, &level.rays.owner, n),
             ] {
                 if tiled {
                     self.iota_ids(&mut rec, ids, count)?;
@@ -715,30 +742,28 @@ impl PdacrtTracer {
                 .then(|| -> vk::Result<Level> {
                     // Largest first (see take_while_idle).
                     let pool = &mut self.pool;
-                    let ray_ids =
-                        pool.take_while_idle("pdacrt-ray-ids", totals.next_rays as u64 * 4)?;
-                    let tri_ids =
-                        pool.take_while_idle("pdacrt-tri-ids", totals.next_tris as u64 * 4)?;
+                    let rays = IdList::take(
+                        pool,
+                        ListKind::Rays,
+                        totals.next_rays,
+                        tiled.then_some(totals.next_ray_tiles),
+                        true,
+                    )?;
+                    let tris = IdList::take(
+                        pool,
+                        ListKind::Triangles,
+                        totals.next_tris,
+                        tiled.then_some(totals.next_tri_tiles),
+                        true,
+                    )?;
                     Ok(Level {
                         nodes: pool.take_while_idle(
                             "pdacrt-nodes",
                             totals.next_nodes as u64 * size_of::<Node>() as u64,
                         )?,
                         node_count: totals.next_nodes,
-                        tri_ids,
-                        tri_owner: pool.take_while_idle(
-                            "pdacrt-tri-owner",
-                            owner_bytes(totals.next_tris, totals.next_tri_tiles),
-                        )?,
-                        tri_tiles: if tiled { totals.next_tri_tiles } else { 0 },
-                        tri_total: totals.next_tris,
-                        ray_ids,
-                        ray_owner: pool.take_while_idle(
-                            "pdacrt-ray-owner",
-                            owner_bytes(totals.next_rays, totals.next_ray_tiles),
-                        )?,
-                        ray_tiles: if tiled { totals.next_ray_tiles } else { 0 },
-                        ray_total: totals.next_rays,
+                        tris,
+                        rays,
                     })
                 })
                 .transpose()?;
@@ -774,7 +799,13 @@ impl PdacrtTracer {
             let empty = &term.segments; // bound where a list is empty; never written then
             let (next_nodes, next_tri_ids, next_tri_owner, next_ray_ids, next_ray_owner) =
                 match &next {
-                    Some(l) => (&l.nodes, &l.tri_ids, &l.tri_owner, &l.ray_ids, &l.ray_owner),
+                    Some(l) => (
+                        &l.nodes,
+                        &l.tris.ids,
+                        &l.tris.owner,
+                        &l.rays.ids,
+                        &l.rays.owner,
+                    ),
                     None => (empty, empty, empty, empty, empty),
                 };
             let mut bindings: Vec<BufferSlice> = vec![
@@ -807,13 +838,10 @@ impl PdacrtTracer {
             )?;
             rec.barrier();
             let (tri_sides, ray_sides) = Ranks::bases(ranks.as_ref());
-            for (rays_list, n_list, tiles, owner, ids, next_ids, next_owner, term_ids, sides) in [
+            for (rays_list, list, next_ids, next_owner, term_ids, sides) in [
                 (
                     0,
-                    current.tri_total,
-                    current.tri_tiles,
-                    &current.tri_owner,
-                    &current.tri_ids,
+                    &current.tris,
                     next_tri_ids,
                     next_tri_owner,
                     &term.tri_ids,
@@ -821,10 +849,7 @@ impl PdacrtTracer {
                 ),
                 (
                     1,
-                    current.ray_total,
-                    current.ray_tiles,
-                    &current.ray_owner,
-                    &current.ray_ids,
+                    &current.rays,
                     next_ray_ids,
                     next_ray_owner,
                     &term.ray_ids,
@@ -832,7 +857,7 @@ impl PdacrtTracer {
                 ),
             ] {
                 let push = ScatterPush {
-                    n: n_list,
+                    n: list.total,
                     rays: rays_list,
                     left_base: sides.0,
                     right_base: sides.1,
@@ -842,28 +867,28 @@ impl PdacrtTracer {
                     Some(ranks) => rec.dispatch(
                         &self.kernels.scatter,
                         &[
-                            owner.into(),
-                            ids.into(),
+                            (&list.owner).into(),
+                            (&list.ids).into(),
                             (&routes).into(),
                             next_ids.into(),
                             term_ids.into(),
                             (&ranks.buffer).into(),
                         ],
                         &push,
-                        grid_for(&gpu, tiles as u64, 1),
+                        grid_for(&gpu, list.tiles as u64, 1),
                     )?,
                     None => rec.dispatch_items(
                         &self.kernels.scatter,
                         &[
-                            owner.into(),
-                            ids.into(),
+                            (&list.owner).into(),
+                            (&list.ids).into(),
                             (&routes).into(),
                             next_ids.into(),
                             next_owner.into(),
                             term_ids.into(),
                         ],
                         &push,
-                        n_list as u64,
+                        list.total as u64,
                     )?,
                 }
             }
@@ -877,24 +902,17 @@ impl PdacrtTracer {
                 chunk: index,
                 level: depth,
                 nodes: current.node_count,
-                triangles: current.tri_total,
-                rays: current.ray_total,
-                ray_duplication: current.ray_total as f64 / n.max(1) as f64,
+                triangles: current.tris.total,
+                rays: current.rays.total,
+                ray_duplication: current.rays.total as f64 / n.max(1) as f64,
                 terminal_nodes: totals.term_nodes,
                 flushed,
                 ms: started.elapsed().as_secs_f64() * 1e3,
             });
             // Line 16: the current level's lists go back to the pool.
-            for b in [
-                current.nodes,
-                current.tri_ids,
-                current.tri_owner,
-                current.ray_ids,
-                current.ray_owner,
-                children,
-                offsets,
-                routes,
-            ] {
+            current.tris.give(&mut self.pool);
+            current.rays.give(&mut self.pool);
+            for b in [current.nodes, children, offsets, routes] {
                 self.pool.give(b);
             }
             if let Some(ranks) = ranks {
@@ -945,14 +963,14 @@ impl PdacrtTracer {
             ..
         } = chunk;
         let gpu = self.gpu.clone();
-        let max_list = level.tri_total.max(level.ray_total);
+        let max_list = level.tris.total.max(level.rays.total);
         let child_count = level.node_count * 2;
         // Channel stride: a multiple of 64 words keeps every channel slice aligned.
         let stride = child_count.next_multiple_of(64);
         let ranked = self.params.split == LevelSplit::PrefixSums;
         let ranks = ranked
             .then(|| -> vk::Result<Ranks> {
-                let (t, r) = (level.tri_tiles + 1, level.ray_tiles + 1);
+                let (t, r) = (level.tris.tiles + 1, level.rays.tiles + 1);
                 Ok(Ranks {
                     buffer: self.pool.take("pdacrt-ranks", 2 * (t + r) as u64 * 4)?,
                     tri_left: 0,
@@ -990,8 +1008,8 @@ impl PdacrtTracer {
         let mut bindings: Vec<BufferSlice> = vec![
             (&self.triangles).into(),
             (&level.nodes).into(),
-            (&level.tri_ids).into(),
-            (&level.tri_owner).into(),
+            (&level.tris.ids).into(),
+            (&level.tris.owner).into(),
         ];
         bindings.extend(ranks.as_ref().map(|r| BufferSlice::from(&r.buffer)));
         // Ranked: one workgroup per tile; sorted: one invocation per id.
@@ -1007,25 +1025,25 @@ impl PdacrtTracer {
             &bindings,
             &FilterTrianglesPush {
                 n: if ranked {
-                    level.tri_tiles
+                    level.tris.tiles
                 } else {
-                    level.tri_total
+                    level.tris.total
                 },
                 eps: self.eps,
                 left_base: tri_bases.0,
                 right_base: tri_bases.1,
             },
             groups(
-                level.tri_total,
-                level.tri_tiles,
+                level.tris.total,
+                level.tris.tiles,
                 &self.kernels.filter_triangles,
             ),
         )?;
         let mut bindings: Vec<BufferSlice> = vec![
             rays.into(),
             (&level.nodes).into(),
-            (&level.ray_ids).into(),
-            (&level.ray_owner).into(),
+            (&level.rays.ids).into(),
+            (&level.rays.owner).into(),
             hits.into(),
         ];
         bindings.extend(ranks.as_ref().map(|r| BufferSlice::from(&r.buffer)));
@@ -1034,9 +1052,9 @@ impl PdacrtTracer {
             &bindings,
             &FilterRaysPush {
                 n: if ranked {
-                    level.ray_tiles
+                    level.rays.tiles
                 } else {
-                    level.ray_total
+                    level.rays.total
                 },
                 eps: self.eps,
                 occlusion: (query == Query::Occlusion) as u32,
@@ -1044,7 +1062,11 @@ impl PdacrtTracer {
                 left_base: ray_bases.0,
                 right_base: ray_bases.1,
             },
-            groups(level.ray_total, level.ray_tiles, &self.kernels.filter_rays),
+            groups(
+                level.rays.total,
+                level.rays.tiles,
+                &self.kernels.filter_rays,
+            ),
         )?;
         let min_extent = self.eps * 4.0;
         let push = ChildrenPush {
@@ -1153,7 +1175,7 @@ impl PdacrtTracer {
         rec: &mut Recorder,
         level: &Level,
     ) -> vk::Result<(Buffer, Buffer)> {
-        let max_list = level.tri_total.max(level.ray_total);
+        let max_list = level.tris.total.max(level.rays.total);
         // At most 4 runs per node: one per status code.
         let max_runs = max_list.min(level.node_count * 4) as u64;
         let run_keys = self.pool.take("pdacrt-run-keys", max_runs * 4)?;
@@ -1173,15 +1195,15 @@ impl PdacrtTracer {
         let key_bits = 2 + bits_for(level.node_count);
         for (list_n, keys, ids, counts) in [
             (
-                level.tri_total,
-                &level.tri_owner,
-                &level.tri_ids,
+                level.tris.total,
+                &level.tris.owner,
+                &level.tris.ids,
                 &tri_counts,
             ),
             (
-                level.ray_total,
-                &level.ray_owner,
-                &level.ray_ids,
+                level.rays.total,
+                &level.rays.owner,
+                &level.rays.ids,
                 &ray_counts,
             ),
         ] {
