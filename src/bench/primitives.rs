@@ -8,6 +8,7 @@ use std::time::Instant;
 use rayon::slice::ParallelSliceMut;
 use serde::Serialize;
 
+use super::host;
 use crate::primitives::compact::Kept;
 use crate::primitives::gather::Direction;
 use crate::primitives::reduce_by_key::{Reduction, RunOutputs};
@@ -78,6 +79,12 @@ pub struct PrimitivesReport {
     pub variant: String,
     pub tuning: Tuning,
     pub runs: usize,
+    /// Threads the host lends (rayon's count) and the effective parallel cores measured
+    /// just before the two target comparisons and just after them ([`host`]): on a
+    /// CPU device the kernels share those cores, the single-thread references do not.
+    pub host_threads: usize,
+    pub host_cores_before: f64,
+    pub host_cores_after: f64,
     pub rows: Vec<BenchRow>,
     pub targets: Vec<TargetCheck>,
 }
@@ -93,6 +100,11 @@ impl fmt::Display for PrimitivesReport {
         writeln!(f, "device : {} ({})", self.device, self.driver)?;
         writeln!(f, "variant: {}", self.variant)?;
         writeln!(f, "runs   : median of {}", self.runs)?;
+        writeln!(
+            f,
+            "host   : {} threads, effective parallel cores {:.2} before the targets, {:.2} after",
+            self.host_threads, self.host_cores_before, self.host_cores_after
+        )?;
         writeln!(
             f,
             "{:<28} {:>10} {:>10} {:>10} {:>10}  references (ms, speedup)",
@@ -286,6 +298,8 @@ pub fn run(gpu: &Gpu, opts: &PrimitivesBenchOptions) -> BenchResult<PrimitivesRe
     let mut rows = Vec::new();
     let mut targets = Vec::new();
 
+    let host_cores_before = host::effective_cores();
+
     // --- Radix sort of key-value pairs (all 32 bits), against sort_unstable_by_key.
     let sort = RadixSort::new(gpu, &tuning)?;
     let keys = random_u32s(n, 1);
@@ -456,6 +470,7 @@ pub fn run(gpu: &Gpu, opts: &PrimitivesBenchOptions) -> BenchResult<PrimitivesRe
     rows.push(r);
     rows.push(row("vkCmdCopyBuffer (reference)", scan_n, copy_t, &[]));
     drop((input, output, scan_scratch));
+    let host_cores_after = host::effective_cores();
 
     // --- Reduce-by-key (sum, arg-min) and run-length encoding over sorted keys with
     // runs of 1..=16 items (like PDACRT's per-ray hit candidates).
@@ -637,6 +652,9 @@ pub fn run(gpu: &Gpu, opts: &PrimitivesBenchOptions) -> BenchResult<PrimitivesRe
         variant: tuning.describe(),
         tuning,
         runs,
+        host_threads: rayon::current_num_threads(),
+        host_cores_before,
+        host_cores_after,
         rows,
         targets,
     })
@@ -705,6 +723,22 @@ pub fn time_scan(gpu: &Gpu, tuning: &Tuning, n: usize, runs: usize) -> BenchResu
         &cpu::exclusive_scan(&data),
     )?;
     time_gpu_min(gpu, runs, || Ok(()), record)
+}
+
+/// Minimum GPU ms over `runs` of a `vkCmdCopyBuffer` of `n` u32: the yardstick of the
+/// scan target, for sweeps that set scan tunings against it.
+pub fn time_copy(gpu: &Gpu, n: usize, runs: usize) -> BenchResult<f64> {
+    let input = device_buffer(gpu, "sweep-copy-in", n as u64 * 4)?;
+    let output = device_buffer(gpu, "sweep-copy-out", n as u64 * 4)?;
+    time_gpu_min(
+        gpu,
+        runs,
+        || Ok(()),
+        |rec: &mut Recorder| {
+            rec.copy(&input, 0, &output, 0, n as u64 * 4);
+            Ok(())
+        },
+    )
 }
 
 /// Minimum ms over `runs` of `sort_unstable_by_key` on the (key, value) pairs that
