@@ -1,4 +1,7 @@
 #version 460
+//! variant first: FIXED_FLAGS=9
+//! variant middle: FIXED_FLAGS=13
+//! variant last: FIXED_FLAGS=5
 // Radix sort pass, step 3, barrier-free segment variant (pairs with
 // sort_seg_count.comp). Each invocation loads the scanned offsets of its own segment
 // (hist[digit * segments + segment]) into its own column of shared counters and writes
@@ -23,6 +26,13 @@ layout(std430, set = 0, binding = 5) writeonly buffer ValsOut { uint vals_out[];
 // bit 3: write interleaved pairs to binding 4 (one uvec2 store per key instead of two
 // scalar stores, and half the output streams). Bits 2 and 3 need bit 0.
 layout(push_constant) uniform Push { uint shift; uint bits; uint flags; } pc;
+#ifdef FIXED_FLAGS
+// The pass kind fixed at compile time (the key-value pair passes: first 1|8, middle
+// 1|4|8, last 1|4), so the branches on it fold away.
+const uint FLAGS = FIXED_FLAGS;
+#else
+#define FLAGS pc.flags
+#endif
 
 shared uint counts[RADIX * WORKGROUP_SIZE];
 
@@ -52,10 +62,10 @@ void main() {
     if (begin == end) return;
     for (uint d = 0u; d < RADIX; ++d) counts[d * WORKGROUP_SIZE + lid] = hist[d * segments + seg];
     uint mask = (1u << pc.bits) - 1u;
-    bool values = (pc.flags & 1u) != 0u;
+    bool values = (FLAGS & 1u) != 0u;
     uint i = begin;
-    bool pairs_in = (pc.flags & 4u) != 0u;
-    bool to_pairs = (pc.flags & 8u) != 0u;
+    bool pairs_in = (FLAGS & 4u) != 0u;
+    bool to_pairs = (FLAGS & 8u) != 0u;
     if (pairs_in || to_pairs) {
         for (; i + 4u <= end; i += 4u) {
             uvec4 k, v;
