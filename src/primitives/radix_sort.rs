@@ -17,7 +17,8 @@
 //! pairs in the scratch: the first pass reads the caller's buffers and writes pairs,
 //! middle passes go from pairs to pairs (two pair buffers, alternating), and the last
 //! pass writes the caller's buffers again — no unpack or copy for any pass count above
-//! one (a single pass ends with an unpack kernel).
+//! one (a single pass ends with an unpack kernel). The scatter is compiled once for each
+//! of those three pass kinds, so that none of them branches on the kind.
 
 use super::{
     args_offset, check_scratch, region, Count, Scan, ScanKind, Setup, Tuning, HEADER_BYTES,
@@ -388,18 +389,16 @@ impl RadixSort {
                     misc,
                     scan_off,
                 )?;
-                let scatter = match &self.pair_scatters {
-                    Some(kinds) => {
-                        &kinds[if !pairs_in {
-                            0
-                        } else if to_pairs {
-                            1
-                        } else {
-                            2
-                        }]
-                    }
-                    None => &self.scatter,
+                // pair_scatters is ordered first, middle, last.
+                let kind = match (pairs_in, to_pairs) {
+                    (false, _) => 0,
+                    (true, true) => 1,
+                    (true, false) => 2,
                 };
+                let scatter = self
+                    .pair_scatters
+                    .as_ref()
+                    .map_or(&self.scatter, |kinds| &kinds[kind]);
                 rec.dispatch_indirect(
                     scatter,
                     &[header, ki, vi, hist, ko, vo],
