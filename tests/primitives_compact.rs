@@ -151,6 +151,32 @@ fn compact_adversarial_flags_and_indirect() {
     common::assert_clean(&gpu);
 }
 
+/// Both paths on every device: the general one (a full position scan) and the segment
+/// variant, here with segments of a few items so that many of them meet each pattern.
+#[test]
+fn compact_general_path_and_short_segments() {
+    let gpu = common::gpu();
+    let base = Tuning::for_device(gpu.info());
+    for segment in [0u32, 4, 12] {
+        let tuning = Tuning {
+            scan_segment: segment,
+            ..base
+        }
+        .fit(gpu.info());
+        let compact = Compact::new(&gpu, &tuning).unwrap();
+        for n in [0usize, 1, 5, 257, 65_537] {
+            for (name, flags) in flag_patterns(n) {
+                let what = format!("segment {segment}: {name} n = {n}");
+                check_compact(&gpu, &compact, &flags, &what, None);
+            }
+            let flags: Vec<u32> = common::random_u32s(n, 3).iter().map(|x| x & 1).collect();
+            let what = format!("segment {segment}: indirect n = {n}");
+            check_compact(&gpu, &compact, &flags, &what, Some(70_000));
+        }
+    }
+    common::assert_clean(&gpu);
+}
+
 #[test]
 fn gather_and_scatter_match_cpu() {
     let gpu = common::gpu();

@@ -236,3 +236,38 @@ fn reduce_by_key_indirect_reads_n_written_on_the_gpu() {
     }
     common::assert_clean(&gpu);
 }
+
+/// Both paths on every device: the general one (flags, scan, atomics) and the segment
+/// variant with segments short enough that runs cross many of them.
+#[test]
+fn reduce_by_key_general_path_and_short_segments() {
+    let gpu = common::gpu();
+    let base = Tuning::for_device(gpu.info());
+    for segment in [0u32, 4, 12] {
+        let tuning = Tuning {
+            scan_segment: segment,
+            ..base
+        }
+        .fit(gpu.info());
+        let rbk = ReduceByKey::new(&gpu, &tuning).unwrap();
+        for n in [0usize, 1, 5, 257, 65_537] {
+            for (name, keys) in key_patterns(n) {
+                check_all(
+                    &gpu,
+                    &rbk,
+                    &keys,
+                    &format!("segment {segment}: {name} n = {n}"),
+                    None,
+                );
+            }
+            check_all(
+                &gpu,
+                &rbk,
+                &runs(n, 9, 8),
+                &format!("segment {segment}: indirect n = {n}"),
+                Some(70_000),
+            );
+        }
+    }
+    common::assert_clean(&gpu);
+}

@@ -1,6 +1,11 @@
 //! Stable stream compaction by a u32 flag array (non-zero = keep): an exclusive
 //! [`Scan`] of `(flag != 0)` gives each kept item its slot; the kept count is written
 //! to a GPU buffer (readable by the host).
+//!
+//! With the segment scan ([`Tuning::scan_segment`], CPU devices) only the scan's first
+//! two passes run: they give every invocation the kept count before its segment, and a
+//! segment kernel then writes each segment's kept items in order. That skips writing
+//! and reading back a per-item position array.
 
 use super::{
     args_offset, check_scratch, region, Count, Scan, ScanKind, Setup, Tuning, HEADER_BYTES,
@@ -26,6 +31,8 @@ pub enum Kept<'a> {
 pub struct Compact {
     setup: Setup,
     scatter: ComputePipeline,
+    /// The segment variant's kernel (where the scan runs in segments).
+    segment_scatter: Option<ComputePipeline>,
     scan: Scan,
     tuning: Tuning,
 }
@@ -41,14 +48,31 @@ impl Compact {
                 4,
                 &[tuning.workgroup_size, tuning.items_per_invocation],
             )?,
+            segment_scatter: match Scan::segment(tuning) {
+                0 => None,
+                items => Some(compute_pipeline(
+                    gpu,
+                    shaders::PRIMITIVES_COMPACT_SEG,
+                    6,
+                    4,
+                    &[tuning.workgroup_size, items],
+                )?),
+            },
             scan: Scan::new(gpu, tuning)?,
             tuning: *tuning,
         })
     }
 
+    /// (positions, inner scan) offsets in the scratch; the segment variant has no
+    /// position array.
     fn layout(&self, max_n: u32) -> (u64, u64) {
         let pos = HEADER_BYTES;
-        (pos, pos + region(max_n as u64 * 4))
+        let pos_words = if self.segment_scatter.is_some() {
+            0
+        } else {
+            max_n as u64
+        };
+        (pos, pos + region(pos_words * 4))
     }
 
     /// Scratch bytes for up to `max_n` items.
@@ -110,7 +134,6 @@ impl Compact {
         check_scratch("compaction", scratch, 0, self.scratch_bytes(cap))?;
         let (pos_off, scan_off) = self.layout(cap);
         let header = scratch.slice(0, HEADER_BYTES);
-        let pos = scratch.slice(pos_off, region(cap as u64 * 4));
         self.setup.record(
             rec,
             n,
@@ -119,6 +142,26 @@ impl Compact {
             [self.tuning.tile(), 0, 0, 0],
             Some(count),
         )?;
+        let (src, mode) = match kept {
+            Kept::Values(v) => (v, 0),
+            Kept::Indices => (flags, 1),
+        };
+        if let Some(segment_scatter) = &self.segment_scatter {
+            self.scan.record_setup(rec, n, 1, scratch, scan_off)?;
+            let offsets = self
+                .scan
+                .record_tile_offsets(rec, flags, true, cap, scratch, scan_off)?;
+            rec.dispatch_indirect(
+                segment_scatter,
+                &[offsets.header, flags, offsets.sums, src, out, count],
+                &FlagsPush { flags: mode },
+                scratch,
+                offsets.args,
+            )?;
+            rec.barrier();
+            return Ok(());
+        }
+        let pos = scratch.slice(pos_off, region(cap as u64 * 4));
         self.scan.record_count(
             rec,
             n,
@@ -129,10 +172,6 @@ impl Compact {
             scratch,
             scan_off,
         )?;
-        let (src, mode) = match kept {
-            Kept::Values(v) => (v, 0),
-            Kept::Indices => (flags, 1),
-        };
         rec.dispatch_indirect(
             &self.scatter,
             &[header, flags, pos, src, out, count],

@@ -6,6 +6,13 @@
 //! each invocation walks a contiguous run of items, reduces locally and issues one
 //! atomic per run piece (integer atomics: the result does not depend on their order).
 //!
+//! On CPU devices ([`Tuning::scan_segment`]) a barrier-free segment variant replaces
+//! all of that: every invocation counts the run heads in its own segment of contiguous
+//! keys, one small exclusive scan of those counts numbers the runs, and each invocation
+//! then reduces every run whose head lies in its segment, to the run's end even past the
+//! segment, so that no run is split: no atomics, one pass for the arg-min, and three
+//! reads of the keys fewer than the general path (lavapipe pays per accessed word).
+//!
 //! Arg-min: the smallest t by IEEE total order (`f32::total_cmp`, so -0 < +0; NaNs are
 //! ordered by their bits, not recommended), ties broken by the smaller id — the per-ray
 //! closest hit of PDACRT Algorithm 3.
@@ -47,7 +54,17 @@ pub struct RunOutputs<'a> {
     pub count: BufferSlice<'a>,
 }
 
+/// The segment variant's kernels.
+struct SegmentKernels {
+    /// Items per segment (one segment per invocation).
+    items: u32,
+    heads: ComputePipeline,
+    /// Sum, count, arg-min.
+    reduce: [ComputePipeline; 3],
+}
+
 pub struct ReduceByKey {
+    segments: Option<SegmentKernels>,
     setup: Setup,
     flags: ComputePipeline,
     init: ComputePipeline,
@@ -60,7 +77,24 @@ pub struct ReduceByKey {
 impl ReduceByKey {
     pub fn new(gpu: &Gpu, tuning: &Tuning) -> Result<Self> {
         let spec = [tuning.workgroup_size, tuning.items_per_invocation];
+        let segments = match Scan::segment(tuning) {
+            0 => None,
+            items => {
+                let spec = [tuning.workgroup_size, items];
+                let reduce = |k| compute_pipeline(gpu, k, 9, 0, &spec);
+                Some(SegmentKernels {
+                    items,
+                    heads: compute_pipeline(gpu, shaders::PRIMITIVES_RBK_SEG_HEADS, 3, 0, &spec)?,
+                    reduce: [
+                        reduce(shaders::PRIMITIVES_RBK_SEG_REDUCE__SUM)?,
+                        reduce(shaders::PRIMITIVES_RBK_SEG_REDUCE__COUNT)?,
+                        reduce(shaders::PRIMITIVES_RBK_SEG_REDUCE__ARGMIN)?,
+                    ],
+                })
+            }
+        };
         Ok(Self {
+            segments,
             setup: Setup::new(gpu)?,
             flags: compute_pipeline(gpu, shaders::PRIMITIVES_RBK_FLAGS, 3, 0, &spec)?,
             init: compute_pipeline(gpu, shaders::PRIMITIVES_RBK_INIT, 7, 4, &spec)?,
@@ -71,15 +105,24 @@ impl ReduceByKey {
         })
     }
 
+    /// Words of the per-item run ids (general path) or the per-segment head counts
+    /// (segment variant) for up to `max_n` items.
+    fn ids_len(&self, max_n: u32) -> u32 {
+        match &self.segments {
+            Some(k) => max_n.div_ceil(k.items),
+            None => max_n,
+        }
+    }
+
     fn layout(&self, max_n: u32) -> (u64, u64) {
         let seg = HEADER_BYTES;
-        let scan = seg + region(max_n as u64 * 4);
+        let scan = seg + region(self.ids_len(max_n) as u64 * 4);
         (seg, scan)
     }
 
     /// Scratch bytes for up to `max_n` items.
     pub fn scratch_bytes(&self, max_n: u32) -> u64 {
-        self.layout(max_n).1 + self.scan.scratch_bytes(max_n)
+        self.layout(max_n).1 + self.scan.scratch_bytes(self.ids_len(max_n))
     }
 
     /// Reduces the runs of equal keys among the first `n` of `keys` (sorted, or at
@@ -129,6 +172,16 @@ impl ReduceByKey {
     ) -> Result<()> {
         let cap = count.capacity();
         check_scratch("reduce-by-key", scratch, 0, self.scratch_bytes(cap))?;
+        if let Reduction::ArgMin { .. } = reduction {
+            if out.b.is_none() {
+                return Err(crate::vk::VkError::Usage(
+                    "reduce-by-key arg-min needs an id output (RunOutputs::b)".into(),
+                ));
+            }
+        }
+        if let Some(kernels) = &self.segments {
+            return self.record_segments(rec, kernels, count, keys, reduction, out, scratch);
+        }
         let (seg_off, scan_off) = self.layout(cap);
         let header = scratch.slice(0, HEADER_BYTES);
         let seg = scratch.slice(seg_off, region(cap as u64 * 4));
@@ -173,11 +226,6 @@ impl ReduceByKey {
                 self.reduce_pass(rec, 1, [header, seg, seg, seg, out.a, b], scratch)?;
             }
             Reduction::ArgMin { t, ids } => {
-                if out.b.is_none() {
-                    return Err(crate::vk::VkError::Usage(
-                        "reduce-by-key arg-min needs an id output (RunOutputs::b)".into(),
-                    ));
-                }
                 self.reduce_pass(rec, 2, [header, seg, t, ids, out.a, b], scratch)?;
                 self.reduce_pass(rec, 3, [header, seg, t, ids, out.a, b], scratch)?;
                 rec.dispatch_indirect(
@@ -190,6 +238,73 @@ impl ReduceByKey {
                 rec.barrier();
             }
         }
+        Ok(())
+    }
+
+    /// The segment variant (see the module documentation).
+    #[allow(clippy::too_many_arguments)]
+    fn record_segments(
+        &self,
+        rec: &mut Recorder,
+        kernels: &SegmentKernels,
+        count: Count<'_>,
+        keys: BufferSlice<'_>,
+        reduction: Reduction<'_>,
+        out: RunOutputs<'_>,
+        scratch: &Buffer,
+    ) -> Result<()> {
+        let cap = count.capacity();
+        let (heads_off, scan_off) = self.layout(cap);
+        let header = scratch.slice(0, HEADER_BYTES);
+        let heads = scratch.slice(heads_off, region(self.ids_len(cap) as u64 * 4));
+        let items = kernels.items;
+        // Kind 0 counts the segments, kind 1 their workgroups (as the segment scan does).
+        self.setup.record(
+            rec,
+            count,
+            1,
+            header,
+            [items, items * self.tuning.workgroup_size, 0, 0],
+            Some(out.count),
+        )?;
+        rec.dispatch_indirect(
+            &kernels.heads,
+            &[header, keys, heads],
+            &(),
+            scratch,
+            args_offset(1),
+        )?;
+        rec.barrier();
+        // The scan's n is the segment count just written to the header (word HDR_GROUPS).
+        let segments = Count::Gpu {
+            buffer: scratch,
+            offset: 4,
+            max: self.ids_len(cap),
+        };
+        self.scan.record_count(
+            rec,
+            segments,
+            heads,
+            heads,
+            ScanKind::Exclusive,
+            false,
+            scratch,
+            scan_off,
+        )?;
+        let (kernel, a, b) = match reduction {
+            Reduction::Sum { values } => (&kernels.reduce[0], values, values),
+            Reduction::Count => (&kernels.reduce[1], keys, keys),
+            Reduction::ArgMin { t, ids } => (&kernels.reduce[2], t, ids),
+        };
+        let out_b = out.b.unwrap_or(out.a);
+        rec.dispatch_indirect(
+            kernel,
+            &[header, keys, heads, a, b, out.keys, out.a, out_b, out.count],
+            &(),
+            scratch,
+            args_offset(1),
+        )?;
+        rec.barrier();
         Ok(())
     }
 

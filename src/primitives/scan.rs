@@ -70,7 +70,7 @@ impl Scan {
     }
 
     /// Items per invocation of the segment scan ([`Tuning::scan_segment`]), 0 where off.
-    fn segment(tuning: &Tuning) -> u32 {
+    pub(crate) fn segment(tuning: &Tuning) -> u32 {
         if tuning.scan_segment % 4 == 0 {
             tuning.scan_segment
         } else {
@@ -222,6 +222,42 @@ impl Scan {
         )
     }
 
+    /// The scan's first two passes (header at `base` already written): the exclusive
+    /// offset of every tile's first item — of every invocation's segment with
+    /// [`Tuning::scan_segment`] — for a caller that walks the tiles itself (the segment
+    /// compaction). Ends with a barrier.
+    pub(crate) fn record_tile_offsets<'s>(
+        &self,
+        rec: &mut Recorder,
+        input: BufferSlice<'_>,
+        predicate: bool,
+        max_n: u32,
+        scratch: &'s Buffer,
+        base: u64,
+    ) -> Result<TileOffsets<'s>> {
+        let header = scratch.slice(base, HEADER_BYTES);
+        let sums = scratch.slice(base + HEADER_BYTES, region(self.tiles(max_n) * 4));
+        let args = base
+            + args_offset(if Self::segment(&self.tuning) > 0 {
+                1
+            } else {
+                0
+            });
+        rec.dispatch_indirect(
+            &self.reduce,
+            &[header, input, sums],
+            &FlagsPush {
+                flags: predicate as u32,
+            },
+            scratch,
+            args,
+        )?;
+        rec.barrier();
+        rec.dispatch(&self.block_sums, &[header, sums], &(), [1, 1, 1])?;
+        rec.barrier();
+        Ok(TileOffsets { header, sums, args })
+    }
+
     /// The three scan passes, reading n from the header at `base` (already written).
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn record_passes(
@@ -235,24 +271,9 @@ impl Scan {
         scratch: &Buffer,
         base: u64,
     ) -> Result<()> {
-        let header = scratch.slice(base, HEADER_BYTES);
-        let sums = scratch.slice(base + HEADER_BYTES, region(self.tiles(max_n) * 4));
+        let TileOffsets { header, sums, args } =
+            self.record_tile_offsets(rec, input, predicate, max_n, scratch, base)?;
         let pred = predicate as u32;
-        let args = args_offset(if Self::segment(&self.tuning) > 0 {
-            1
-        } else {
-            0
-        });
-        rec.dispatch_indirect(
-            &self.reduce,
-            &[header, input, sums],
-            &FlagsPush { flags: pred },
-            scratch,
-            base + args,
-        )?;
-        rec.barrier();
-        rec.dispatch(&self.block_sums, &[header, sums], &(), [1, 1, 1])?;
-        rec.barrier();
         let inclusive = if kind == ScanKind::Inclusive { 2 } else { 0 };
         rec.dispatch_indirect(
             &self.downsweep,
@@ -261,9 +282,19 @@ impl Scan {
                 flags: pred | inclusive,
             },
             scratch,
-            base + args,
+            args,
         )?;
         rec.barrier();
         Ok(())
     }
+}
+
+/// What [`Scan::record_tile_offsets`] leaves for the pass that follows it.
+pub(crate) struct TileOffsets<'s> {
+    /// The scan's header: n, and the tile / segment counts and dispatch arguments.
+    pub header: BufferSlice<'s>,
+    /// Exclusive offset of each tile (segment).
+    pub sums: BufferSlice<'s>,
+    /// Byte offset in the scratch of the indirect arguments that cover the tiles.
+    pub args: u64,
 }

@@ -36,9 +36,13 @@
 //!   per-invocation-run sort in the same sweep) and was dropped. 8192 keys per invocation and 2-invocation workgroups were slower. With
 //!   32768 keys per invocation a workgroup takes 131072 keys, so sorts below ~256K keys
 //!   run on fewer workgroups than lavapipe has threads.
-//!   Compaction, reduce-by-key and gather keep one SIMD subgroup per workgroup
-//!   (`workgroup_size = subgroup_size`, queried, never assumed) with 256 items per
-//!   invocation.
+//!   Reduce-by-key and compaction reuse the scan's segments: per-segment run-head or
+//!   kept counts, one small scan of those, then each invocation writes its segment's
+//!   runs (reducing a run to its end, so none is split and no atomic is needed) or kept
+//!   items in order (reduce-by-key 2.1–3.5× and compaction 1.02–1.08× the general path,
+//!   4M items, interleaved minima). Gather and the general paths keep one SIMD subgroup
+//!   per workgroup (`workgroup_size = subgroup_size`, queried, never assumed) with 256
+//!   items per invocation.
 //! - **GPUs** — variant `gpu-wide`: 128-invocation workgroups (at least one subgroup),
 //!   short runs (8 to 16 items) for occupancy, and 4-bit digits so the per-invocation
 //!   counter table (`2^bits × workgroup_size` words) stays small in shared memory.
