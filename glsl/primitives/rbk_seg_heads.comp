@@ -20,7 +20,12 @@ void main() {
     uint begin = seg * ITEMS;
     uint end = min(begin + ITEMS, n);
     // The key before the segment; for the first segment one that differs from keys[0].
-    uint prev = begin == 0u ? ~keys[0] : keys[begin - 1u];
+    uint prev;
+    if (begin == 0u) {
+        prev = ~keys[0];
+    } else {
+        prev = keys[begin - 1u];
+    }
     uint count = 0u;
     for (uint i = begin; i < end; ++i) {
         uint k = keys[i];

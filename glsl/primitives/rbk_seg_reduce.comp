@@ -8,6 +8,8 @@
 // if it runs on, so no run is split between invocations: no atomics, and the arg-min
 // is one pass. Each invocation first skips the tail of a run that started before its
 // segment. The segment holding the last key writes the number of runs.
+// Every key read is guarded by an explicit branch, not by `&&`: a compiler may evaluate
+// both sides of a side-effect-free `&&`, and keys[n] is past the buffer.
 // MODE 0: out_a[s] = wrapping sum of in_a over the run;
 // MODE 1: out_a[s] = the run's length;
 // MODE 2: out_a[s] = the smallest in_a as f32 by total order (f32_order), out_b[s] = its
@@ -36,22 +38,30 @@ void main() {
     uint i = begin;
     if (begin > 0u) {
         uint before = keys[begin - 1u];
-        while (i < end && keys[i] == before) ++i;
+        for (; i < end; ++i) {
+            if (keys[i] != before) break;
+        }
     }
     while (i < end) {
         uint k = keys[i];
         uint j = i + 1u;
 #if MODE == 0
         uint acc = in_a[i];
-        for (; j < n && keys[j] == k; ++j) acc += in_a[j];
+        for (; j < n; ++j) {
+            if (keys[j] != k) break;
+            acc += in_a[j];
+        }
         out_a[s] = acc;
 #elif MODE == 1
-        for (; j < n && keys[j] == k; ++j) {}
+        for (; j < n; ++j) {
+            if (keys[j] != k) break;
+        }
         out_a[s] = j - i;
 #else
         uint best = f32_order(in_a[i]);
         uint id = in_b[i];
-        for (; j < n && keys[j] == k; ++j) {
+        for (; j < n; ++j) {
+            if (keys[j] != k) break;
             uint o = f32_order(in_a[j]);
             uint b = in_b[j];
             if (o < best || (o == best && b < id)) {

@@ -10,8 +10,9 @@
 //! all of that: every invocation counts the run heads in its own segment of contiguous
 //! keys, one small exclusive scan of those counts numbers the runs, and each invocation
 //! then reduces every run whose head lies in its segment, to the run's end even past the
-//! segment, so that no run is split: no atomics, one pass for the arg-min, and three
-//! reads of the keys fewer than the general path (lavapipe pays per accessed word).
+//! segment, so that no run is split: no atomics, one pass for the arg-min, no per-item
+//! run-id array, and half or fewer of the general path's key reads (lavapipe pays per
+//! accessed word).
 //!
 //! Arg-min: the smallest t by IEEE total order (`f32::total_cmp`, so -0 < +0; NaNs are
 //! ordered by their bits, not recommended), ties broken by the smaller id — the per-ray
