@@ -156,13 +156,7 @@ fn compact_adversarial_flags_and_indirect() {
 #[test]
 fn compact_general_path_and_short_segments() {
     let gpu = common::gpu();
-    let base = Tuning::for_device(gpu.info());
-    for segment in [0u32, 4, 12] {
-        let tuning = Tuning {
-            scan_segment: segment,
-            ..base
-        }
-        .fit(gpu.info());
+    for (segment, tuning) in common::segment_tunings(&gpu) {
         let compact = Compact::new(&gpu, &tuning).unwrap();
         for n in [0usize, 1, 5, 257, 65_537] {
             for (name, flags) in flag_patterns(n) {

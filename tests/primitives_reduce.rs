@@ -242,13 +242,7 @@ fn reduce_by_key_indirect_reads_n_written_on_the_gpu() {
 #[test]
 fn reduce_by_key_general_path_and_short_segments() {
     let gpu = common::gpu();
-    let base = Tuning::for_device(gpu.info());
-    for segment in [0u32, 4, 12] {
-        let tuning = Tuning {
-            scan_segment: segment,
-            ..base
-        }
-        .fit(gpu.info());
+    for (segment, tuning) in common::segment_tunings(&gpu) {
         let rbk = ReduceByKey::new(&gpu, &tuning).unwrap();
         for n in [0usize, 1, 5, 257, 65_537] {
             for (name, keys) in key_patterns(n) {

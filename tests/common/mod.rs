@@ -39,6 +39,23 @@ pub fn assert_clean(gpu: &Gpu) {
 }
 
 /// Deterministic pseudo-random u32s (SplitMix64) for test data.
+/// The device's tuning with the general (non-segment) path and with segments of 4 and
+/// 12 items, so that runs and kept items cross many segments: for primitives whose
+/// segment variant must agree with their general path on every device.
+pub fn segment_tunings(gpu: &Gpu) -> Vec<(u32, splitray::primitives::Tuning)> {
+    let base = splitray::primitives::Tuning::for_device(gpu.info());
+    [0u32, 4, 12]
+        .into_iter()
+        .map(|segment| {
+            let tuning = splitray::primitives::Tuning {
+                scan_segment: segment,
+                ..base
+            };
+            (segment, tuning.fit(gpu.info()))
+        })
+        .collect()
+}
+
 pub fn random_u32s(n: usize, seed: u64) -> Vec<u32> {
     let mut state = seed;
     (0..n)
