@@ -63,16 +63,14 @@ impl Compact {
         })
     }
 
-    /// (positions, inner scan) offsets in the scratch; the segment variant has no
-    /// position array.
+    /// (positions, inner scan) offsets in the scratch. The segment variant has neither
+    /// a header of its own nor a position array: its scratch is the scan's.
     fn layout(&self, max_n: u32) -> (u64, u64) {
+        if self.segment_scatter.is_some() {
+            return (0, 0);
+        }
         let pos = HEADER_BYTES;
-        let pos_words = if self.segment_scatter.is_some() {
-            0
-        } else {
-            max_n as u64
-        };
-        (pos, pos + region(pos_words * 4))
+        (pos, pos + region(max_n as u64 * 4))
     }
 
     /// Scratch bytes for up to `max_n` items.
@@ -133,21 +131,14 @@ impl Compact {
         let cap = n.capacity();
         check_scratch("compaction", scratch, 0, self.scratch_bytes(cap))?;
         let (pos_off, scan_off) = self.layout(cap);
-        let header = scratch.slice(0, HEADER_BYTES);
-        self.setup.record(
-            rec,
-            n,
-            1,
-            header,
-            [self.tuning.tile(), 0, 0, 0],
-            Some(count),
-        )?;
         let (src, mode) = match kept {
             Kept::Values(v) => (v, 0),
             Kept::Indices => (flags, 1),
         };
         if let Some(segment_scatter) = &self.segment_scatter {
-            self.scan.record_setup(rec, n, 1, scratch, scan_off)?;
+            // The scan's header is the only one; its setup also zeroes the count (n = 0).
+            self.scan
+                .record_setup(rec, n, 1, scratch, scan_off, Some(count))?;
             let offsets = self
                 .scan
                 .record_tile_offsets(rec, flags, true, cap, scratch, scan_off)?;
@@ -161,6 +152,15 @@ impl Compact {
             rec.barrier();
             return Ok(());
         }
+        let header = scratch.slice(0, HEADER_BYTES);
+        self.setup.record(
+            rec,
+            n,
+            1,
+            header,
+            [self.tuning.tile(), 0, 0, 0],
+            Some(count),
+        )?;
         let pos = scratch.slice(pos_off, region(cap as u64 * 4));
         self.scan.record_count(
             rec,

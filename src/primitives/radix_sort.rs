@@ -340,6 +340,7 @@ impl RadixSort {
             self.radix() * self.hist_rows(),
             misc,
             scan_off,
+            None,
         )?;
 
         let with_values = values.is_some() as u32;

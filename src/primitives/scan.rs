@@ -169,7 +169,7 @@ impl Scan {
         scratch: &Buffer,
         base: u64,
     ) -> Result<()> {
-        self.record_setup(rec, count, 1, scratch, base)?;
+        self.record_setup(rec, count, 1, scratch, base, None)?;
         self.record_passes(
             rec,
             input,
@@ -182,7 +182,8 @@ impl Scan {
         )
     }
 
-    /// Writes the scan's header (n = count × `mul`).
+    /// Writes the scan's header (n = count × `mul`), and 0 to `zero` where given (a
+    /// caller's output count, so that n = 0 leaves it right).
     pub(crate) fn record_setup(
         &self,
         rec: &mut Recorder,
@@ -190,6 +191,7 @@ impl Scan {
         mul: u32,
         scratch: &Buffer,
         base: u64,
+        zero: Option<BufferSlice<'_>>,
     ) -> Result<()> {
         let cap = count
             .capacity()
@@ -218,7 +220,7 @@ impl Scan {
             scratch.slice(base, HEADER_BYTES),
             // Kind 0 counts the tile sums; kind 1 the segment scan's workgroups.
             [self.tile(), self.tile() * self.tuning.workgroup_size, 0, 0],
-            None,
+            zero,
         )
     }
 
