@@ -117,16 +117,18 @@ pub fn run(args: &InfoArgs) -> anyhow::Result<()> {
         let l = &i.limits;
         let c = &i.capabilities;
         println!(
-            "    limits: maxStorageBufferRange {} MiB, shared memory {} KiB, workgroup invocations {}, subgroup size {}, push constants {} B, timestampPeriod {} ns",
+            "    limits: maxStorageBufferRange {} MiB, shared memory {} KiB, workgroup invocations {}, subgroup size {} ({}..{}), push constants {} B, timestampPeriod {} ns",
             l.max_storage_buffer_range >> 20,
             l.max_compute_shared_memory_size >> 10,
             l.max_compute_work_group_invocations,
             l.subgroup_size,
+            l.min_subgroup_size,
+            l.max_subgroup_size,
             l.max_push_constants_size,
             l.timestamp_period_ns
         );
         println!(
-            "    features: timeline semaphores {}, synchronization2 {}, maintenance4 {}, push descriptors {}, buffer device address {}, ray query {}, subgroup arithmetic {}, 64-bit buffer atomics {}",
+            "    features: timeline semaphores {}, synchronization2 {}, maintenance4 {}, push descriptors {}, buffer device address {}, ray query {}, subgroup arithmetic {}, subgroup ballot+shuffle {}, full subgroups {}, 64-bit buffer atomics {}",
             c.timeline_semaphore,
             c.synchronization2,
             c.maintenance4,
@@ -134,6 +136,8 @@ pub fn run(args: &InfoArgs) -> anyhow::Result<()> {
             c.buffer_device_address,
             c.ray_query,
             c.subgroup_arithmetic,
+            c.subgroup_ballot_shuffle,
+            c.compute_full_subgroups,
             c.buffer_int64_atomics
         );
     }

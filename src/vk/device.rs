@@ -150,9 +150,12 @@ impl Gpu {
             .buffer_device_address(ray_query)
             .shader_buffer_int64_atomics(int64_atomics);
         let f10 = vk::PhysicalDeviceFeatures::default().shader_int64(int64_atomics);
+        let full_subgroups = info.capabilities.compute_full_subgroups;
         let mut f13 = vk::PhysicalDeviceVulkan13Features::default()
             .synchronization2(true)
-            .maintenance4(true);
+            .maintenance4(true)
+            .subgroup_size_control(full_subgroups)
+            .compute_full_subgroups(full_subgroups);
         let mut accel_features = vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default()
             .acceleration_structure(true);
         let mut rq_features = vk::PhysicalDeviceRayQueryFeaturesKHR::default().ray_query(true);

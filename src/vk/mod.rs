@@ -26,7 +26,9 @@ pub use instance::{validation_layer_available, Instance, InstanceDesc};
 pub use physical::{
     enumerate, select, CapabilityInfo, LimitsInfo, PhysicalDeviceInfo, QueueFamilyInfo,
 };
-pub use pipeline::{compute_pipeline, ComputePipeline, PipelineDesc};
+pub use pipeline::{
+    compute_pipeline, compute_pipeline_full_subgroups, ComputePipeline, PipelineDesc,
+};
 pub use profiler::{KernelTime, ProfileLog, ProfileRecord};
 pub use stream::{QueueSlot, StreamKind, StreamMapping, StreamPlacement, TimelinePoint};
 pub use validation::{ValidationMessage, SUPPRESSED};

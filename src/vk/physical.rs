@@ -30,6 +30,10 @@ pub struct LimitsInfo {
     pub min_storage_buffer_offset_alignment: u64,
     pub timestamp_period_ns: f32,
     pub subgroup_size: u32,
+    /// The range a compute subgroup's size may take (Vulkan 1.3 subgroup size control):
+    /// SPIR-V 1.6 modules may run with any size in it unless a size is required.
+    pub min_subgroup_size: u32,
+    pub max_subgroup_size: u32,
     pub max_memory_allocation_size: u64,
 }
 
@@ -46,6 +50,12 @@ pub struct CapabilityInfo {
     /// true, the device is opened with all of them enabled.
     pub ray_query: bool,
     pub subgroup_arithmetic: bool,
+    /// Subgroup ballot and shuffle operations in compute shaders (the radix sort's
+    /// multisplit ranking).
+    pub subgroup_ballot_shuffle: bool,
+    /// The computeFullSubgroups feature: pipelines can require every subgroup of a
+    /// workgroup to be full (enabled on the device when present).
+    pub compute_full_subgroups: bool,
     pub shader_int64: bool,
     /// shaderInt64 with shaderBufferInt64Atomics (64-bit atomicMin on storage buffers);
     /// enabled on the device when present (PDACRT's atomic flush uses it).
@@ -73,6 +83,30 @@ pub struct PhysicalDeviceInfo {
 }
 
 impl PhysicalDeviceInfo {
+    /// A device description that no Vulkan device stands behind, for unit tests of
+    /// choices made from limits and capabilities.
+    #[cfg(test)]
+    pub(crate) fn synthetic(
+        device_type: &str,
+        limits: LimitsInfo,
+        capabilities: CapabilityInfo,
+    ) -> Self {
+        Self {
+            index: 0,
+            name: format!("synthetic {device_type}"),
+            device_type: device_type.into(),
+            api_version: "1.3.0".into(),
+            driver_name: String::new(),
+            driver_info: String::new(),
+            queue_families: Vec::new(),
+            limits,
+            capabilities,
+            raw: vk::PhysicalDevice::null(),
+            api_version_raw: vk::API_VERSION_1_3,
+            type_rank: 0,
+        }
+    }
+
     /// True for a CPU implementation such as lavapipe.
     pub fn is_cpu(&self) -> bool {
         self.device_type == "cpu"
@@ -124,9 +158,11 @@ pub fn enumerate(instance: &Instance) -> Result<Vec<PhysicalDeviceInfo>> {
     for (index, &pd) in devices.iter().enumerate() {
         let mut props11 = vk::PhysicalDeviceVulkan11Properties::default();
         let mut props12 = vk::PhysicalDeviceVulkan12Properties::default();
+        let mut props13 = vk::PhysicalDeviceVulkan13Properties::default();
         let mut props2 = vk::PhysicalDeviceProperties2::default()
             .push_next(&mut props11)
-            .push_next(&mut props12);
+            .push_next(&mut props12)
+            .push_next(&mut props13);
         let mut f12 = vk::PhysicalDeviceVulkan12Features::default();
         let mut f13 = vk::PhysicalDeviceVulkan13Features::default();
         let mut features2 = vk::PhysicalDeviceFeatures2::default()
@@ -205,6 +241,14 @@ pub fn enumerate(instance: &Instance) -> Result<Vec<PhysicalDeviceInfo>> {
                 min_storage_buffer_offset_alignment: p.limits.min_storage_buffer_offset_alignment,
                 timestamp_period_ns: p.limits.timestamp_period,
                 subgroup_size: props11.subgroup_size,
+                // A device without subgroup size control reports zeros: then the one
+                // size it has is the range.
+                min_subgroup_size: if props13.min_subgroup_size > 0 {
+                    props13.min_subgroup_size
+                } else {
+                    props11.subgroup_size
+                },
+                max_subgroup_size: props13.max_subgroup_size.max(props11.subgroup_size),
                 max_memory_allocation_size: props11.max_memory_allocation_size,
             },
             capabilities: CapabilityInfo {
@@ -217,6 +261,16 @@ pub fn enumerate(instance: &Instance) -> Result<Vec<PhysicalDeviceInfo>> {
                 subgroup_arithmetic: props11
                     .subgroup_supported_operations
                     .contains(vk::SubgroupFeatureFlags::ARITHMETIC),
+                subgroup_ballot_shuffle: props11
+                    .subgroup_supported_stages
+                    .contains(vk::ShaderStageFlags::COMPUTE)
+                    && props11.subgroup_supported_operations.contains(
+                        vk::SubgroupFeatureFlags::BASIC
+                            | vk::SubgroupFeatureFlags::BALLOT
+                            | vk::SubgroupFeatureFlags::SHUFFLE,
+                    ),
+                compute_full_subgroups: f13.compute_full_subgroups == vk::TRUE
+                    && f13.subgroup_size_control == vk::TRUE,
                 shader_int64: f10.shader_int64 == vk::TRUE,
                 buffer_int64_atomics: f10.shader_int64 == vk::TRUE
                     && f12.shader_buffer_int64_atomics == vk::TRUE,

@@ -58,6 +58,46 @@ pub fn compute_pipeline(
     )
 }
 
+/// As [`compute_pipeline`], for a kernel whose work partition counts on every subgroup
+/// of its workgroup being full (`gl_NumSubgroups * gl_SubgroupSize` equals the
+/// workgroup size), as ranking by subgroup ballots does. SPIR-V 1.6 modules may run with
+/// any subgroup size in the device's range, so the workgroup size (`spec[0]`) must be a
+/// multiple of `maxSubgroupSize`, and the device must offer `computeFullSubgroups`.
+pub fn compute_pipeline_full_subgroups(
+    gpu: &Gpu,
+    kernel: Kernel,
+    bindings: u32,
+    push_constant_bytes: u32,
+    spec: &[u32],
+) -> Result<ComputePipeline> {
+    let info = gpu.info();
+    let workgroup = spec.first().copied().unwrap_or(1);
+    if !info.capabilities.compute_full_subgroups {
+        return Err(VkError::Usage(format!(
+            "kernel '{}' needs full subgroups, which device '{}' does not offer",
+            kernel.name, info.name
+        )));
+    }
+    if workgroup % info.limits.max_subgroup_size != 0 {
+        return Err(VkError::Usage(format!(
+            "kernel '{}': workgroup size {workgroup} is not a multiple of the largest \
+             subgroup size {}, so its subgroups cannot all be full",
+            kernel.name, info.limits.max_subgroup_size
+        )));
+    }
+    ComputePipeline::create(
+        gpu,
+        &PipelineDesc {
+            kernel,
+            bindings,
+            push_constant_bytes,
+            spec,
+        },
+        false,
+        true,
+    )
+}
+
 impl std::fmt::Debug for ComputePipeline {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("ComputePipeline")
@@ -68,7 +108,7 @@ impl std::fmt::Debug for ComputePipeline {
 
 impl ComputePipeline {
     pub fn new(gpu: &Gpu, desc: &PipelineDesc<'_>) -> Result<Self> {
-        Self::create(gpu, desc, false)
+        Self::create(gpu, desc, false, false)
     }
 
     /// A kernel that also reads an acceleration structure (a TLAS, for ray queries) at
@@ -84,10 +124,15 @@ impl ComputePipeline {
                 gpu.info().name
             )));
         }
-        Self::create(gpu, desc, true)
+        Self::create(gpu, desc, true, false)
     }
 
-    fn create(gpu: &Gpu, desc: &PipelineDesc<'_>, tlas_binding: bool) -> Result<Self> {
+    fn create(
+        gpu: &Gpu,
+        desc: &PipelineDesc<'_>,
+        tlas_binding: bool,
+        full_subgroups: bool,
+    ) -> Result<Self> {
         let device = &gpu.0.raw;
         let words = ash::util::read_spv(&mut std::io::Cursor::new(desc.kernel.spirv))
             .map_err(|_| VkError::BadSpirv(desc.kernel.name))?;
@@ -175,6 +220,9 @@ impl ComputePipeline {
                 .name(c"main");
             if !desc.spec.is_empty() {
                 stage = stage.specialization_info(&spec_info);
+            }
+            if full_subgroups {
+                stage = stage.flags(vk::PipelineShaderStageCreateFlags::REQUIRE_FULL_SUBGROUPS);
             }
             let info = vk::ComputePipelineCreateInfo::default()
                 .stage(stage)
