@@ -217,12 +217,100 @@ fn sort_keys_only_and_other_tunings() {
     common::assert_clean(&gpu);
 }
 
+/// The multisplit tile sort (the GPU variant) in shapes that fit any device offering it,
+/// lavapipe included: every awkward size and adversarial pattern, bit ranges, keys alone
+/// and the indirect count. Tiles of 64 × 5 keys make small inputs cross many tiles and
+/// leave partial subgroups of keys in the last tile; 192 invocations are not a power of
+/// two; 7-bit digits take 5 passes for 32-bit keys (an odd count: the copy home).
+#[test]
+fn sort_multisplit_tiles() {
+    let gpu = common::gpu();
+    let info = gpu.info();
+    let max_sg = info.limits.max_subgroup_size;
+    // (workgroup, keys per invocation, digit bits)
+    let shapes: Vec<(u32, u32, u32)> = [(64u32, 5u32, 8u32), (128, 12, 8), (192, 3, 8), (64, 8, 7)]
+        .into_iter()
+        .map(|(w, k, bits)| (w.next_multiple_of(max_sg), k, bits))
+        .collect();
+    if !splitray::primitives::tuning::multisplit_supported(info, shapes[0].0) {
+        println!(
+            "skipped: '{}' lacks subgroup ballot/shuffle/arithmetic or full subgroups",
+            info.name
+        );
+        return;
+    }
+    let base = Tuning::gpu(info.limits.subgroup_size);
+    for (i, &(w, k, bits)) in shapes.iter().enumerate() {
+        let tuning = Tuning {
+            sort_workgroup_size: w,
+            sort_keys_per_invocation: k,
+            radix_bits: bits,
+            ..base
+        }
+        .fit(info);
+        assert!(tuning.sort_multisplit, "{}", tuning.describe());
+        println!("variant: {}", tuning.describe());
+        let sort = RadixSort::new(&gpu, &tuning).unwrap();
+        let scratch = sort.alloc_scratch(&gpu, 1 << 22).unwrap();
+        // The first shape takes the whole suite; the others the sizes around their tile.
+        let sizes: &[usize] = if i == 0 {
+            &[0, 1, 2, 255, 256, 257, 1000, 65_537, 1_000_003, 1 << 22]
+        } else {
+            &[1, 1000, 65_537]
+        };
+        for &n in sizes {
+            let keys = common::random_u32s(n, n as u64 + 5);
+            let what = format!("{} random n = {n}", tuning.describe());
+            check_sort(&gpu, &sort, &scratch, &keys, 0..32, &what);
+        }
+        if i > 0 {
+            continue;
+        }
+        for n in [257usize, 65_537, 1_000_003] {
+            for (name, keys) in patterns(n) {
+                let what = format!("{} {name} n = {n}", tuning.describe());
+                check_sort(&gpu, &sort, &scratch, &keys, 0..32, &what);
+            }
+        }
+        let r = common::random_u32s(100_000, 3);
+        let pdacrt: Vec<u32> = r.iter().map(|k| ((k >> 20) << 2) | (k & 3)).collect();
+        check_sort(
+            &gpu,
+            &sort,
+            &scratch,
+            &pdacrt,
+            0..14,
+            "multisplit bits 0..14",
+        );
+        check_sort(&gpu, &sort, &scratch, &r, 0..24, "multisplit bits 0..24");
+        check_sort(&gpu, &sort, &scratch, &r, 8..20, "multisplit bits 8..20");
+        check_sort(&gpu, &sort, &scratch, &r, 31..32, "multisplit top bit");
+        // Keys alone, and n read on the GPU.
+        let keys = common::random_u32s(65_537, 8);
+        let kb = gpu.upload("keys", &keys).unwrap();
+        let mut rec = gpu.recorder(StreamKind::Main).unwrap();
+        sort.record(&mut rec, 65_537, (&kb).into(), None, 0..32, &scratch)
+            .unwrap();
+        gpu.wait(&rec.submit(&[]).unwrap()).unwrap();
+        let mut expect = keys.clone();
+        expect.sort_unstable();
+        assert_eq!(kb.read::<u32>().unwrap(), expect, "multisplit keys alone");
+        check_indirect(&gpu, &sort, 70_000);
+    }
+    common::assert_clean(&gpu);
+}
+
 #[test]
 fn sort_indirect_reads_n_written_on_the_gpu() {
     let gpu = common::gpu();
     let sort = RadixSort::new(&gpu, &Tuning::for_device(gpu.info())).unwrap();
-    let max_n = 70_000u32;
-    let scratch = sort.alloc_scratch(&gpu, max_n).unwrap();
+    check_indirect(&gpu, &sort, 70_000);
+    common::assert_clean(&gpu);
+}
+
+/// Sorts with n written on the GPU, for n around `max_n` and past it (clamped).
+fn check_indirect(gpu: &Gpu, sort: &RadixSort, max_n: u32) {
+    let scratch = sort.alloc_scratch(gpu, max_n).unwrap();
     let keys = common::random_u32s(max_n as usize, 21);
     let values: Vec<u32> = (0..max_n).collect();
     for n in [0u32, 1, 257, 65_537, max_n, max_n + 9] {
@@ -255,5 +343,4 @@ fn sort_indirect_reads_n_written_on_the_gpu() {
             "touched past n = {n}"
         );
     }
-    common::assert_clean(&gpu);
 }

@@ -9,6 +9,12 @@
 //! between the caller's buffers and the scratch pair; after an odd number of passes a
 //! copy brings the result home, so the sorted pairs always end in the caller's buffers.
 //!
+//! The multisplit variant ([`Tuning::sort_multisplit`], GPUs) counts each tile's digits
+//! with shared atomics and, in the scatter, ranks the keys of each subgroup with ballots
+//! over the digit bits, sorts the tile in shared memory and writes every digit's run
+//! coalesced (`sort_ms_scatter.comp` has the details). Its 8-bit digits take 4 passes
+//! for 32-bit keys.
+//!
 //! The segment variant ([`Tuning::sort_segments`], CPU devices) has no barrier at all:
 //! every invocation's keys are one segment with its own histogram, written digit-major
 //! across all segments (`hist[digit * segments + segment]`), so the scan gives every
@@ -20,13 +26,14 @@
 //! one (a single pass ends with an unpack kernel). The scatter is compiled once for each
 //! of those three pass kinds, so that none of them branches on the kind.
 
+use super::tuning::multisplit_supported;
 use super::{
     args_offset, check_scratch, region, Count, Scan, ScanKind, Setup, Tuning, HEADER_BYTES,
 };
 use crate::shaders;
 use crate::vk::{
-    compute_pipeline, Buffer, BufferSlice, ComputePipeline, Gpu, MemoryKind, Recorder, Result,
-    VkError,
+    compute_pipeline, compute_pipeline_full_subgroups, Buffer, BufferSlice, ComputePipeline, Gpu,
+    MemoryKind, Recorder, Result, VkError,
 };
 
 #[repr(C)]
@@ -67,6 +74,8 @@ pub struct RadixSort {
     rows: bool,
     /// Barrier-free segments ([`Tuning::sort_segments`]): histograms per invocation.
     segments: bool,
+    /// Multisplit tiles ([`Tuning::sort_multisplit`]).
+    multisplit: bool,
     /// Interleaved pairs in the scratch ([`Tuning::sort_pairs`], segments only).
     pairs: bool,
 }
@@ -78,18 +87,41 @@ impl RadixSort {
             tuning.sort_keys_per_invocation,
             tuning.radix_bits,
         ];
-        let shared = gpu.info().limits.max_compute_shared_memory_size as u64;
-        if tuning.sort_shared_bytes() > shared {
+        let info = gpu.info();
+        let shared = info.limits.max_compute_shared_memory_size as u64;
+        if tuning.sort_shared_bytes(info) > shared {
             return Err(VkError::Usage(format!(
                 "radix sort tuning needs {} bytes of shared memory; the device has {shared}",
-                tuning.sort_shared_bytes()
+                tuning.sort_shared_bytes(info)
+            )));
+        }
+        let multisplit = tuning.sort_multisplit;
+        if multisplit
+            && (!multisplit_supported(info, tuning.sort_workgroup_size) || tuning.radix_bits > 8)
+        {
+            return Err(VkError::Usage(format!(
+                "radix sort: the multisplit variant ({}) cannot run on '{}' (it needs subgroup \
+                 ballot, shuffle and arithmetic, full subgroups, a workgroup that is a multiple \
+                 of the largest subgroup size {}, and digits of at most 8 bits)",
+                tuning.describe(),
+                info.name,
+                info.limits.max_subgroup_size
             )));
         }
         // The row variant needs the workgroup to be exactly one subgroup.
-        let rows =
-            tuning.sort_rows && tuning.sort_workgroup_size == gpu.info().limits.subgroup_size;
-        let segments = !rows && tuning.sort_segments && tuning.sort_keys_per_invocation % 4 == 0;
-        let (histogram, scatter) = if segments {
+        let rows = !multisplit
+            && tuning.sort_rows
+            && tuning.sort_workgroup_size == info.limits.subgroup_size;
+        let segments = !multisplit
+            && !rows
+            && tuning.sort_segments
+            && tuning.sort_keys_per_invocation % 4 == 0;
+        let (histogram, scatter) = if multisplit {
+            (
+                shaders::PRIMITIVES_SORT_MS_COUNT,
+                shaders::PRIMITIVES_SORT_MS_SCATTER,
+            )
+        } else if segments {
             (
                 shaders::PRIMITIVES_SORT_SEG_COUNT,
                 shaders::PRIMITIVES_SORT_SEG_SCATTER,
@@ -118,10 +150,24 @@ impl RadixSort {
             histogram.name,
             scatter.name
         );
+        // Segment and multisplit kernels bind no per-invocation count table.
+        let tableless = segments || multisplit;
+        let scatter = if multisplit {
+            let max_subgroups = tuning.sort_max_subgroups(info);
+            compute_pipeline_full_subgroups(
+                gpu,
+                scatter,
+                6,
+                12,
+                &[spec[0], spec[1], spec[2], max_subgroups],
+            )?
+        } else {
+            compute_pipeline(gpu, scatter, if segments { 6 } else { 7 }, 12, &spec)?
+        };
         Ok(Self {
             setup: Setup::new(gpu)?,
-            histogram: compute_pipeline(gpu, histogram, if segments { 3 } else { 4 }, 12, &spec)?,
-            scatter: compute_pipeline(gpu, scatter, if segments { 6 } else { 7 }, 12, &spec)?,
+            histogram: compute_pipeline(gpu, histogram, if tableless { 3 } else { 4 }, 12, &spec)?,
+            scatter,
             pair_scatters: if segments && tuning.sort_pairs {
                 let kind = |k| compute_pipeline(gpu, k, 6, 12, &spec);
                 Some([
@@ -134,6 +180,7 @@ impl RadixSort {
             },
             rows,
             segments,
+            multisplit,
             pairs: segments && tuning.sort_pairs,
             unpack: if segments && tuning.sort_pairs {
                 Some(compute_pipeline(
@@ -189,7 +236,12 @@ impl RadixSort {
     /// (instead of the scatter counting again): where that table (radix × workgroup
     /// words per tile) is at most a quarter of the tile's keys.
     fn stores_lane_counts(&self) -> bool {
-        !self.rows && !self.segments && self.radix() * 4 <= self.tuning.sort_keys_per_invocation
+        !self.rows && !self.tableless() && self.radix() * 4 <= self.tuning.sort_keys_per_invocation
+    }
+
+    /// Whether the kernels bind no per-invocation count table (segments, multisplit).
+    fn tableless(&self) -> bool {
+        self.segments || self.multisplit
     }
 
     fn lane_counts_len(&self, max_n: u32) -> u64 {
@@ -432,7 +484,7 @@ impl RadixSort {
             let count_bindings = [header, src.0, hist, lanes];
             rec.dispatch_indirect(
                 &self.histogram,
-                &count_bindings[..if self.segments { 3 } else { 4 }],
+                &count_bindings[..if self.tableless() { 3 } else { 4 }],
                 &push,
                 misc,
                 args_offset(1),
@@ -451,7 +503,7 @@ impl RadixSort {
             let scatter_bindings = [header, src.0, src.1, hist, dst.0, dst.1, lanes];
             rec.dispatch_indirect(
                 &self.scatter,
-                &scatter_bindings[..if self.segments { 6 } else { 7 }],
+                &scatter_bindings[..if self.tableless() { 6 } else { 7 }],
                 &push,
                 misc,
                 args_offset(1),

@@ -43,15 +43,39 @@
 //!   4M items, interleaved minima). Gather and the general paths keep one SIMD subgroup
 //!   per workgroup (`workgroup_size = subgroup_size`, queried, never assumed) with 256
 //!   items per invocation.
-//! - **GPUs** — variant `gpu-wide`: 128-invocation workgroups (at least one subgroup),
-//!   short runs (8 to 16 items) for occupancy, and 4-bit digits so the per-invocation
-//!   counter table (`2^bits × workgroup_size` words) stays small in shared memory.
+//! - **GPUs** — variant `gpu-multisplit` (`gpu-wide` where the sort must fall back):
+//!   128-invocation workgroups (at least one subgroup) with short runs of 16 items for
+//!   the scan-like kernels, for occupancy. The sort is a reduce-then-scan LSD sort
+//!   with 8-bit digits over tiles of 512 invocations × 7 keys ([`Tuning::sort_multisplit`]):
+//!   a histogram per tile counted with shared atomics, one scan of the digit-major
+//!   histograms, and a scatter that ranks each subgroup's keys by ballots over the digit
+//!   bits (warp-level multisplit), sorts the tile in shared memory and writes each digit's
+//!   run coalesced. Still no forward-progress assumption (no decoupled look-back). Where
+//!   a device lacks subgroup ballot and shuffle or full subgroups, the sort falls back to
+//!   per-invocation runs with 4-bit digits (the per-invocation counter table of
+//!   `2^bits × workgroup_size` words must stay small in shared memory). Measured on an
+//!   NVIDIA H100 (2026-11-23, `bench primitives --n 16777216 --runs 9`): the multisplit
+//!   sort sorts 16M pairs in 1.53 ms (10.9 Gkeys/s); the fallback took 25.2 ms in the
+//!   benchmark as it stood before this variant and 5.13 ms in the shape sweep of
+//!   [`Tuning::gpu`]. docs/PERFORMANCE.md has the figures.
 //!
 //! Both are checked against the device's shared-memory and workgroup limits.
 
 use serde::Serialize;
 
 use crate::vk::PhysicalDeviceInfo;
+
+/// Whether `info`'s device can run the multisplit sort with `workgroup` invocations:
+/// subgroup ballot, shuffle and arithmetic in compute shaders, and full subgroups of
+/// any size it may choose.
+pub fn multisplit_supported(info: &PhysicalDeviceInfo, workgroup: u32) -> bool {
+    let c = &info.capabilities;
+    c.subgroup_ballot_shuffle
+        && c.subgroup_arithmetic
+        && c.compute_full_subgroups
+        && workgroup % info.limits.max_subgroup_size.max(1) == 0
+        && workgroup <= info.limits.max_compute_work_group_invocations
+}
 
 /// Shapes of the primitives' kernels (specialization constants).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -83,6 +107,12 @@ pub struct Tuning {
     /// nor the scatter kernel needs a workgroup barrier. Used only where
     /// `sort_keys_per_invocation` is a multiple of 4 and `sort_rows` is off.
     pub sort_segments: bool,
+    /// Multisplit tiles (GPUs): per-tile histograms with shared atomics, and a scatter
+    /// that ranks keys with subgroup ballots, sorts the tile in shared memory and writes
+    /// coalesced (`sort_ms_*.comp`). Digits of at most 8 bits. Used only where the device
+    /// has subgroup ballot, shuffle and arithmetic and full subgroups, and
+    /// `sort_workgroup_size` is a multiple of the largest subgroup size.
+    pub sort_multisplit: bool,
     /// With `sort_segments`, key-value sorts ping-pong through interleaved (key, value)
     /// pairs (one `uvec2` store per key in the scatter instead of two scalar stores,
     /// and half the output streams); the scratch holds the pairs instead of separate
@@ -111,6 +141,7 @@ impl Tuning {
             subgroup_rows: true,
             sort_rows: false,
             sort_segments: true,
+            sort_multisplit: false,
             sort_pairs: true,
             // Quiet-machine sweep (load 0.2, 16M items, min of 5): 1024 → 17.5 ms,
             // 2048 → 16.7, 4096 → 25.4, 8192 → 16.4, 16384 → 30.3 (vkCmdCopyBuffer of
@@ -121,8 +152,27 @@ impl Tuning {
         }
     }
 
-    /// The variant for GPUs.
+    /// The variant for GPUs with subgroup ballot and shuffle and full subgroups: the
+    /// multisplit sort, in tiles of 512 invocations × 7 keys. Shape sweep on an NVIDIA
+    /// H100 (16M pairs, minimum of 3 rounds, two sweeps on 2026-11-23 agreeing within
+    /// 1%): 512 × 7 1.54 ms, 384 × 10 1.58, 256 × 16 1.65, 256 × 18 1.66–1.67,
+    /// 256 × 15 1.72, 128 × 16 1.74, 256 × 12 1.81, 256 × 8 2.10, 128 × 24 2.42; the
+    /// per-invocation-run fallback 5.13 ms. Larger tiles overflow 48 KiB of shared
+    /// memory at 512 invocations.
     pub fn gpu(subgroup_size: u32) -> Self {
+        Self {
+            variant: "gpu-multisplit",
+            sort_workgroup_size: subgroup_size.clamp(512, 1024),
+            sort_keys_per_invocation: 7,
+            radix_bits: 8,
+            sort_multisplit: true,
+            ..Self::gpu_runs(subgroup_size)
+        }
+    }
+
+    /// The variant for other GPUs: the sort in per-invocation runs of 8 keys with 4-bit
+    /// digits, whose per-invocation counter tables stay small in shared memory.
+    pub fn gpu_runs(subgroup_size: u32) -> Self {
         let w = subgroup_size.clamp(128, 1024);
         Self {
             variant: "gpu-wide",
@@ -134,6 +184,7 @@ impl Tuning {
             subgroup_rows: false,
             sort_rows: false,
             sort_segments: false,
+            sort_multisplit: false,
             sort_pairs: false,
             scan_segment: 0,
         }
@@ -142,10 +193,13 @@ impl Tuning {
     /// Chooses the variant for a device and fits it to the device's limits.
     pub fn for_device(info: &PhysicalDeviceInfo) -> Self {
         let subgroup = info.limits.subgroup_size.max(1);
+        let gpu = Self::gpu(subgroup);
         let t = if info.is_cpu() {
             Self::cpu(subgroup)
+        } else if multisplit_supported(info, gpu.sort_workgroup_size) {
+            gpu
         } else {
-            Self::gpu(subgroup)
+            Self::gpu_runs(subgroup)
         };
         t.fit(info)
     }
@@ -161,6 +215,11 @@ impl Tuning {
             && self.workgroup_size == info.limits.subgroup_size
             && self.items_per_invocation % 4 == 0;
         self.sort_rows &= self.sort_workgroup_size == info.limits.subgroup_size;
+        self.sort_multisplit &= multisplit_supported(info, self.sort_workgroup_size);
+        if self.sort_multisplit {
+            self.sort_rows = false;
+            self.sort_segments = false;
+        }
         self.sort_segments &= !self.sort_rows && self.sort_keys_per_invocation % 4 == 0;
         self.sort_pairs &= self.sort_segments;
         if self.scan_segment % 4 != 0 {
@@ -169,8 +228,18 @@ impl Tuning {
         let max_bits = if self.sort_segments { 11 } else { 8 };
         self.radix_bits = self.radix_bits.clamp(1, max_bits);
         let shared = info.limits.max_compute_shared_memory_size as u64;
-        while self.sort_shared_bytes() > shared {
-            if self.radix_bits > 4 {
+        let max_subgroup = info.limits.max_subgroup_size.max(1);
+        while self.sort_shared_bytes(info) > shared {
+            let half = self.sort_workgroup_size / 2;
+            if self.sort_multisplit && half >= 64 && half % max_subgroup == 0 {
+                // Fewer subgroups (their counters dominate where subgroups are narrow);
+                // more keys per invocation keep the tile about as long.
+                self.sort_workgroup_size = half;
+                self.sort_keys_per_invocation = (self.sort_keys_per_invocation * 2).min(16);
+            } else if self.sort_multisplit && self.sort_keys_per_invocation > 1 {
+                // A shorter tile; the workgroup must stay a multiple of the subgroup size.
+                self.sort_keys_per_invocation -= 1;
+            } else if self.radix_bits > 4 {
                 self.radix_bits -= 1;
             } else if self.sort_workgroup_size > 1 {
                 self.sort_workgroup_size /= 2;
@@ -181,9 +250,25 @@ impl Tuning {
         self
     }
 
-    /// Shared memory of the sort kernels: one counter per digit per invocation.
-    pub fn sort_shared_bytes(&self) -> u64 {
-        (1u64 << self.radix_bits) * self.sort_workgroup_size as u64 * 4
+    /// Shared memory of the sort kernels on `info`'s device: for the multisplit
+    /// scatter, one counter per digit per subgroup and the tile's keys and values; for
+    /// the others, one counter per digit per invocation.
+    pub fn sort_shared_bytes(&self, info: &PhysicalDeviceInfo) -> u64 {
+        let radix = 1u64 << self.radix_bits;
+        if self.sort_multisplit {
+            let subgroups = self.sort_max_subgroups(info) as u64;
+            let tile = self.sort_tile() as u64;
+            (subgroups * radix + radix + subgroups + 2 * tile) * 4
+        } else {
+            radix * self.sort_workgroup_size as u64 * 4
+        }
+    }
+
+    /// Most subgroups a sort workgroup can hold on `info`'s device (the multisplit
+    /// scatter's per-subgroup counters).
+    pub fn sort_max_subgroups(&self, info: &PhysicalDeviceInfo) -> u32 {
+        self.sort_workgroup_size
+            .div_ceil(info.limits.min_subgroup_size.max(1))
     }
 
     /// Items per workgroup of the scan-like kernels.
@@ -213,7 +298,9 @@ impl Tuning {
             self.sort_workgroup_size,
             self.sort_keys_per_invocation,
             self.radix_bits,
-            if self.sort_rows {
+            if self.sort_multisplit {
+                "multisplit tiles"
+            } else if self.sort_rows {
                 "subgroup-row sort"
             } else if self.sort_segments && self.sort_pairs {
                 "barrier-free segment sort, interleaved pairs"
@@ -223,5 +310,78 @@ impl Tuning {
                 "per-invocation-run sort"
             }
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::vk::{CapabilityInfo, LimitsInfo};
+
+    fn device(shared_kib: u32, subgroups: (u32, u32), ballots: bool) -> PhysicalDeviceInfo {
+        PhysicalDeviceInfo::synthetic(
+            "discrete",
+            LimitsInfo {
+                max_storage_buffer_range: 1 << 32,
+                max_compute_shared_memory_size: shared_kib << 10,
+                max_compute_work_group_invocations: 1024,
+                max_compute_work_group_count: [65535; 3],
+                max_push_constants_size: 128,
+                min_storage_buffer_offset_alignment: 64,
+                timestamp_period_ns: 1.0,
+                subgroup_size: subgroups.1,
+                min_subgroup_size: subgroups.0,
+                max_subgroup_size: subgroups.1,
+                max_memory_allocation_size: 1 << 32,
+            },
+            CapabilityInfo {
+                timeline_semaphore: true,
+                synchronization2: true,
+                maintenance4: true,
+                buffer_device_address: true,
+                push_descriptor: true,
+                ray_query: false,
+                subgroup_arithmetic: true,
+                subgroup_ballot_shuffle: ballots,
+                compute_full_subgroups: ballots,
+                shader_int64: true,
+                buffer_int64_atomics: true,
+            },
+        )
+    }
+
+    /// The multisplit shape fits the device's shared memory, keeps its workgroup a
+    /// multiple of every subgroup size the device may choose, and keeps 8-bit digits.
+    fn assert_multisplit_fits(info: &PhysicalDeviceInfo) -> Tuning {
+        let t = Tuning::for_device(info);
+        assert!(t.sort_multisplit, "{}", t.describe());
+        assert_eq!(t.radix_bits, 8, "{}", t.describe());
+        assert_eq!(t.sort_workgroup_size % info.limits.max_subgroup_size, 0);
+        let shared = info.limits.max_compute_shared_memory_size as u64;
+        assert!(t.sort_shared_bytes(info) <= shared, "{}", t.describe());
+        t
+    }
+
+    #[test]
+    fn gpus_with_ballots_get_the_multisplit_sort_within_their_shared_memory() {
+        // NVIDIA (the measured default), AMD RDNA (wave32 or wave64), Intel (SIMD8..32),
+        // and a small-shared-memory GPU with narrow subgroups.
+        let nvidia = assert_multisplit_fits(&device(48, (32, 32), true));
+        assert_eq!(
+            (nvidia.sort_workgroup_size, nvidia.sort_keys_per_invocation),
+            (512, 7)
+        );
+        assert_multisplit_fits(&device(64, (32, 64), true));
+        assert_multisplit_fits(&device(64, (8, 32), true));
+        let small = assert_multisplit_fits(&device(32, (8, 8), true));
+        assert!(small.sort_tile() >= 1024, "{}", small.describe());
+    }
+
+    #[test]
+    fn gpus_without_ballots_fall_back_to_per_invocation_runs() {
+        let t = Tuning::for_device(&device(48, (32, 32), false));
+        assert!(!t.sort_multisplit && !t.sort_segments && !t.sort_rows);
+        assert_eq!(t.variant, "gpu-wide");
+        assert!(t.sort_shared_bytes(&device(48, (32, 32), false)) <= 48 << 10);
     }
 }
