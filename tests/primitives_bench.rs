@@ -85,33 +85,59 @@ fn tuning_sweep() {
         gpu.info().name,
         base.describe()
     );
-    // (workgroup, keys per invocation, digit bits, subgroup rows, barrier-free segments,
-    // interleaved pairs)
-    let sorts: Vec<(u32, u32, u32, bool, bool, bool)> = vec![
-        (sg / 2, 16384, 11, false, true, true),
-        (sg / 2, 32768, 11, false, true, true),
-        (sg / 2, 65536, 11, false, true, true),
-        (sg / 4, 32768, 11, false, true, true),
-        (sg / 2, 16384, 11, false, true, false),
-        (sg, 16384, 8, false, true, false),
-        (sg, 16384, 8, false, false, false),
-    ];
+    let cpu_device = gpu.info().is_cpu();
     let only_scan = std::env::var_os("SPLITRAY_SWEEP_SCAN_ONLY").is_some();
+    let sorts: Vec<Tuning> = if cpu_device {
+        // (workgroup, keys per invocation, digit bits, subgroup rows, barrier-free
+        // segments, interleaved pairs)
+        vec![
+            (sg / 2, 16384, 11, false, true, true),
+            (sg / 2, 32768, 11, false, true, true),
+            (sg / 2, 65536, 11, false, true, true),
+            (sg / 4, 32768, 11, false, true, true),
+            (sg / 2, 16384, 11, false, true, false),
+            (sg, 16384, 8, false, true, false),
+            (sg, 16384, 8, false, false, false),
+        ]
+        .into_iter()
+        .map(|(w, k, bits, rows, segments, pairs)| Tuning {
+            sort_workgroup_size: w,
+            sort_keys_per_invocation: k,
+            radix_bits: bits,
+            sort_rows: rows,
+            sort_segments: segments,
+            sort_pairs: pairs,
+            ..base
+        })
+        .collect()
+    } else {
+        // Multisplit tiles (workgroup, keys per invocation), then the fallback of GPUs
+        // without subgroup ballots for the ratio between the two.
+        let multisplit = Tuning::gpu(sg);
+        [
+            (128, 16),
+            (128, 24),
+            (256, 8),
+            (256, 12),
+            (256, 15),
+            (256, 16),
+            (256, 18),
+            (384, 10),
+            (512, 7),
+        ]
+        .into_iter()
+        .map(|(w, k)| Tuning {
+            sort_workgroup_size: w,
+            sort_keys_per_invocation: k,
+            ..multisplit
+        })
+        .chain([Tuning::gpu_runs(sg)])
+        .collect()
+    };
     let sorts: Vec<Tuning> = sorts
         .into_iter()
         .filter(|_| !only_scan)
-        .map(|(w, k, bits, rows, segments, pairs)| {
-            Tuning {
-                sort_workgroup_size: w,
-                sort_keys_per_invocation: k,
-                radix_bits: bits,
-                sort_rows: rows,
-                sort_segments: segments,
-                sort_pairs: pairs,
-                ..base
-            }
-            .fit(gpu.info())
-        })
+        .map(|t| t.fit(gpu.info()))
         .collect();
     // Rounds interleave the tunings (and the CPU reference) so that a change of load on
     // a shared machine hits them alike; each reports its minimum over all rounds.
@@ -119,12 +145,14 @@ fn tuning_sweep() {
     let mut best = vec![f64::INFINITY; sorts.len()];
     let mut cpu_best = f64::INFINITY;
     for _ in 0..rounds.min(if sorts.is_empty() { 0 } else { rounds }) {
-        cpu_best = cpu_best.min(time_cpu_sort(n, 2));
+        if cpu_device {
+            cpu_best = cpu_best.min(time_cpu_sort(n, 2));
+        }
         for (t, b) in sorts.iter().zip(&mut best) {
             *b = b.min(time_sort(&gpu, t, n, 2).unwrap());
         }
     }
-    if !sorts.is_empty() {
+    if !sorts.is_empty() && cpu_device {
         println!("sort {n}: {cpu_best:>9.2} ms  cpu sort_unstable_by_key (single thread)");
     }
     for (t, ms) in sorts.iter().zip(best) {
@@ -138,29 +166,40 @@ fn tuning_sweep() {
     }
     let only_sort = std::env::var_os("SPLITRAY_SWEEP_SORT_ONLY").is_some();
     // (workgroup, items per invocation, subgroup rows, segment-scan items per invocation)
-    let scans: Vec<Tuning> = [
-        (sg, 256, true, 1040),
-        (sg, 256, true, 2048),
-        (sg, 256, true, 2064),
-        (sg, 256, true, 4096),
-        (sg, 256, true, 4112),
-        (sg, 256, true, 8208),
-        (sg, 256, true, 0),
-        (sg, 256, false, 0),
-    ]
-    .into_iter()
-    .filter(|_| !only_sort)
-    .map(|(w, k, rows, seg)| {
-        Tuning {
-            workgroup_size: w,
-            items_per_invocation: k,
-            subgroup_rows: rows,
-            scan_segment: seg,
-            ..base
-        }
-        .fit(gpu.info())
-    })
-    .collect();
+    let scan_shapes: &[(u32, u32, bool, u32)] = if cpu_device {
+        &[
+            (sg, 256, true, 1040),
+            (sg, 256, true, 2048),
+            (sg, 256, true, 2064),
+            (sg, 256, true, 4096),
+            (sg, 256, true, 4112),
+            (sg, 256, true, 8208),
+            (sg, 256, true, 0),
+            (sg, 256, false, 0),
+        ]
+    } else {
+        &[
+            (128, 16, false, 0),
+            (256, 8, false, 0),
+            (256, 16, false, 0),
+            (512, 8, false, 0),
+        ]
+    };
+    let scans: Vec<Tuning> = scan_shapes
+        .iter()
+        .copied()
+        .filter(|_| !only_sort)
+        .map(|(w, k, rows, seg)| {
+            Tuning {
+                workgroup_size: w,
+                items_per_invocation: k,
+                subgroup_rows: rows,
+                scan_segment: seg,
+                ..base
+            }
+            .fit(gpu.info())
+        })
+        .collect();
     // Interleaved rounds as for the sort, with a copy of the same bytes as the yardstick.
     let mut best = vec![f64::INFINITY; scans.len()];
     let mut copy_best = f64::INFINITY;
