@@ -165,30 +165,8 @@ fn gpu_once(
     record: &impl Fn(&mut Recorder) -> crate::vk::Result<()>,
     print_profile: bool,
 ) -> BenchResult<(f64, f64)> {
-    let scope = "bench-primitive";
-    gpu.wait_idle()?;
-    let _ = gpu.take_profile();
-    let mut rec = gpu.recorder(StreamKind::Main)?;
-    prepare(&mut rec)?;
-    rec.begin_scope(scope)?;
-    record(&mut rec)?;
-    rec.end_scope()?;
-    let t0 = Instant::now();
-    let point = rec.submit(&[])?;
-    gpu.wait(&point)?;
-    let wall = t0.elapsed().as_secs_f64() * 1e3;
-    gpu.wait_idle()?;
-    let profile = gpu.take_profile();
-    if print_profile && std::env::var_os("SPLITRAY_BENCH_PROFILE").is_some() {
-        eprint!("{}", profile.table());
-    }
-    let g: f64 = profile
-        .records
-        .iter()
-        .filter(|r| r.name == scope)
-        .map(|r| r.duration_ms())
-        .sum();
-    Ok((if g > 0.0 { g } else { wall }, wall))
+    let (times, wall) = gpu_batch(gpu, prepare, record, 1, print_profile)?;
+    Ok((times.first().copied().unwrap_or(wall), wall))
 }
 
 /// Nothing to prepare.
