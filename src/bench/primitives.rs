@@ -3,6 +3,7 @@
 //! CPU references measured in the same run.
 
 use std::fmt;
+use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use rayon::slice::ParallelSliceMut;
@@ -766,25 +767,22 @@ pub fn time_sort(gpu: &Gpu, tuning: &Tuning, n: usize, runs: usize) -> BenchResu
     time_gpu_min(gpu, runs, restore, record)
 }
 
-/// The CPU twin's sort of the sweep's pairs, kept for the next tuning of the same
-/// input (a sweep verifies every tuning; sorting 16M pairs on the CPU each time would
-/// take longer than the timings).
-fn expected_sort(
-    keys: &[u32],
-    values: &[u32],
-) -> (std::sync::Arc<Vec<u32>>, std::sync::Arc<Vec<u32>>) {
-    type Sorted = (Vec<u32>, std::sync::Arc<Vec<u32>>, std::sync::Arc<Vec<u32>>);
-    static LAST: std::sync::Mutex<Option<Sorted>> = std::sync::Mutex::new(None);
+/// The CPU twin's sort of the pairs [`time_sort`] makes for `n` (its keys and values
+/// depend on `n` alone), kept for the next tuning: a sweep verifies every tuning, and
+/// sorting 16M pairs on the CPU each time would take longer than the timings.
+fn expected_sort(keys: &[u32], values: &[u32]) -> (Arc<Vec<u32>>, Arc<Vec<u32>>) {
+    type Sorted = (usize, Arc<Vec<u32>>, Arc<Vec<u32>>);
+    static LAST: Mutex<Option<Sorted>> = Mutex::new(None);
     let mut last = LAST.lock().unwrap_or_else(|e| e.into_inner());
-    if let Some((k, ck, cv)) = last.as_ref() {
-        if k[..] == *keys && cv.len() == values.len() {
-            return (ck.clone(), cv.clone());
+    match last.as_ref() {
+        Some((n, ck, cv)) if *n == keys.len() => (ck.clone(), cv.clone()),
+        _ => {
+            let (ck, cv) = cpu::sort_pairs(keys, values, 0..32);
+            let (ck, cv) = (Arc::new(ck), Arc::new(cv));
+            *last = Some((keys.len(), ck.clone(), cv.clone()));
+            (ck, cv)
         }
     }
-    let (ck, cv) = cpu::sort_pairs(keys, values, 0..32);
-    let sorted = (std::sync::Arc::new(ck), std::sync::Arc::new(cv));
-    *last = Some((keys.to_vec(), sorted.0.clone(), sorted.1.clone()));
-    sorted
 }
 
 /// Minimum GPU ms over `runs` of an exclusive scan of `n` u32 with `tuning` (verified

@@ -47,15 +47,7 @@ pub fn compute_pipeline(
     push_constant_bytes: u32,
     spec: &[u32],
 ) -> Result<ComputePipeline> {
-    ComputePipeline::new(
-        gpu,
-        &PipelineDesc {
-            kernel,
-            bindings,
-            push_constant_bytes,
-            spec,
-        },
-    )
+    pipeline_of(gpu, kernel, bindings, push_constant_bytes, spec, false)
 }
 
 /// As [`compute_pipeline`], for a kernel whose work partition counts on every subgroup
@@ -70,32 +62,24 @@ pub fn compute_pipeline_full_subgroups(
     push_constant_bytes: u32,
     spec: &[u32],
 ) -> Result<ComputePipeline> {
-    let info = gpu.info();
-    let workgroup = spec.first().copied().unwrap_or(1);
-    if !info.capabilities.compute_full_subgroups {
-        return Err(VkError::Usage(format!(
-            "kernel '{}' needs full subgroups, which device '{}' does not offer",
-            kernel.name, info.name
-        )));
-    }
-    if workgroup % info.limits.max_subgroup_size != 0 {
-        return Err(VkError::Usage(format!(
-            "kernel '{}': workgroup size {workgroup} is not a multiple of the largest \
-             subgroup size {}, so its subgroups cannot all be full",
-            kernel.name, info.limits.max_subgroup_size
-        )));
-    }
-    ComputePipeline::create(
-        gpu,
-        &PipelineDesc {
-            kernel,
-            bindings,
-            push_constant_bytes,
-            spec,
-        },
-        false,
-        true,
-    )
+    pipeline_of(gpu, kernel, bindings, push_constant_bytes, spec, true)
+}
+
+fn pipeline_of(
+    gpu: &Gpu,
+    kernel: Kernel,
+    bindings: u32,
+    push_constant_bytes: u32,
+    spec: &[u32],
+    full_subgroups: bool,
+) -> Result<ComputePipeline> {
+    let desc = PipelineDesc {
+        kernel,
+        bindings,
+        push_constant_bytes,
+        spec,
+    };
+    ComputePipeline::create(gpu, &desc, false, full_subgroups)
 }
 
 impl std::fmt::Debug for ComputePipeline {
@@ -136,6 +120,9 @@ impl ComputePipeline {
         let device = &gpu.0.raw;
         let words = ash::util::read_spv(&mut std::io::Cursor::new(desc.kernel.spirv))
             .map_err(|_| VkError::BadSpirv(desc.kernel.name))?;
+        if full_subgroups {
+            check_full_subgroups(gpu, desc)?;
+        }
         let max_push = gpu.info().limits.max_push_constants_size;
         if desc.push_constant_bytes > max_push {
             return Err(VkError::Usage(format!(
@@ -262,6 +249,27 @@ impl ComputePipeline {
     pub fn workgroup_size(&self) -> u32 {
         self.workgroup_size
     }
+}
+
+/// Whether `desc` can require full subgroups on `gpu` (see
+/// [`compute_pipeline_full_subgroups`]).
+fn check_full_subgroups(gpu: &Gpu, desc: &PipelineDesc<'_>) -> Result<()> {
+    let info = gpu.info();
+    let workgroup = desc.spec.first().copied().unwrap_or(1);
+    if !info.capabilities.compute_full_subgroups {
+        return Err(VkError::Usage(format!(
+            "kernel '{}' needs full subgroups, which device '{}' does not offer",
+            desc.kernel.name, info.name
+        )));
+    }
+    if workgroup % info.limits.max_subgroup_size != 0 {
+        return Err(VkError::Usage(format!(
+            "kernel '{}': workgroup size {workgroup} is not a multiple of the largest \
+             subgroup size {}, so its subgroups cannot all be full",
+            desc.kernel.name, info.limits.max_subgroup_size
+        )));
+    }
+    Ok(())
 }
 
 impl Drop for ComputePipeline {
