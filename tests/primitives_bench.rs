@@ -89,24 +89,26 @@ fn tuning_sweep() {
     let only_scan = std::env::var_os("SPLITRAY_SWEEP_SCAN_ONLY").is_some();
     let sorts: Vec<Tuning> = if cpu_device {
         // (workgroup, keys per invocation, digit bits, subgroup rows, barrier-free
-        // segments, interleaved pairs)
+        // segments, interleaved pairs, 64-bit accesses)
         vec![
-            (sg / 2, 16384, 11, false, true, true),
-            (sg / 2, 32768, 11, false, true, true),
-            (sg / 2, 65536, 11, false, true, true),
-            (sg / 4, 32768, 11, false, true, true),
-            (sg / 2, 16384, 11, false, true, false),
-            (sg, 16384, 8, false, true, false),
-            (sg, 16384, 8, false, false, false),
+            (sg / 2, 32768, 11, false, true, true, true),
+            (sg / 2, 32768, 11, false, true, true, false),
+            (sg / 2, 16384, 11, false, true, true, true),
+            (sg / 2, 65536, 11, false, true, true, true),
+            (sg / 4, 32768, 11, false, true, true, true),
+            (sg / 2, 16384, 11, false, true, false, true),
+            (sg, 16384, 8, false, true, false, true),
+            (sg, 16384, 8, false, false, false, false),
         ]
         .into_iter()
-        .map(|(w, k, bits, rows, segments, pairs)| Tuning {
+        .map(|(w, k, bits, rows, segments, pairs, wide)| Tuning {
             sort_workgroup_size: w,
             sort_keys_per_invocation: k,
             radix_bits: bits,
             sort_rows: rows,
             sort_segments: segments,
             sort_pairs: pairs,
+            wide_accesses: wide,
             ..base
         })
         .collect()
@@ -165,36 +167,38 @@ fn tuning_sweep() {
         );
     }
     let only_sort = std::env::var_os("SPLITRAY_SWEEP_SORT_ONLY").is_some();
-    // (workgroup, items per invocation, subgroup rows, segment-scan items per invocation)
-    let scan_shapes: &[(u32, u32, bool, u32)] = if cpu_device {
+    // (workgroup, items per invocation, subgroup rows, segment-scan items per invocation,
+    // 64-bit accesses)
+    let scan_shapes: &[(u32, u32, bool, u32, bool)] = if cpu_device {
         &[
-            (sg, 256, true, 1040),
-            (sg, 256, true, 2048),
-            (sg, 256, true, 2064),
-            (sg, 256, true, 4096),
-            (sg, 256, true, 4112),
-            (sg, 256, true, 8208),
-            (sg, 256, true, 0),
-            (sg, 256, false, 0),
+            (sg, 256, true, 1024, true),
+            (sg, 256, true, 2048, true),
+            (sg, 256, true, 2048, false),
+            (sg, 256, true, 2064, true),
+            (sg, 256, true, 4096, true),
+            (sg, 256, true, 4112, true),
+            (sg, 256, true, 8208, true),
+            (sg, 256, true, 0, false),
         ]
     } else {
         &[
-            (128, 16, false, 0),
-            (256, 8, false, 0),
-            (256, 16, false, 0),
-            (512, 8, false, 0),
+            (128, 16, false, 0, false),
+            (256, 8, false, 0, false),
+            (256, 16, false, 0, false),
+            (512, 8, false, 0, false),
         ]
     };
     let scans: Vec<Tuning> = scan_shapes
         .iter()
         .copied()
         .filter(|_| !only_sort)
-        .map(|(w, k, rows, seg)| {
+        .map(|(w, k, rows, seg, wide)| {
             Tuning {
                 workgroup_size: w,
                 items_per_invocation: k,
                 subgroup_rows: rows,
                 scan_segment: seg,
+                wide_accesses: wide,
                 ..base
             }
             .fit(gpu.info())

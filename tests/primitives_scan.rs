@@ -95,38 +95,45 @@ fn scan_shapes_other_than_the_device_default() {
     // Small and large tiles: one workgroup, many, and tile sums longer than a workgroup.
     let gpu = common::gpu();
     let sg = gpu.info().limits.subgroup_size;
-    // (workgroup, items per invocation, subgroup rows, segment-scan items per invocation)
-    for (w, k, rows, seg) in [
-        (1, 1, false, 0),
-        (4, 3, false, 0),
-        (32, 8, false, 0),
-        (64, 64, false, 0),
-        (sg, 5, true, 0),
-        (sg, 8, true, 0),
-        (sg, 256, true, 0),
-        (sg, 64, false, 0),
-        (1, 1, false, 4),
-        (3, 1, false, 8),
-        (sg, 256, true, 4096),
-        (64, 1, false, 12),
-        (sg, 256, true, 6),
+    // (workgroup, items per invocation, subgroup rows, segment-scan items per
+    // invocation, 64-bit accesses where the device has them)
+    for (w, k, rows, seg, wide) in [
+        (1, 1, false, 0, false),
+        (4, 3, false, 0, false),
+        (32, 8, false, 0, false),
+        (64, 64, false, 0, false),
+        (sg, 5, true, 0, false),
+        (sg, 8, true, 0, false),
+        (sg, 256, true, 0, false),
+        (sg, 64, false, 0, false),
+        (1, 1, false, 4, false),
+        (3, 1, false, 8, false),
+        (3, 1, false, 8, true),
+        (sg, 256, true, 4096, false),
+        (sg, 256, true, 4096, true),
+        (64, 1, false, 12, true),
+        (5, 1, false, 24, true),
+        (sg, 256, true, 6, false),
     ] {
         let tuning = Tuning {
             workgroup_size: w,
             items_per_invocation: k,
             subgroup_rows: rows,
             scan_segment: seg,
+            wide_accesses: wide,
             ..Tuning::for_device(gpu.info())
         };
         let scan = Scan::new(&gpu, &tuning).unwrap();
         for n in [0usize, 1, 1000, 65_537] {
             let data = common::random_u32s(n, 9);
-            let kind = ScanKind::Exclusive;
-            assert_eq!(
-                run_scan(&gpu, &scan, &data, kind, false),
-                expected(&data, kind),
-                "w {w} k {k} rows {rows} segment {seg} n {n}"
-            );
+            // Exclusive out of place, inclusive in place.
+            for (kind, in_place) in [(ScanKind::Exclusive, false), (ScanKind::Inclusive, true)] {
+                assert_eq!(
+                    run_scan(&gpu, &scan, &data, kind, in_place),
+                    expected(&data, kind),
+                    "w {w} k {k} rows {rows} segment {seg} wide {wide} n {n} {kind:?}"
+                );
+            }
         }
     }
     common::assert_clean(&gpu);

@@ -179,21 +179,26 @@ fn sort_keys_only_and_other_tunings() {
     let base = Tuning::for_device(gpu.info());
     let sg = gpu.info().limits.subgroup_size;
     // (workgroup, keys per invocation, digit bits, subgroup rows, barrier-free segments,
-    // interleaved pairs)
-    for (w, k, bits, rows, segments, pairs) in [
-        (1, 1, 8, false, false, false),
-        (8, 3, 4, false, false, false),
-        (32, 16, 6, false, false, false),
-        (64, 8, 5, false, false, false),
-        (sg, 7, 8, true, false, false),
-        (sg, 256, 8, false, false, false),
-        (sg, 256, 8, false, true, false),
-        (sg, 256, 8, false, true, true),
-        (4, 12, 6, false, true, true),
-        (4, 64, 11, false, true, true),
-        (sg, 7, 8, false, true, true),
-        (1, 4, 3, false, true, false),
-        (2, 8, 10, false, true, true),
+    // interleaved pairs, 64-bit accesses where the device has them: segments of a
+    // multiple of 8 keys)
+    for (w, k, bits, rows, segments, pairs, wide) in [
+        (1, 1, 8, false, false, false, false),
+        (8, 3, 4, false, false, false, false),
+        (32, 16, 6, false, false, false, false),
+        (64, 8, 5, false, false, false, false),
+        (sg, 7, 8, true, false, false, false),
+        (sg, 256, 8, false, false, false, false),
+        (sg, 256, 8, false, true, false, false),
+        (sg, 256, 8, false, true, false, true),
+        (sg, 256, 8, false, true, true, false),
+        (sg, 256, 8, false, true, true, true),
+        (4, 12, 6, false, true, true, true),
+        (4, 64, 11, false, true, true, false),
+        (4, 64, 11, false, true, true, true),
+        (sg, 7, 8, false, true, true, true),
+        (1, 4, 3, false, true, false, false),
+        (2, 8, 10, false, true, true, true),
+        (3, 24, 9, false, true, false, true),
     ] {
         let tuning = Tuning {
             sort_workgroup_size: w,
@@ -202,6 +207,7 @@ fn sort_keys_only_and_other_tunings() {
             sort_rows: rows,
             sort_segments: segments,
             sort_pairs: pairs,
+            wide_accesses: wide,
             ..base
         }
         .fit(gpu.info());

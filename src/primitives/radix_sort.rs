@@ -26,7 +26,7 @@
 //! one (a single pass ends with an unpack kernel). The scatter is compiled once for each
 //! of those three pass kinds, so that none of them branches on the kind.
 
-use super::tuning::multisplit_supported;
+use super::tuning::{multisplit_supported, wide_accesses_supported};
 use super::{
     args_offset, check_scratch, region, Count, Scan, ScanKind, Setup, Tuning, HEADER_BYTES,
 };
@@ -116,10 +116,20 @@ impl RadixSort {
             && !rows
             && tuning.sort_segments
             && tuning.sort_keys_per_invocation % 4 == 0;
+        // 64-bit accesses (Tuning::wide_accesses) need segments of a multiple of 8 keys.
+        let wide = segments
+            && tuning.wide_accesses
+            && tuning.sort_keys_per_invocation % 8 == 0
+            && wide_accesses_supported(info);
         let (histogram, scatter) = if multisplit {
             (
                 shaders::PRIMITIVES_SORT_MS_COUNT,
                 shaders::PRIMITIVES_SORT_MS_SCATTER,
+            )
+        } else if segments && wide {
+            (
+                shaders::PRIMITIVES_SORT_SEG_COUNT__WIDE64,
+                shaders::PRIMITIVES_SORT_SEG_SCATTER,
             )
         } else if segments {
             (
@@ -170,11 +180,19 @@ impl RadixSort {
             scatter,
             pair_scatters: if segments && tuning.sort_pairs {
                 let kind = |k| compute_pipeline(gpu, k, 6, 12, &spec);
-                Some([
-                    kind(shaders::PRIMITIVES_SORT_SEG_SCATTER__FIRST)?,
-                    kind(shaders::PRIMITIVES_SORT_SEG_SCATTER__MIDDLE)?,
-                    kind(shaders::PRIMITIVES_SORT_SEG_SCATTER__LAST)?,
-                ])
+                Some(if wide {
+                    [
+                        kind(shaders::PRIMITIVES_SORT_SEG_SCATTER__FIRST64)?,
+                        kind(shaders::PRIMITIVES_SORT_SEG_SCATTER__MIDDLE64)?,
+                        kind(shaders::PRIMITIVES_SORT_SEG_SCATTER__LAST64)?,
+                    ]
+                } else {
+                    [
+                        kind(shaders::PRIMITIVES_SORT_SEG_SCATTER__FIRST)?,
+                        kind(shaders::PRIMITIVES_SORT_SEG_SCATTER__MIDDLE)?,
+                        kind(shaders::PRIMITIVES_SORT_SEG_SCATTER__LAST)?,
+                    ]
+                })
             } else {
                 None
             },

@@ -4,6 +4,7 @@
 //! [`Tuning::scan_segment`] (CPU devices) the sums are per invocation instead of per
 //! workgroup, so neither big pass has a barrier or a subgroup operation.
 
+use super::tuning::wide_accesses_supported;
 use super::{args_offset, check_scratch, region, Count, Setup, Tuning, HEADER_BYTES};
 use crate::shaders;
 use crate::vk::{compute_pipeline, Buffer, BufferSlice, ComputePipeline, Gpu, Recorder, Result};
@@ -42,12 +43,12 @@ impl Scan {
             "scan on {}: {} — kernels {} + {}",
             gpu.info().name,
             tuning.describe(),
-            Self::reduce_kernel(tuning).name,
+            Self::reduce_kernel(gpu, tuning).name,
             Self::downsweep_kernel(gpu, tuning).name
         );
         Ok(Self {
             setup: Setup::new(gpu)?,
-            reduce: compute_pipeline(gpu, Self::reduce_kernel(tuning), 3, 4, &spec)?,
+            reduce: compute_pipeline(gpu, Self::reduce_kernel(gpu, tuning), 3, 4, &spec)?,
             block_sums: compute_pipeline(
                 gpu,
                 shaders::PRIMITIVES_SCAN_BLOCK_SUMS,
@@ -78,6 +79,13 @@ impl Scan {
         }
     }
 
+    /// Whether the segment kernels run their `wide64` variants: 64-bit accesses of
+    /// eight items ([`Tuning::wide_accesses`]), for segments of a multiple of 8 items.
+    fn wide(gpu: &Gpu, tuning: &Tuning) -> bool {
+        let seg = Self::segment(tuning);
+        tuning.wide_accesses && seg > 0 && seg % 8 == 0 && wide_accesses_supported(gpu.info())
+    }
+
     /// Items per tile sum: per workgroup, or per invocation for the segment scan.
     fn tile(&self) -> u32 {
         match Self::segment(&self.tuning) {
@@ -87,8 +95,10 @@ impl Scan {
     }
 
     /// Tile sums read as uvec4s where the runs allow (the tile is the same either way).
-    fn reduce_kernel(tuning: &Tuning) -> crate::shaders::Kernel {
-        if Self::segment(tuning) > 0 {
+    fn reduce_kernel(gpu: &Gpu, tuning: &Tuning) -> crate::shaders::Kernel {
+        if Self::wide(gpu, tuning) {
+            shaders::PRIMITIVES_SCAN_SEG_REDUCE__WIDE64
+        } else if Self::segment(tuning) > 0 {
             shaders::PRIMITIVES_SCAN_SEG_REDUCE
         } else if tuning.items_per_invocation % 4 == 0 {
             shaders::PRIMITIVES_SCAN_REDUCE__VEC4
@@ -99,7 +109,9 @@ impl Scan {
 
     /// The subgroup-row kernel where it is valid, else per-invocation runs.
     fn downsweep_kernel(gpu: &Gpu, tuning: &Tuning) -> crate::shaders::Kernel {
-        if Self::segment(tuning) > 0 {
+        if Self::wide(gpu, tuning) {
+            shaders::PRIMITIVES_SCAN_SEG__WIDE64
+        } else if Self::segment(tuning) > 0 {
             shaders::PRIMITIVES_SCAN_SEG
         } else if Self::rows(gpu, tuning) {
             shaders::PRIMITIVES_SCAN_ROWS

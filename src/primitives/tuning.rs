@@ -7,8 +7,9 @@
 //! per device is the shape, set by specialization constants:
 //!
 //! - **CPU devices (lavapipe/llvmpipe)** — variant `cpu-segments`: barrier-free
-//!   segments. Every invocation owns one long contiguous segment (4096 scan items,
-//!   32768 sort keys) that it reads and writes as `uvec4`s, with its own partial sum
+//!   segments. Every invocation owns one long contiguous segment (4112 scan items,
+//!   32768 sort keys) that it reads and writes as `u64vec4`s (eight u32 per access;
+//!   `uvec4`s where the device lacks shaderInt64, see [`Tuning::wide_accesses`]), with its own partial sum
 //!   (scan) or its own column of 2^11 digit counters in shared memory (sort), and no
 //!   kernel of the scan or sort has a workgroup barrier or a subgroup operation. The
 //!   per-segment sums / digit histograms are written in an order (segment-major for the
@@ -36,6 +37,15 @@
 //!   per-invocation-run sort in the same sweep) and was dropped. 8192 keys per invocation and 2-invocation workgroups were slower. With
 //!   32768 keys per invocation a workgroup takes 131072 keys, so sorts below ~256K keys
 //!   run on fewer workgroups than lavapipe has threads.
+//!   64-bit accesses (2026-11-24, an AMD EPYC host): lavapipe makes one scalar access
+//!   per component of a lane's load or store whatever the component's width, and its
+//!   per-lane overhead (exec-mask test, descriptor and bounds reload) is paid once per
+//!   lane per access, so four 64-bit components carry twice the bytes of a `uvec4` for
+//!   the same cost. A per-invocation segment copy of 16M u32 took 9.5-9.6 ms with
+//!   `uvec4`, 8.4 with `u64vec2` and 6.0-6.6 with `u64vec4` (a `vkCmdCopyBuffer` of the
+//!   same bytes 5.9-6.3 ms); a segment sum 4.4-6.6 ms against 3.4-3.7. The scan of 16M
+//!   items went from 14.5 to 11.6 ms (2048-item segments; sweep minima of 5 rounds),
+//!   the sort of 4M pairs from 55.6 to 48.8 ms (CPU `sort_unstable_by_key` 78.0 ms).
 //!   Reduce-by-key and compaction reuse the scan's segments: per-segment run-head or
 //!   kept counts, one small scan of those, then each invocation writes its segment's
 //!   runs (reducing a run to its end, so none is split and no atomic is needed) or kept
@@ -75,6 +85,13 @@ pub fn multisplit_supported(info: &PhysicalDeviceInfo, workgroup: u32) -> bool {
         && c.compute_full_subgroups
         && workgroup % info.limits.max_subgroup_size.max(1) == 0
         && workgroup <= info.limits.max_compute_work_group_invocations
+}
+
+/// Whether `info`'s device can run the `wide64` segment kernels
+/// ([`Tuning::wide_accesses`]): shaderInt64 (enabled on the device where present), and
+/// storage-buffer offsets that keep every binding's 64-bit components 8-byte aligned.
+pub fn wide_accesses_supported(info: &PhysicalDeviceInfo) -> bool {
+    info.capabilities.shader_int64 && info.limits.min_storage_buffer_offset_alignment % 8 == 0
 }
 
 /// Shapes of the primitives' kernels (specialization constants).
@@ -123,6 +140,13 @@ pub struct Tuning {
     /// scan kernel needs a barrier or a subgroup operation. A multiple of 4 (`uvec4`
     /// accesses).
     pub scan_segment: u32,
+    /// The segment kernels read and write 64-bit vector components (`u64vec4`, eight
+    /// u32 per access instead of four per `uvec4`). lavapipe makes one scalar access
+    /// per component of every lane's load or store, whatever the component's width,
+    /// so this halves the accesses of the streaming kernels. Used only where the device
+    /// has shaderInt64 and storage-buffer offsets are 8-byte aligned; segments are then
+    /// a multiple of 8 items.
+    pub wide_accesses: bool,
 }
 
 impl Tuning {
@@ -143,12 +167,15 @@ impl Tuning {
             sort_segments: true,
             sort_multisplit: false,
             sort_pairs: true,
-            // Quiet-machine sweep (load 0.2, 16M items, min of 5): 1024 → 17.5 ms,
-            // 2048 → 16.7, 4096 → 25.4, 8192 → 16.4, 16384 → 30.3 (vkCmdCopyBuffer of
-            // the same bytes 13.3). 4096-item (16 KiB) strides seem to alias in the
-            // cache across a subgroup's lanes; 2048 is as fast as the best and keeps
-            // more invocations busy on small inputs.
-            scan_segment: 2048,
+            // Segments a little off a power of two: with 64-bit accesses, three sweeps
+            // of 16M items (2026-11-24, AMD EPYC host, minima of 5 interleaved rounds
+            // each) gave 4112 items 9.4-9.7 ms, 8208 9.1, 4096 10.4-11.1, 2064
+            // 10.6-16.0, 2048 10.4-11.6, 1024 11.1-14.1, against a vkCmdCopyBuffer of
+            // the same bytes of 6.3-6.7 ms. Power-of-two strides (16 KiB apart) let a
+            // subgroup's eight lane streams alias in the cache. 4112 keeps two
+            // workgroups, one per lavapipe thread, from 66K items on.
+            scan_segment: 4112,
+            wide_accesses: true,
         }
     }
 
@@ -187,6 +214,7 @@ impl Tuning {
             sort_multisplit: false,
             sort_pairs: false,
             scan_segment: 0,
+            wide_accesses: false,
         }
     }
 
@@ -225,6 +253,7 @@ impl Tuning {
         if self.scan_segment % 4 != 0 {
             self.scan_segment = 0;
         }
+        self.wide_accesses &= wide_accesses_supported(info);
         let max_bits = if self.sort_segments { 11 } else { 8 };
         self.radix_bits = self.radix_bits.clamp(1, max_bits);
         let shared = info.limits.max_compute_shared_memory_size as u64;
@@ -284,7 +313,7 @@ impl Tuning {
     /// One line for logs and benchmark output.
     pub fn describe(&self) -> String {
         format!(
-            "{} (workgroup {} x {} items, {}; sort workgroup {} x {} keys, {}-bit digits, {})",
+            "{} (workgroup {} x {} items, {}; sort workgroup {} x {} keys, {}-bit digits, {}{})",
             self.variant,
             self.workgroup_size,
             self.items_per_invocation,
@@ -308,6 +337,11 @@ impl Tuning {
                 "barrier-free segment sort"
             } else {
                 "per-invocation-run sort"
+            },
+            if self.wide_accesses && (self.scan_segment > 0 || self.sort_segments) {
+                "; 64-bit accesses in the segment kernels"
+            } else {
+                ""
             }
         )
     }

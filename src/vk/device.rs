@@ -149,7 +149,8 @@ impl Gpu {
             .timeline_semaphore(true)
             .buffer_device_address(ray_query)
             .shader_buffer_int64_atomics(int64_atomics);
-        let f10 = vk::PhysicalDeviceFeatures::default().shader_int64(int64_atomics);
+        let f10 =
+            vk::PhysicalDeviceFeatures::default().shader_int64(info.capabilities.shader_int64);
         let full_subgroups = info.capabilities.compute_full_subgroups;
         let mut f13 = vk::PhysicalDeviceVulkan13Features::default()
             .synchronization2(true)
