@@ -50,9 +50,10 @@
 //!   kept counts, one small scan of those, then each invocation writes its segment's
 //!   runs (reducing a run to its end, so none is split and no atomic is needed) or kept
 //!   items in order (reduce-by-key 2.1–3.5× and compaction 1.02–1.08× the general path,
-//!   4M items, interleaved minima). Gather and the general paths keep one SIMD subgroup
-//!   per workgroup (`workgroup_size = subgroup_size`, queried, never assumed) with 256
-//!   items per invocation.
+//!   4M items, interleaved minima). Gathers move segments of the scan's length with
+//!   64-bit index and output accesses (`gather.comp`, variant `seg64`); scatters and the
+//!   general paths keep one SIMD subgroup per workgroup (`workgroup_size =
+//!   subgroup_size`, queried, never assumed) with 256 items per invocation.
 //! - **GPUs** — variant `gpu-multisplit` (`gpu-wide` where the sort must fall back):
 //!   128-invocation workgroups (at least one subgroup) with short runs of 16 items for
 //!   the scan-like kernels, for occupancy. The sort is a reduce-then-scan LSD sort
