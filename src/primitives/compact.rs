@@ -52,7 +52,11 @@ impl Compact {
                 0 => None,
                 items => Some(compute_pipeline(
                     gpu,
-                    shaders::PRIMITIVES_COMPACT_SEG,
+                    if Scan::wide(gpu, tuning) {
+                        shaders::PRIMITIVES_COMPACT_SEG__WIDE64
+                    } else {
+                        shaders::PRIMITIVES_COMPACT_SEG
+                    },
                     6,
                     4,
                     &[tuning.workgroup_size, items],

@@ -85,7 +85,17 @@ impl ReduceByKey {
                 let reduce = |k| compute_pipeline(gpu, k, 9, 0, &spec);
                 Some(SegmentKernels {
                     items,
-                    heads: compute_pipeline(gpu, shaders::PRIMITIVES_RBK_SEG_HEADS, 3, 0, &spec)?,
+                    heads: compute_pipeline(
+                        gpu,
+                        if Scan::wide(gpu, tuning) {
+                            shaders::PRIMITIVES_RBK_SEG_HEADS__WIDE64
+                        } else {
+                            shaders::PRIMITIVES_RBK_SEG_HEADS
+                        },
+                        3,
+                        0,
+                        &spec,
+                    )?,
                     reduce: [
                         reduce(shaders::PRIMITIVES_RBK_SEG_REDUCE__SUM)?,
                         reduce(shaders::PRIMITIVES_RBK_SEG_REDUCE__COUNT)?,

@@ -81,7 +81,7 @@ impl Scan {
 
     /// Whether the segment kernels run their `wide64` variants: 64-bit accesses of
     /// eight items ([`Tuning::wide_accesses`]), for segments of a multiple of 8 items.
-    fn wide(gpu: &Gpu, tuning: &Tuning) -> bool {
+    pub(crate) fn wide(gpu: &Gpu, tuning: &Tuning) -> bool {
         let seg = Self::segment(tuning);
         tuning.wide_accesses && seg > 0 && seg % 8 == 0 && wide_accesses_supported(gpu.info())
     }

@@ -39,16 +39,18 @@ pub fn assert_clean(gpu: &Gpu) {
 }
 
 /// Deterministic pseudo-random u32s (SplitMix64) for test data.
-/// The device's tuning with the general (non-segment) path and with segments of 4 and
-/// 12 items, so that runs and kept items cross many segments: for primitives whose
-/// segment variant must agree with their general path on every device.
+/// The device's tuning with the general (non-segment) path and with segments of 4, 12,
+/// 16 and 24 items, so that runs and kept items cross many segments — the last two with
+/// 64-bit accesses where the device has them: for primitives whose segment variants
+/// must agree with their general path on every device.
 pub fn segment_tunings(gpu: &Gpu) -> Vec<(u32, splitray::primitives::Tuning)> {
     let base = splitray::primitives::Tuning::for_device(gpu.info());
-    [0u32, 4, 12]
+    [(0u32, false), (4, false), (12, false), (16, true), (24, true)]
         .into_iter()
-        .map(|segment| {
+        .map(|(segment, wide)| {
             let tuning = splitray::primitives::Tuning {
                 scan_segment: segment,
+                wide_accesses: wide,
                 ..base
             };
             (segment, tuning.fit(gpu.info()))
