@@ -1,6 +1,5 @@
 //! Gather (`out[i] = src[idx[i]]`) and scatter (`out[idx[i]] = src[i]`) of u32 by index.
 
-use super::tuning::wide_accesses_supported;
 use super::{args_offset, check_scratch, Count, Setup, Tuning, HEADER_BYTES};
 use crate::shaders;
 use crate::vk::{compute_pipeline, Buffer, BufferSlice, ComputePipeline, Gpu, Recorder, Result};
@@ -43,11 +42,7 @@ impl Gather {
         // ms). The scatter keeps the rows, which measured 7% faster there (14.8 / 14.9
         // against 15.8 / 16.2 ms): its cost is the random stores either way.
         let segment = tuning.scan_segment;
-        let gather = if tuning.wide_accesses
-            && segment > 0
-            && segment % 8 == 0
-            && wide_accesses_supported(gpu.info())
-        {
+        let gather = if tuning.wide_segments(gpu.info(), segment) {
             let kernel = shaders::PRIMITIVES_GATHER__SEG64;
             let pipeline = compute_pipeline(gpu, kernel, 4, 8, &[tuning.workgroup_size, segment])?;
             (pipeline, tuning.workgroup_size * segment)

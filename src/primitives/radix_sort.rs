@@ -24,9 +24,11 @@
 //! middle passes go from pairs to pairs (two pair buffers, alternating), and the last
 //! pass writes the caller's buffers again — no unpack or copy for any pass count above
 //! one (a single pass ends with an unpack kernel). The scatter is compiled once for each
-//! of those three pass kinds, so that none of them branches on the kind.
+//! of those three pass kinds, so that none of them branches on the kind. With
+//! [`Tuning::wide_accesses`] the segment kernels read keys eight at a time (or pairs four
+//! at a time) as `u64vec4`s and store each pair as one 64-bit word.
 
-use super::tuning::{multisplit_supported, wide_accesses_supported};
+use super::tuning::multisplit_supported;
 use super::{
     args_offset, check_scratch, region, Count, Scan, ScanKind, Setup, Tuning, HEADER_BYTES,
 };
@@ -116,11 +118,7 @@ impl RadixSort {
             && !rows
             && tuning.sort_segments
             && tuning.sort_keys_per_invocation % 4 == 0;
-        // 64-bit accesses (Tuning::wide_accesses) need segments of a multiple of 8 keys.
-        let wide = segments
-            && tuning.wide_accesses
-            && tuning.sort_keys_per_invocation % 8 == 0
-            && wide_accesses_supported(info);
+        let wide = segments && tuning.wide_segments(info, tuning.sort_keys_per_invocation);
         let (histogram, scatter) = if multisplit {
             (
                 shaders::PRIMITIVES_SORT_MS_COUNT,

@@ -4,7 +4,6 @@
 //! [`Tuning::scan_segment`] (CPU devices) the sums are per invocation instead of per
 //! workgroup, so neither big pass has a barrier or a subgroup operation.
 
-use super::tuning::wide_accesses_supported;
 use super::{args_offset, check_scratch, region, Count, Setup, Tuning, HEADER_BYTES};
 use crate::shaders;
 use crate::vk::{compute_pipeline, Buffer, BufferSlice, ComputePipeline, Gpu, Recorder, Result};
@@ -82,8 +81,7 @@ impl Scan {
     /// Whether the segment kernels run their `wide64` variants: 64-bit accesses of
     /// eight items ([`Tuning::wide_accesses`]), for segments of a multiple of 8 items.
     pub(crate) fn wide(gpu: &Gpu, tuning: &Tuning) -> bool {
-        let seg = Self::segment(tuning);
-        tuning.wide_accesses && seg > 0 && seg % 8 == 0 && wide_accesses_supported(gpu.info())
+        tuning.wide_segments(gpu.info(), Self::segment(tuning))
     }
 
     /// Items per tile sum: per workgroup, or per invocation for the segment scan.

@@ -9,7 +9,7 @@
 //! - **CPU devices (lavapipe/llvmpipe)** — variant `cpu-segments`: barrier-free
 //!   segments. Every invocation owns one long contiguous segment (4112 scan items,
 //!   32768 sort keys) that it reads and writes as `u64vec4`s (eight u32 per access;
-//!   `uvec4`s where the device lacks shaderInt64, see [`Tuning::wide_accesses`]), with its own partial sum
+//!   `uvec4`s without shaderInt64: [`Tuning::wide_accesses`]), with its own partial sum
 //!   (scan) or its own column of 2^11 digit counters in shared memory (sort), and no
 //!   kernel of the scan or sort has a workgroup barrier or a subgroup operation. The
 //!   per-segment sums / digit histograms are written in an order (segment-major for the
@@ -34,16 +34,18 @@
 //!   pairs against separate arrays within noise for 11-bit digits, 0.9x the time for
 //!   8-bit. Shared-memory `atomicAdd` for the counters instead of a load and a store
 //!   measured slower (8 × 16384 8-bit segments 256 ms, against 152 ms for the previous
-//!   per-invocation-run sort in the same sweep) and was dropped. 8192 keys per invocation and 2-invocation workgroups were slower. With
-//!   32768 keys per invocation a workgroup takes 131072 keys, so sorts below ~256K keys
-//!   run on fewer workgroups than lavapipe has threads.
+//!   per-invocation-run sort in the same sweep) and was dropped. 8192 keys per
+//!   invocation and 2-invocation workgroups were slower. With 32768 keys per
+//!   invocation a workgroup takes 131072 keys, so sorts below ~256K keys run on fewer
+//!   workgroups than lavapipe has threads.
 //!   64-bit accesses (2026-11-24, an AMD EPYC host): lavapipe makes one scalar access
 //!   per component of a lane's load or store whatever the component's width, and its
 //!   per-lane overhead (exec-mask test, descriptor and bounds reload) is paid once per
 //!   lane per access, so four 64-bit components carry twice the bytes of a `uvec4` for
-//!   the same cost. A per-invocation segment copy of 16M u32 took 9.5-9.6 ms with
-//!   `uvec4`, 8.4 with `u64vec2` and 6.0-6.6 with `u64vec4` (a `vkCmdCopyBuffer` of the
-//!   same bytes 5.9-6.3 ms); a segment sum 4.4-6.6 ms against 3.4-3.7. The scan of 16M
+//!   the same cost. A per-invocation segment copy of 16M u32 took 9.5-13.0 ms with
+//!   `uvec4`, 8.4-9.9 with `u64vec2` and 6.0-6.6 with `u64vec4` (a `vkCmdCopyBuffer` of
+//!   the same bytes 5.3-6.3 ms); a segment sum 4.3-7.7 ms against 3.4-3.7 (minima of
+//!   interleaved rounds, three runs; docs/PERFORMANCE.md). The scan of 16M
 //!   items went from 14.5 to 11.6 ms (2048-item segments; sweep minima of 5 rounds),
 //!   the sort of 4M pairs from 55.6 to 48.8 ms (CPU `sort_unstable_by_key` 78.0 ms).
 //!   Reduce-by-key and compaction reuse the scan's segments: per-segment run-head or
@@ -139,7 +141,7 @@ pub struct Tuning {
     /// Items per invocation of the barrier-free segment scan (0: off): every invocation
     /// of `workgroup_size` owns this many contiguous items with its own sum, so neither
     /// scan kernel needs a barrier or a subgroup operation. A multiple of 4 (`uvec4`
-    /// accesses).
+    /// accesses), of 8 for 64-bit accesses.
     pub scan_segment: u32,
     /// The segment kernels read and write 64-bit vector components (`u64vec4`, eight
     /// u32 per access instead of four per `uvec4`). lavapipe makes one scalar access
@@ -309,6 +311,12 @@ impl Tuning {
     /// Keys per workgroup of the sort.
     pub fn sort_tile(&self) -> u32 {
         self.sort_workgroup_size * self.sort_keys_per_invocation
+    }
+
+    /// Whether segment kernels over segments of `segment` items run with 64-bit
+    /// accesses on `info`'s device: asked for, supported, and segments of a multiple of 8.
+    pub(crate) fn wide_segments(&self, info: &PhysicalDeviceInfo, segment: u32) -> bool {
+        self.wide_accesses && segment > 0 && segment % 8 == 0 && wide_accesses_supported(info)
     }
 
     /// One line for logs and benchmark output.

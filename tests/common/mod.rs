@@ -45,17 +45,23 @@ pub fn assert_clean(gpu: &Gpu) {
 /// must agree with their general path on every device.
 pub fn segment_tunings(gpu: &Gpu) -> Vec<(u32, splitray::primitives::Tuning)> {
     let base = splitray::primitives::Tuning::for_device(gpu.info());
-    [(0u32, false), (4, false), (12, false), (16, true), (24, true)]
-        .into_iter()
-        .map(|(segment, wide)| {
-            let tuning = splitray::primitives::Tuning {
-                scan_segment: segment,
-                wide_accesses: wide,
-                ..base
-            };
-            (segment, tuning.fit(gpu.info()))
-        })
-        .collect()
+    [
+        (0u32, false),
+        (4, false),
+        (12, false),
+        (16, true),
+        (24, true),
+    ]
+    .into_iter()
+    .map(|(segment, wide)| {
+        let tuning = splitray::primitives::Tuning {
+            scan_segment: segment,
+            wide_accesses: wide,
+            ..base
+        };
+        (segment, tuning.fit(gpu.info()))
+    })
+    .collect()
 }
 
 pub fn random_u32s(n: usize, seed: u64) -> Vec<u32> {
