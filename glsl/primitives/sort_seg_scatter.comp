@@ -4,7 +4,6 @@
 //! variant last: FIXED_FLAGS=5
 //! variant first64: FIXED_FLAGS=9 WIDE64=1
 //! variant middle64: FIXED_FLAGS=13 WIDE64=1
-//! variant last64: FIXED_FLAGS=5 WIDE64=1
 #ifdef WIDE64
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #endif
