@@ -12,7 +12,7 @@
 // (hist[digit * segments + segment]) into its own column of shared counters and writes
 // its keys (and values) in their original order: stable, with no barrier and no
 // cooperation inside the workgroup. Keys and values are read as uvec4s (KEYS a multiple
-// of 4).
+// of 4), or as u64vec4s with the `...64` variants (KEYS a multiple of 8).
 #include "grid.glsl"
 #include "prim.glsl"
 layout(constant_id = 1) const uint KEYS = 64;
