@@ -1,9 +1,9 @@
 #version 460
 // Radix sort pass, step 1, barrier-free segment variant (CPU devices). Each invocation
-// owns KEYS contiguous keys (its segment, KEYS a multiple of 4, read as uvec4s, or a
-// multiple of 8 read as u64vec4s with `wide64`) and
-// counts their digits into its own column of shared counters, then writes the counts
-// digit-major across all segments (hist[digit * segments + segment]), so one exclusive
+// owns KEYS contiguous keys (its segment: KEYS a multiple of 4, read as uvec4s, or of 8,
+// read as u64vec4s with `wide64`) and counts their digits into its own column of shared
+// counters, then writes the counts digit-major across all segments
+// (hist[digit * segments + segment]), so one exclusive
 // scan gives every (digit, segment) its global offset in stable order. No invocation
 // touches another's counters: no barrier anywhere (barriers are slow on lavapipe).
 //! variant wide64: WIDE64=1
