@@ -108,18 +108,7 @@ fn check_compact(
 fn compact_matches_cpu_at_awkward_sizes() {
     let gpu = common::gpu();
     let compact = Compact::new(&gpu, &Tuning::for_device(gpu.info())).unwrap();
-    for n in [
-        0usize,
-        1,
-        2,
-        255,
-        256,
-        257,
-        1000,
-        65_537,
-        1_000_003,
-        1 << 22,
-    ] {
+    for n in common::ISSUE_SIZES {
         let flags: Vec<u32> = common::random_u32s(n, n as u64)
             .iter()
             .map(|x| x & 1)
@@ -171,9 +160,6 @@ fn compact_general_path_and_short_segments() {
     common::assert_clean(&gpu);
 }
 
-/// The gather kernels' scratch: the header alone.
-const HEADER_BYTES_FOR_GATHER: u64 = 256;
-
 #[test]
 fn gather_and_scatter_match_cpu() {
     let gpu = common::gpu();
@@ -193,25 +179,12 @@ fn gather_and_scatter_match_cpu() {
         }
         .fit(gpu.info())
     };
-    let scratch = gpu
-        .create_buffer("scratch", HEADER_BYTES_FOR_GATHER, MemoryKind::Device)
-        .unwrap();
     for tuning in [base, other] {
         let gather = Gather::new(&gpu, &tuning).unwrap();
-        assert!(gather.scratch_bytes(0) <= HEADER_BYTES_FOR_GATHER);
-        for n in [
-            0usize,
-            1,
-            2,
-            7,
-            255,
-            256,
-            257,
-            1000,
-            65_537,
-            1_000_003,
-            1 << 22,
-        ] {
+        let scratch = gpu
+            .create_buffer("scratch", gather.scratch_bytes(0), MemoryKind::Device)
+            .unwrap();
+        for n in common::ISSUE_SIZES.into_iter().chain([7]) {
             let what = format!("{} n = {n}", tuning.describe());
             let src = common::random_u32s(n, 1);
             // A permutation; for gather a few indices past the source, for scatter a
@@ -261,6 +234,9 @@ fn gather_and_scatter_match_cpu() {
         }
     }
     let gather = Gather::new(&gpu, &base).unwrap();
+    let scratch = gpu
+        .create_buffer("scratch", gather.scratch_bytes(0), MemoryKind::Device)
+        .unwrap();
     // Indirect: n from the GPU, larger buffers.
     let n = 1000u32;
     let src = common::random_u32s(2000, 4);

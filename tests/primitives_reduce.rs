@@ -150,18 +150,7 @@ fn check_all(gpu: &Gpu, rbk: &ReduceByKey, keys: &[u32], what: &str, indirect: O
 fn reduce_by_key_matches_cpu_at_awkward_sizes() {
     let gpu = common::gpu();
     let rbk = ReduceByKey::new(&gpu, &Tuning::for_device(gpu.info())).unwrap();
-    for n in [
-        0usize,
-        1,
-        2,
-        255,
-        256,
-        257,
-        1000,
-        65_537,
-        1_000_003,
-        1 << 22,
-    ] {
+    for n in common::ISSUE_SIZES {
         check_all(&gpu, &rbk, &runs(n, n as u64, 8), &format!("n = {n}"), None);
     }
     common::assert_clean(&gpu);

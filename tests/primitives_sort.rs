@@ -79,18 +79,7 @@ fn sort_matches_cpu_at_awkward_sizes() {
     println!("variant: {}", tuning.describe());
     let sort = RadixSort::new(&gpu, &tuning).unwrap();
     let scratch = sort.alloc_scratch(&gpu, 1 << 22).unwrap();
-    for n in [
-        0usize,
-        1,
-        2,
-        255,
-        256,
-        257,
-        1000,
-        65_537,
-        1_000_003,
-        1 << 22,
-    ] {
+    for n in common::ISSUE_SIZES {
         let keys = common::random_u32s(n, n as u64);
         check_sort(
             &gpu,

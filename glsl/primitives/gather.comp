@@ -49,7 +49,7 @@ void main() {
     uint n = hdr[HDR_N];
     bool scatter = (pc.flags & 1u) != 0u;
 #ifdef SEG64
-    uint seg = g * WORKGROUP_SIZE + gl_LocalInvocationID.x;
+    uint seg = linear_invocation_id();
     uint begin = min(seg * ITEMS, n);
     uint end = min(begin + ITEMS, n);
     uint i = begin;

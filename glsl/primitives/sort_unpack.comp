@@ -1,7 +1,7 @@
 #version 460
 // Splits interleaved (key, value) pairs back into keys and values: the last step of a
 // key-value segment radix sort that left its result in the pairs scratch (after a
-// single pass; with `wide64`, after any number, RadixSort::split_last). Each invocation
+// single pass; with `wide64`, after any number, RadixSort::splits_last). Each invocation
 // moves its own KEYS contiguous pairs (KEYS a multiple of 4, of 8 for `wide64`),
 // reading and writing uvec4s, or u64vec4s with `wide64`; tiles as in the sort.
 //! variant wide64: WIDE64=1

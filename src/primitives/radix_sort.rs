@@ -65,7 +65,12 @@ struct PairScatters {
     first: ComputePipeline,
     /// Pairs to pairs.
     middle: ComputePipeline,
-    /// Pairs to the caller's arrays (absent with `RadixSort::split_last`).
+    /// Pairs to the caller's arrays. Absent with 64-bit accesses: key-value sorts then
+    /// keep pairs through their last pass and end with the streaming unpack
+    /// ([`RadixSort::splits_last`]), since two scattered 32-bit stores per key cost more
+    /// on lavapipe than one scattered 64-bit store plus the split. 4M pairs, medians of
+    /// 40 runs alternating the two in one process, three runs (2026-11-24): 52.1 / 50.9
+    /// / 51.6 ms against 54.2 / 54.3 / 55.3 ms.
     last: Option<ComputePipeline>,
 }
 
@@ -78,19 +83,11 @@ pub struct RadixSort {
     /// branches on the pass kind fold away. On lavapipe that took a 4M-pair sort from
     /// 70.1 / 69.9 / 68.7 / 70.2 to 67.3 / 67.9 / 64.7 / 66.2 ms (tuning sweep, minima
     /// of 4 interleaved rounds, four sweeps alternating the two).
-    /// With 64-bit accesses the last pass writes pairs too (a middle pass), and the
-    /// unpack kernel splits them (`split_last`); then there is no last kind.
     pair_scatters: Option<PairScatters>,
     copy: ComputePipeline,
     /// Pairs back to keys and values: after a single pass, and at the end of every
-    /// key-value sort with `split_last`.
+    /// key-value sort that [`RadixSort::splits_last`].
     unpack: Option<ComputePipeline>,
-    /// Key-value segment sorts end with pairs and a streaming unpack instead of a last
-    /// pass that scatters keys and values apart (with 64-bit accesses): two scattered
-    /// 32-bit stores per key cost more on lavapipe than one scattered 64-bit store plus
-    /// the split. 4M pairs, medians of 40 runs alternating the two in one process,
-    /// three runs (2026-11-24): 52.1 / 50.9 / 51.6 ms against 54.2 / 54.3 / 55.3 ms.
-    split_last: bool,
     scan: Scan,
     tuning: Tuning,
     rows: bool,
@@ -214,7 +211,6 @@ impl RadixSort {
             } else {
                 None
             },
-            split_last: segments && tuning.sort_pairs && wide,
             rows,
             segments,
             multisplit,
@@ -248,6 +244,14 @@ impl RadixSort {
 
     pub fn tuning(&self) -> &Tuning {
         &self.tuning
+    }
+
+    /// Whether key-value sorts keep pairs through their last pass and end with the
+    /// unpack kernel (no last-pass scatter: see [`PairScatters::last`]).
+    fn splits_last(&self) -> bool {
+        self.pair_scatters
+            .as_ref()
+            .is_some_and(|k| k.last.is_none())
     }
 
     fn radix(&self) -> u32 {
@@ -400,7 +404,7 @@ impl RadixSort {
         if self.pairs {
             let words = if pairs { 2 } else { 1 };
             check_scratch("radix sort", &scratch.keys, 0, cap as u64 * 4 * words)?;
-            if pairs && (passes > 2 || (self.split_last && passes > 1)) {
+            if pairs && (passes > 2 || (self.splits_last() && passes > 1)) {
                 check_scratch("radix sort", &scratch.values, 0, cap as u64 * 8)?;
             }
         } else {
@@ -445,9 +449,10 @@ impl RadixSort {
             for pass in 0..passes {
                 let shift = bits.start + pass * self.tuning.radix_bits;
                 // The first pass reads the caller's buffers, the last (if not also the
-                // first) writes them; everything in between is pairs to pairs.
+                // first, and unless the sort splits its pairs at the end) writes them;
+                // everything in between is pairs to pairs.
                 let pairs_in = pass > 0;
-                let to_pairs = pass == 0 || pass + 1 < passes || self.split_last;
+                let to_pairs = pass == 0 || pass + 1 < passes || self.splits_last();
                 let push = PassPush {
                     shift,
                     bits: (bits.end - shift).min(self.tuning.radix_bits),
@@ -483,16 +488,12 @@ impl RadixSort {
                     misc,
                     scan_off,
                 )?;
-                let scatter = match (&self.pair_scatters, pairs_in, to_pairs) {
-                    (Some(kinds), false, _) => &kinds.first,
-                    (Some(kinds), true, true) => &kinds.middle,
-                    (
-                        Some(PairScatters {
-                            last: Some(last), ..
-                        }),
-                        true,
-                        false,
-                    ) => last,
+                let scatter = match &self.pair_scatters {
+                    Some(kinds) if !pairs_in => &kinds.first,
+                    Some(kinds) if to_pairs => &kinds.middle,
+                    Some(PairScatters {
+                        last: Some(last), ..
+                    }) => last,
                     _ => &self.scatter,
                 };
                 rec.dispatch_indirect(
@@ -505,8 +506,8 @@ impl RadixSort {
                 rec.barrier();
             }
             // The result is still in pairs after a single pass, or after every pass
-            // with split_last: split it into the caller's arrays.
-            if let (true, Some(unpack)) = (passes == 1 || self.split_last, &self.unpack) {
+            // when the sort splits its pairs at the end: split them into the caller's arrays.
+            if let (true, Some(unpack)) = (passes == 1 || self.splits_last(), &self.unpack) {
                 let p = pair_buffers[(passes as usize - 1) % 2];
                 rec.dispatch_indirect(unpack, &[header, p, keys, vals], &(), misc, args_offset(1))?;
                 rec.barrier();

@@ -38,7 +38,10 @@ pub fn assert_clean(gpu: &Gpu) {
     );
 }
 
-/// Deterministic pseudo-random u32s (SplitMix64) for test data.
+/// The sizes issue 3 asks every primitive to be tested at: empty, one, two, around a
+/// power of two, non-powers of two, and large.
+pub const ISSUE_SIZES: [usize; 10] = [0, 1, 2, 255, 256, 257, 1000, 65_537, 1_000_003, 1 << 22];
+
 /// The device's tuning with the general (non-segment) path and with segments of 4, 12,
 /// 16 and 24 items, so that runs and kept items cross many segments — the last two with
 /// 64-bit accesses where the device has them: for primitives whose segment variants
@@ -64,6 +67,7 @@ pub fn segment_tunings(gpu: &Gpu) -> Vec<(u32, splitray::primitives::Tuning)> {
     .collect()
 }
 
+/// Deterministic pseudo-random u32s (SplitMix64) for test data.
 pub fn random_u32s(n: usize, seed: u64) -> Vec<u32> {
     let mut state = seed;
     (0..n)
