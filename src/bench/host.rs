@@ -54,3 +54,97 @@ pub fn effective_cores() -> f64 {
     });
     serial / parallel
 }
+
+/// The host's processor as `/proc/cpuinfo` names it, with its family and model numbers
+/// and its widest x86 vector extension, e.g. `AMD EPYC (family 25, model 1; AVX2)`.
+/// lavapipe's figures and the CPU references both move with the processor (the sort
+/// target has been met on some of the VMs this project ran on and missed by far on
+/// others: docs/PERFORMANCE.md), so every benchmark report names it. "unknown CPU"
+/// where `/proc/cpuinfo` cannot be read.
+pub fn cpu_model() -> String {
+    std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|text| describe_cpuinfo(&text, vector_extension()))
+        .unwrap_or_else(|| "unknown CPU".to_string())
+}
+
+/// The widest x86 vector extension the processor offers: what lavapipe's LLVM back end
+/// may emit for its 8-lane vectors (AVX-512 brings gather and scatter instructions that
+/// changed which memory accesses were fastest: docs/PERFORMANCE.md).
+fn vector_extension() -> Option<&'static str> {
+    #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
+    {
+        if std::arch::is_x86_feature_detected!("avx512f") {
+            return Some("AVX-512");
+        }
+        if std::arch::is_x86_feature_detected!("avx2") {
+            return Some("AVX2");
+        }
+    }
+    None
+}
+
+/// The first processor's `model name`, `cpu family` and `model` from the text of
+/// `/proc/cpuinfo`, and `vector` after them where given. None without a model name.
+fn describe_cpuinfo(text: &str, vector: Option<&str>) -> Option<String> {
+    let first = text.split("\n\n").next()?;
+    let field = |key: &str| {
+        first.lines().find_map(|line| {
+            let (k, v) = line.split_once(':')?;
+            (k.trim() == key).then(|| v.trim().to_string())
+        })
+    };
+    let name = field("model name").filter(|n| !n.is_empty())?;
+    let numbers: Vec<String> = [("family", "cpu family"), ("model", "model")]
+        .into_iter()
+        .filter_map(|(label, key)| field(key).map(|v| format!("{label} {v}")))
+        .collect();
+    let details = [
+        Some(numbers.join(", ")).filter(|s| !s.is_empty()),
+        vector.map(str::to_string),
+    ]
+    .into_iter()
+    .flatten()
+    .collect::<Vec<_>>()
+    .join("; ");
+    Some(if details.is_empty() {
+        name
+    } else {
+        format!("{name} ({details})")
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::describe_cpuinfo;
+
+    const EPYC: &str = "processor\t: 0\nvendor_id\t: AuthenticAMD\ncpu family\t: 25\n\
+                        model\t\t: 1\nmodel name\t: AMD EPYC\nstepping\t: 1\n\n\
+                        processor\t: 1\nmodel name\t: Other\n";
+
+    #[test]
+    fn names_the_first_processor_with_family_model_and_vectors() {
+        assert_eq!(
+            describe_cpuinfo(EPYC, Some("AVX2")).as_deref(),
+            Some("AMD EPYC (family 25, model 1; AVX2)")
+        );
+        assert_eq!(
+            describe_cpuinfo(EPYC, None).as_deref(),
+            Some("AMD EPYC (family 25, model 1)")
+        );
+    }
+
+    #[test]
+    fn without_a_model_name_there_is_no_description() {
+        assert_eq!(
+            describe_cpuinfo("processor\t: 0\ncpu family\t: 6\n", None),
+            None
+        );
+        assert_eq!(describe_cpuinfo("", Some("AVX2")), None);
+        // No family or model lines: the name alone.
+        assert_eq!(
+            describe_cpuinfo("model name\t: Neoverse\n", None).as_deref(),
+            Some("Neoverse")
+        );
+    }
+}

@@ -85,6 +85,8 @@ pub struct PrimitivesReport {
     /// just before the two target comparisons and just after them ([`host`]): on a
     /// CPU device the kernels share those cores, the single-thread references do not.
     pub host_threads: usize,
+    /// The host's processor ([`host::cpu_model`]): on a CPU device it runs the kernels.
+    pub host_cpu: String,
     pub host_cores_before: f64,
     pub host_cores_after: f64,
     pub rows: Vec<BenchRow>,
@@ -104,8 +106,8 @@ impl fmt::Display for PrimitivesReport {
         writeln!(f, "runs   : median of {}", self.runs)?;
         writeln!(
             f,
-            "host   : {} threads, effective parallel cores {:.2} before the targets, {:.2} after",
-            self.host_threads, self.host_cores_before, self.host_cores_after
+            "host   : {}, {} threads, effective parallel cores {:.2} before the targets, {:.2} after",
+            self.host_cpu, self.host_threads, self.host_cores_before, self.host_cores_after
         )?;
         writeln!(
             f,
@@ -722,6 +724,7 @@ pub fn run(gpu: &Gpu, opts: &PrimitivesBenchOptions) -> BenchResult<PrimitivesRe
         tuning,
         runs,
         host_threads: rayon::current_num_threads(),
+        host_cpu: host::cpu_model(),
         host_cores_before,
         host_cores_after,
         rows,
