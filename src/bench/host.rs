@@ -95,18 +95,17 @@ fn describe_cpuinfo(text: &str, vector: Option<&str>) -> Option<String> {
         })
     };
     let name = field("model name").filter(|n| !n.is_empty())?;
-    let numbers: Vec<String> = [("family", "cpu family"), ("model", "model")]
+    let mut details = [("family", "cpu family"), ("model", "model")]
         .into_iter()
         .filter_map(|(label, key)| field(key).map(|v| format!("{label} {v}")))
-        .collect();
-    let details = [
-        Some(numbers.join(", ")).filter(|s| !s.is_empty()),
-        vector.map(str::to_string),
-    ]
-    .into_iter()
-    .flatten()
-    .collect::<Vec<_>>()
-    .join("; ");
+        .collect::<Vec<_>>()
+        .join(", ");
+    if let Some(v) = vector {
+        if !details.is_empty() {
+            details.push_str("; ");
+        }
+        details.push_str(v);
+    }
     Some(if details.is_empty() {
         name
     } else {

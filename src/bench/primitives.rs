@@ -81,12 +81,12 @@ pub struct PrimitivesReport {
     pub variant: String,
     pub tuning: Tuning,
     pub runs: usize,
+    /// The host's processor ([`host::cpu_model`]): on a CPU device it runs the kernels.
+    pub host_cpu: String,
     /// Threads the host lends (rayon's count) and the effective parallel cores measured
     /// just before the two target comparisons and just after them ([`host`]): on a
     /// CPU device the kernels share those cores, the single-thread references do not.
     pub host_threads: usize,
-    /// The host's processor ([`host::cpu_model`]): on a CPU device it runs the kernels.
-    pub host_cpu: String,
     pub host_cores_before: f64,
     pub host_cores_after: f64,
     pub rows: Vec<BenchRow>,
@@ -723,8 +723,8 @@ pub fn run(gpu: &Gpu, opts: &PrimitivesBenchOptions) -> BenchResult<PrimitivesRe
         variant: tuning.describe(),
         tuning,
         runs,
-        host_threads: rayon::current_num_threads(),
         host_cpu: host::cpu_model(),
+        host_threads: rayon::current_num_threads(),
         host_cores_before,
         host_cores_after,
         rows,
