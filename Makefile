@@ -19,9 +19,10 @@ render: build
 
 # Every GPU test opens its device with VK_LAYER_KHRONOS_validation and fails on any
 # validation error or warning (tests/common/mod.rs); SPLITRAY_VALIDATION turns it on for
-# anything else that opens a device.
+# anything else that opens a device. The `ci` profile (Cargo.toml) is release optimisation
+# with debug assertions: the light-transport tests sample millions of paths.
 test: deps
-	SPLITRAY_VALIDATION=1 $(CARGO) test --locked --all-targets
+	SPLITRAY_VALIDATION=1 $(CARGO) test --profile ci --locked --all-targets
 
 lint:
 	$(CARGO) fmt --all -- --check
