@@ -1,14 +1,18 @@
-//! A render from start to finish: scene → GPU data → tracer → integrator passes → film,
-//! with the statistics a user profiles by.
+//! A render from start to finish: scene → GPU data → tracer → AOVs → integrator passes
+//! → film, with the statistics a user profiles by. The pass loop is the same for every
+//! integrator ([`run_passes`]).
 
 use std::time::Instant;
 
 use serde::Serialize;
 
-use crate::film::{Film, FilmError, RenderMetadata};
-use crate::integrator::{self, GpuMaterial, IntegratorKind, PassInputs, PassOptions};
+use crate::film::{self, Film, FilmError, FilmSums, RenderMetadata};
+use crate::integrator::{
+    self, aov, EyeInputs, EyeIntegrator, EyeOptions, GpuMaterial, Integrator, IntegratorError,
+    IntegratorKind, NamedImage,
+};
 use crate::scene::{Scene, SceneError};
-use crate::trace::{GpuTriangle, TracerKind};
+use crate::trace::{GpuTriangle, Tracer, TracerKind};
 use crate::vk::{self, Gpu, KernelTime};
 
 #[derive(Debug, thiserror::Error)]
@@ -19,6 +23,8 @@ pub enum RenderError {
     Gpu(#[from] vk::VkError),
     #[error(transparent)]
     Film(#[from] FilmError),
+    #[error(transparent)]
+    Integrator(#[from] IntegratorError),
     #[error("{0}")]
     Options(String),
 }
@@ -51,6 +57,9 @@ pub struct RenderOptions {
     /// Stop after the pass during which this many seconds ran out (`spp` is then the
     /// most passes).
     pub time_limit: Option<f64>,
+    /// A reference image (mean RGB per pixel, this film's size): the render reports its
+    /// relative MSE against it as it goes.
+    pub reference: Option<std::sync::Arc<Vec<[f32; 3]>>>,
 }
 
 impl RenderOptions {
@@ -92,6 +101,7 @@ impl RenderOptions {
             sort_materials: true,
             strategy: Default::default(),
             time_limit: None,
+            reference: None,
         };
         if options.width == 0
             || options.height == 0
@@ -117,23 +127,61 @@ pub struct RenderStats {
     pub triangles: usize,
     pub width: u32,
     pub height: u32,
-    pub spp: u32,
+    /// Samples per pixel reached.
+    pub spp: u64,
+    /// Passes rendered (each adds `spp / passes` samples per pixel).
+    pub passes: u32,
     pub seed: u64,
     pub integrator: String,
     pub tracer: String,
     pub device: String,
     pub render_time_s: f64,
+    /// Pixel samples per second: spp × pixels / render time.
+    pub samples_per_second: f64,
     pub rays_traced: u64,
     pub rays_per_second: f64,
     pub peak_gpu_bytes: u64,
+    /// The render stopped before its spp or time limit (a signal, a closed window).
+    pub stopped_early: bool,
+    /// Relative MSE against `--reference`, at the end of the render.
+    pub relative_mse: Option<f64>,
+    /// The integrator's own counts (paths, connections, non-finite samples …).
+    pub counters: std::collections::BTreeMap<String, u64>,
     /// GPU time per kernel (timestamp queries), longest first.
     pub kernels: Vec<KernelTime>,
 }
 
 pub struct RenderOutput {
     pub film: Film,
+    /// The film's sums (mean and standard error), for checkpoints and merging.
+    pub sums: FilmSums,
     pub metadata: RenderMetadata,
     pub stats: RenderStats,
+    /// Images the integrator was asked for besides the render (technique images …).
+    pub extra_images: Vec<NamedImage>,
+}
+
+/// How far a render has come, told after every batch of passes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Progress {
+    pub passes: u32,
+    /// Samples per pixel so far.
+    pub spp: u64,
+    /// Samples per pixel asked for (`u64::MAX`-like when only a time limit bounds it).
+    pub target_spp: u64,
+    pub elapsed_s: f64,
+    pub time_limit: Option<f64>,
+    /// Relative MSE against the reference, when one was given.
+    pub relative_mse: Option<f64>,
+}
+
+/// What a caller can do while a render runs.
+pub struct RenderControl<'a> {
+    /// Told after every batch of passes.
+    pub progress: &'a mut dyn FnMut(&Progress),
+    /// Asked before every batch: `true` stops the render at that pass boundary (the
+    /// image then holds the passes done).
+    pub stop: &'a dyn Fn() -> bool,
 }
 
 /// A one-line description of the device for logs and file headers.
@@ -142,12 +190,30 @@ pub fn device_description(gpu: &Gpu) -> String {
     format!("{} ({} {})", info.name, info.driver_name, info.driver_info)
 }
 
-/// Renders `scene`. `progress` is told the passes done so far.
+/// Renders `scene`; `progress` is told how far it has come after every batch of passes.
 pub fn render(
     gpu: &Gpu,
     scene: &Scene,
     options: &RenderOptions,
-    progress: &mut dyn FnMut(u32),
+    progress: &mut dyn FnMut(&Progress),
+) -> Result<RenderOutput, RenderError> {
+    render_with(
+        gpu,
+        scene,
+        options,
+        RenderControl {
+            progress,
+            stop: &|| false,
+        },
+    )
+}
+
+/// [`render`] with every control: scene → tracer → AOVs → integrator passes → film.
+pub fn render_with(
+    gpu: &Gpu,
+    scene: &Scene,
+    options: &RenderOptions,
+    control: RenderControl<'_>,
 ) -> Result<RenderOutput, RenderError> {
     let limit = gpu.info().limits.max_storage_buffer_range;
     scene.check_fits(limit, size_of::<GpuTriangle>() as u64)?;
@@ -156,15 +222,6 @@ pub fn render(
         .iter()
         .map(|t| GpuTriangle::new(t.p))
         .collect();
-    let triangle_material: Vec<u32> = scene.triangles.iter().map(|t| t.material).collect();
-    let materials: Vec<GpuMaterial> = scene
-        .materials
-        .iter()
-        .map(|m| GpuMaterial {
-            diffuse: m.diffuse.extend(0.0).into(),
-            emission: m.emission.extend(0.0).into(),
-        })
-        .collect();
     let camera = scene.camera.frame(options.width, options.height);
 
     gpu.wait_idle()?;
@@ -172,108 +229,214 @@ pub fn render(
     gpu.reset_peak_memory();
     let start = Instant::now();
     let mut tracer = options.tracer.create(gpu, &triangles)?;
-    if options.integrator == IntegratorKind::Pt {
-        return render_pt(gpu, scene, options, tracer.as_mut(), start, progress);
-    }
-    let output = integrator::render_passes(
-        gpu,
-        tracer.as_mut(),
-        &PassInputs {
-            triangles: &triangles,
-            triangle_material: &triangle_material,
-            materials: &materials,
-            camera,
-            scene_radius: scene.bounds().radius(),
-            light: shadow_light(scene),
-        },
-        &PassOptions {
-            integrator: options.integrator,
-            spp: options.spp,
-            seed: options.seed,
-            ao_rays: options.ao_rays,
-            ..Default::default()
-        },
-        progress,
-    )?;
-    drop(tracer);
+    let aovs = {
+        let triangle_buffer = gpu.upload("aov-triangles", &triangles)?;
+        aov::render_aovs(gpu, tracer.as_mut(), &triangle_buffer, &camera)?
+    };
+    let mut integrator = integrator_on(gpu, scene, options, &triangles, tracer)?;
+    let run = run_passes(integrator.as_mut(), options, control, start)?;
+    let sums = integrator.sums()?;
+    let extra_images = integrator.extra_images()?;
+    let integrator_stats = integrator.stats();
+    let settings = integrator.settings();
+    drop(integrator);
     let seconds = start.elapsed().as_secs_f64();
     let (_, peak_gpu_bytes) = gpu.memory_bytes();
 
-    let mean: Vec<[f32; 3]> = output
-        .sum_rgb
-        .iter()
-        .map(|s| {
-            let w = s[3].max(1.0);
-            [s[0] / w, s[1] / w, s[2] / w]
-        })
-        .collect();
-    let mut film = Film::from_mean_rgb(options.width, options.height, &mean)?;
-    film.set_depth(output.depth)?;
-    film.set_triangle_id(output.triangle_id)?;
-    film.set_normal(output.normal.iter().map(|n| [n[0], n[1], n[2]]).collect())?;
-
-    Ok(finish(
-        gpu,
-        scene,
-        options,
-        film,
-        options.spp,
-        seconds,
-        peak_gpu_bytes,
-        output.rays_traced,
-        vec![],
-    ))
-}
-
-/// Statistics and header metadata of a finished render.
-#[allow(clippy::too_many_arguments)]
-fn finish(
-    gpu: &Gpu,
-    scene: &Scene,
-    options: &RenderOptions,
-    film: Film,
-    spp: u32,
-    seconds: f64,
-    peak_gpu_bytes: u64,
-    rays_traced: u64,
-    extra: Vec<(String, String)>,
-) -> RenderOutput {
+    let mut film = sums.to_film()?;
+    film.set_depth(aovs.depth)?;
+    film.set_triangle_id(aovs.triangle_id)?;
+    film.set_normal(aovs.normal)?;
     let device = device_description(gpu);
+    let pixels = options.width as f64 * options.height as f64;
     let stats = RenderStats {
         scene: scene.name.clone(),
         triangles: scene.triangles.len(),
         width: options.width,
         height: options.height,
-        spp,
+        spp: sums.spp(),
+        passes: sums.passes,
         seed: options.seed,
         integrator: options.integrator.name().into(),
         tracer: options.tracer.name().into(),
         device: device.clone(),
         render_time_s: seconds,
-        rays_traced,
-        rays_per_second: rays_traced as f64 / seconds.max(1e-9),
+        samples_per_second: sums.spp() as f64 * pixels / seconds.max(1e-9),
+        rays_traced: integrator_stats.rays_traced,
+        rays_per_second: integrator_stats.rays_traced as f64 / seconds.max(1e-9),
         peak_gpu_bytes,
+        stopped_early: run.stopped,
+        relative_mse: run.relative_mse,
+        counters: integrator_stats.counters,
         kernels: gpu.take_profile().summary(),
     };
-    let mut all_extra = vec![
+    let mut extra = vec![
         ("scene".to_string(), scene.name.clone()),
-        ("rays_traced".to_string(), rays_traced.to_string()),
+        ("rays_traced".to_string(), stats.rays_traced.to_string()),
+        ("passes".to_string(), sums.passes.to_string()),
     ];
-    all_extra.extend(extra);
+    if run.stopped {
+        extra.push(("stopped_early".into(), "true".into()));
+    }
+    extra.extend(settings);
     let metadata = RenderMetadata {
-        spp,
+        spp: sums.spp().min(u32::MAX as u64) as u32,
         seed: options.seed,
         integrator: options.integrator.name().into(),
         tracer: options.tracer.name().into(),
         device,
         render_time_s: seconds,
-        extra: all_extra,
+        extra,
     };
-    RenderOutput {
+    Ok(RenderOutput {
         film,
+        sums,
         metadata,
         stats,
+        extra_images,
+    })
+}
+
+/// The integrator `options` asks for, on its own tracer, ready to render passes (for
+/// callers that drive passes themselves: tests, previews, resumed renders).
+pub fn create_integrator(
+    gpu: &Gpu,
+    scene: &Scene,
+    options: &RenderOptions,
+) -> Result<Box<dyn Integrator>, RenderError> {
+    let limit = gpu.info().limits.max_storage_buffer_range;
+    scene.check_fits(limit, size_of::<GpuTriangle>() as u64)?;
+    let triangles: Vec<GpuTriangle> = scene
+        .triangles
+        .iter()
+        .map(|t| GpuTriangle::new(t.p))
+        .collect();
+    let tracer = options.tracer.create(gpu, &triangles)?;
+    integrator_on(gpu, scene, options, &triangles, tracer)
+}
+
+/// Builds the integrator `options` asks for; it takes the tracer over.
+fn integrator_on(
+    gpu: &Gpu,
+    scene: &Scene,
+    options: &RenderOptions,
+    triangles: &[GpuTriangle],
+    tracer: Box<dyn Tracer>,
+) -> Result<Box<dyn Integrator>, RenderError> {
+    let camera = scene.camera.frame(options.width, options.height);
+    Ok(match options.integrator {
+        IntegratorKind::Pt => Box::new(integrator::pt::PtIntegrator::new(
+            gpu,
+            tracer,
+            &integrator::pt::PtScene::new(scene),
+            &camera,
+            &integrator::pt::PtOptions {
+                spp: options.spp,
+                time_limit: options.time_limit,
+                seed: options.seed,
+                max_depth: options.max_depth,
+                rr_depth: options.rr_depth,
+                sort: options.sort_materials,
+                strategy: options.strategy,
+                ..Default::default()
+            },
+        )?),
+        kind => {
+            let triangle_material: Vec<u32> = scene.triangles.iter().map(|t| t.material).collect();
+            let materials: Vec<GpuMaterial> = scene
+                .materials
+                .iter()
+                .map(|m| GpuMaterial {
+                    diffuse: m.diffuse.extend(0.0).into(),
+                    emission: m.emission.extend(0.0).into(),
+                })
+                .collect();
+            Box::new(EyeIntegrator::new(
+                gpu,
+                tracer,
+                &EyeInputs {
+                    triangles,
+                    triangle_material: &triangle_material,
+                    materials: &materials,
+                    camera,
+                    scene_radius: scene.bounds().radius(),
+                    light: shadow_light(scene),
+                },
+                &EyeOptions {
+                    integrator: kind,
+                    spp: options.spp,
+                    seed: options.seed,
+                    ao_rays: options.ao_rays,
+                    ..Default::default()
+                },
+            )?)
+        }
+    })
+}
+
+/// How the pass loop ended.
+struct PassRun {
+    stopped: bool,
+    relative_mse: Option<f64>,
+}
+
+/// Seconds between two relative-MSE readings while a render runs (each reads the film).
+const MSE_INTERVAL_S: f64 = 0.5;
+
+/// The render loop every integrator shares: batches of passes until the spp are done,
+/// the time ran out (checked after each batch) or the caller asks to stop (checked
+/// before each batch).
+fn run_passes(
+    integrator: &mut dyn Integrator,
+    options: &RenderOptions,
+    control: RenderControl<'_>,
+    start: Instant,
+) -> Result<PassRun, RenderError> {
+    let per_pass = integrator.samples_per_pass().max(1);
+    let target_passes = options.spp.div_ceil(per_pass);
+    let mut passes = 0u32;
+    let mut stopped = false;
+    let mut relative_mse = None;
+    let mut mse_read_at = f64::NEG_INFINITY;
+    while passes < target_passes {
+        if (control.stop)() {
+            stopped = true;
+            break;
+        }
+        let count = integrator
+            .passes_per_call()
+            .max(1)
+            .min(target_passes - passes);
+        integrator.render_passes(passes, count)?;
+        passes += count;
+        let elapsed_s = start.elapsed().as_secs_f64();
+        let out_of_time = options.time_limit.is_some_and(|t| elapsed_s >= t);
+        let last = passes == target_passes || out_of_time;
+        if let Some(reference) = &options.reference {
+            if last || elapsed_s - mse_read_at >= MSE_INTERVAL_S {
+                relative_mse = film::relative_mse(&integrator.sums()?.mean(), reference);
+                mse_read_at = elapsed_s;
+            }
+        }
+        (control.progress)(&Progress {
+            passes,
+            spp: passes as u64 * per_pass as u64,
+            target_spp: target_passes as u64 * per_pass as u64,
+            elapsed_s,
+            time_limit: options.time_limit,
+            relative_mse,
+        });
+        if out_of_time {
+            break;
+        }
     }
+    if let (true, Some(reference)) = (stopped, &options.reference) {
+        relative_mse = film::relative_mse(&integrator.sums()?.mean(), reference);
+    }
+    Ok(PassRun {
+        stopped,
+        relative_mse,
+    })
 }
 
 /// The `shadow` integrator's light: the scene's first point light (RGB intensity
@@ -288,53 +451,4 @@ pub fn shadow_light(scene: &Scene) -> glam::Vec4 {
             position.extend(d * d)
         }
     }
-}
-
-/// The `pt` integrator's half of [`render`].
-fn render_pt(
-    gpu: &Gpu,
-    scene: &Scene,
-    options: &RenderOptions,
-    tracer: &mut dyn crate::trace::Tracer,
-    start: Instant,
-    progress: &mut dyn FnMut(u32),
-) -> Result<RenderOutput, RenderError> {
-    let pt_scene = integrator::pt::PtScene::new(scene);
-    let camera = scene.camera.frame(options.width, options.height);
-    let output = integrator::pt::render_pt(
-        gpu,
-        tracer,
-        &pt_scene,
-        &camera,
-        &integrator::pt::PtOptions {
-            spp: options.spp,
-            time_limit: options.time_limit,
-            seed: options.seed,
-            max_depth: options.max_depth,
-            rr_depth: options.rr_depth,
-            sort: options.sort_materials,
-            strategy: options.strategy,
-            ..Default::default()
-        },
-        progress,
-    )?;
-    let seconds = start.elapsed().as_secs_f64();
-    let (_, peak_gpu_bytes) = gpu.memory_bytes();
-    let (mean, _) = output.mean_and_stderr();
-    let film = Film::from_mean_rgb(options.width, options.height, &mean)?;
-    Ok(finish(
-        gpu,
-        scene,
-        options,
-        film,
-        output.passes,
-        seconds,
-        peak_gpu_bytes,
-        output.rays_traced,
-        vec![
-            ("max_depth".into(), options.max_depth.to_string()),
-            ("rr_depth".into(), options.rr_depth.to_string()),
-            ("sort_materials".into(), options.sort_materials.to_string()),
-        ],
-    ))
 }

@@ -72,6 +72,11 @@ pub struct RenderArgs {
     /// Print the per-kernel GPU time table.
     #[arg(long)]
     profile: bool,
+    /// A reference image (an EXR of this film size, e.g. a long render or a Mitsuba
+    /// reference): the relative MSE against it is shown as the render goes and recorded
+    /// in the stats.
+    #[arg(long, value_name = "REF.exr")]
+    reference: Option<PathBuf>,
 }
 
 /// The output path, checked before any work so a bad path fails fast.
@@ -137,6 +142,9 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     options.rr_depth = args.rr_depth;
     options.sort_materials = !args.no_sort;
     options.strategy = args.strategy;
+    if let Some(path) = &args.reference {
+        options.reference = Some(std::sync::Arc::new(read_reference(path, &options)?));
+    }
     let gpu = Gpu::new(&GpuDesc {
         instance: InstanceDesc {
             validation: args.validation,
@@ -170,21 +178,27 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         }
     };
     let pixels = options.width as f64 * options.height as f64;
-    let started = std::time::Instant::now();
     let timed = options.time_limit.is_some();
     bar.set_message(format!(
         "{} {}x{}",
         scene.name, options.width, options.height
     ));
     let label = format!("{} {}x{}", scene.name, options.width, options.height);
-    let result = render(&gpu, &scene, &options, &mut |done| {
-        let secs = started.elapsed().as_secs_f64().max(1e-9);
-        let rate = done as f64 * pixels / secs;
-        bar.set_message(format!("{label} {done} spp, {:.3} Msamples/s", rate * 1e-6));
+    let result = render(&gpu, &scene, &options, &mut |p| {
+        let rate = p.spp as f64 * pixels / p.elapsed_s.max(1e-9);
+        let mse = p
+            .relative_mse
+            .map(|m| format!(", relMSE {m:.4e}"))
+            .unwrap_or_default();
+        bar.set_message(format!(
+            "{label} {} spp, {:.3} Msamples/s{mse}",
+            p.spp,
+            rate * 1e-6
+        ));
         if timed {
-            bar.set_position((secs * 10.0) as u64);
+            bar.set_position((p.elapsed_s * 10.0) as u64);
         } else {
-            bar.set_position(done as u64);
+            bar.set_position(p.spp);
         }
     });
     bar.finish_and_clear();
@@ -218,6 +232,9 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         written.exr.display(),
         written.png.display()
     );
+    if let Some(mse) = s.relative_mse {
+        println!("relative MSE against the reference: {mse:.6e}");
+    }
     if args.profile {
         print!("{}", splitray::vk::ProfileLog::table_of(&s.kernels));
     }
@@ -227,4 +244,20 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             .with_context(|| format!("cannot write {}", path.display()))?;
     }
     Ok(())
+}
+
+/// The reference image's mean RGB, refused unless it has this render's film size.
+fn read_reference(path: &Path, options: &RenderOptions) -> anyhow::Result<Vec<[f32; 3]>> {
+    let (film, _) = splitray::film::read_exr(path)?;
+    if (film.width(), film.height()) != (options.width, options.height) {
+        bail!(
+            "{}: the reference is {}x{}, the render {}x{}",
+            path.display(),
+            film.width(),
+            film.height(),
+            options.width,
+            options.height
+        );
+    }
+    Ok(film.mean_rgb_buffer())
 }

@@ -6,6 +6,8 @@
 //! - [`write_exr`] / [`read_exr`] ([`exr_out`]): single-part float EXR with AOV channels
 //!   and [`RenderMetadata`] as header attributes.
 //! - [`write_png_preview`] ([`png_out`]): 8-bit sRGB preview.
+//! - [`FilmSums`] ([`sums`]): the per-pass sums every integrator accumulates (mean and
+//!   standard error), which checkpoints save and shards merge.
 //! - [`write_outputs`]: both at once.
 //!
 //! Every file is written atomically ([`atomic`]): to a temporary file in the target's
@@ -19,6 +21,7 @@ pub mod exr_out;
 mod metadata;
 mod outputs;
 pub mod png_out;
+pub mod sums;
 
 pub use accum::Film;
 pub use atomic::{write_atomically, AtomicFile};
@@ -27,3 +30,4 @@ pub use exr_out::{read_exr, write_exr};
 pub use metadata::RenderMetadata;
 pub use outputs::{write_outputs, WrittenOutputs};
 pub use png_out::{write_png_preview, write_png_preview_with, PreviewSettings, ToneMap};
+pub use sums::{relative_mse, FilmSums};

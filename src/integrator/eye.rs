@@ -1,11 +1,12 @@
-//! The `primary` and `ao` integrators: one camera sample per pixel per pass, processed
-//! in chunks of pixels small enough that every ray buffer fits one storage binding.
+//! The ray workloads of the PDACRT paper as integrators: `primary`, `ao`, `shadow`,
+//! `reflection` and `path`, one camera sample per pixel per pass.
 //!
-//! Stages per chunk (each a named dispatch): `camera_rays` → trace → `write_aovs`
-//! (sample 0) → `shade_primary`, or for AO: → `ao_rays` → trace (occlusion) → `shade_ao`.
+//! Stages per chunk (each a named dispatch): `camera_rays` → trace → `shade_primary`, or
+//! for AO: → `ao_rays` → trace (occlusion) → `shade_ao`, and likewise for the others.
 
 use super::gpu_types::{FrameParams, GpuMaterial};
-use super::IntegratorKind;
+use super::{check_film_size, Integrator, IntegratorError, IntegratorKind, IntegratorStats};
+use crate::film::FilmSums;
 use crate::scene::CameraFrame;
 use crate::shaders;
 use crate::trace::{GpuTriangle, Hit, Query, Ray, Tracer};
@@ -17,7 +18,7 @@ use crate::vk::{
 const WORKGROUP: u32 = 64;
 
 /// Scene data the shading kernels read.
-pub struct PassInputs<'a> {
+pub struct EyeInputs<'a> {
     pub triangles: &'a [GpuTriangle],
     pub triangle_material: &'a [u32],
     pub materials: &'a [GpuMaterial],
@@ -29,8 +30,10 @@ pub struct PassInputs<'a> {
 }
 
 #[derive(Clone, Copy, Debug)]
-pub struct PassOptions {
+pub struct EyeOptions {
     pub integrator: IntegratorKind,
+    /// Samples per pixel the render will take: one sample goes through the pixel centre,
+    /// more are jittered uniformly within the pixel.
     pub spp: u32,
     pub seed: u64,
     pub ao_rays: u32,
@@ -40,7 +43,7 @@ pub struct PassOptions {
     pub max_rays_per_chunk: u32,
 }
 
-impl Default for PassOptions {
+impl Default for EyeOptions {
     fn default() -> Self {
         Self {
             integrator: IntegratorKind::Primary,
@@ -53,19 +56,8 @@ impl Default for PassOptions {
     }
 }
 
-/// What the passes produced: the per-pixel sum of all samples (w = sample count) and
-/// the first-hit AOVs of sample 0.
-pub struct IntegratorOutput {
-    pub sum_rgb: Vec<[f32; 4]>,
-    pub depth: Vec<f32>,
-    pub triangle_id: Vec<u32>,
-    pub normal: Vec<[f32; 4]>,
-    pub rays_traced: u64,
-}
-
 struct Pipelines {
     camera_rays: ComputePipeline,
-    write_aovs: ComputePipeline,
     shade_primary: ComputePipeline,
     ao_rays: ComputePipeline,
     shade_ao: ComputePipeline,
@@ -88,7 +80,6 @@ impl Pipelines {
         };
         Ok(Self {
             camera_rays: make(shaders::INTEGRATOR_CAMERA_RAYS, 1)?,
-            write_aovs: make(shaders::INTEGRATOR_WRITE_AOVS, 6)?,
             shade_primary: make(shaders::INTEGRATOR_SHADE_PRIMARY, 6)?,
             ao_rays: make(shaders::INTEGRATOR_AO_RAYS, 4)?,
             shade_ao: make(shaders::INTEGRATOR_SHADE_AO, 3)?,
@@ -128,126 +119,170 @@ impl RaySlot {
     }
 }
 
-/// Renders `options.spp` passes; `progress` is called with the number of passes done.
-/// Two chunks are in flight at most: the host waits only to reuse a chunk's buffers.
-pub fn render_passes(
-    gpu: &Gpu,
-    tracer: &mut dyn Tracer,
-    inputs: &PassInputs<'_>,
-    options: &PassOptions,
-    progress: &mut dyn FnMut(u32),
-) -> vk::Result<IntegratorOutput> {
-    let pipelines = Pipelines::new(gpu)?;
-    let pixels = inputs.camera.width as usize * inputs.camera.height as usize;
-    let kind = options.integrator;
-    let ao_rays = options.ao_rays.max(1);
-    let per_pixel = match kind {
-        IntegratorKind::Ao => ao_rays,
-        IntegratorKind::Shadow | IntegratorKind::Reflection => 1,
-        IntegratorKind::Primary | IntegratorKind::Path => 0,
-        IntegratorKind::Pt => {
-            return Err(vk::VkError::Usage(
-                "the pt integrator renders through integrator::pt::render_pt".into(),
-            ))
-        }
-    };
-    let chunk = (options.max_rays_per_chunk / (1 + per_pixel)).clamp(1, pixels.max(1) as u32);
+/// The ray workloads as an [`Integrator`]: one camera sample per pixel per pass,
+/// processed in chunks of pixels small enough that every ray buffer fits one storage
+/// binding. Two chunks are in flight at most: the host waits only to reuse a chunk's
+/// buffers. The film is the GPU's per-pixel sum (no second moments).
+pub struct EyeIntegrator {
+    gpu: Gpu,
+    tracer: Box<dyn Tracer>,
+    kind: IntegratorKind,
+    pipelines: Pipelines,
+    triangles: Buffer,
+    triangle_material: Buffer,
+    materials: Buffer,
+    accum: Buffer,
+    slots: [RaySlot; 2],
+    frame: FrameParams,
+    chunk: u32,
+    passes: u32,
+    rays_traced: u64,
+}
 
-    let triangles = gpu.upload("shade-triangles", inputs.triangles)?;
-    let triangle_material = gpu.upload("triangle-material", inputs.triangle_material)?;
-    let materials = gpu.upload("materials", inputs.materials)?;
-    let accum = gpu.zeroed::<[f32; 4]>("accum", pixels)?;
-    let depth = gpu.zeroed::<f32>("aov-depth", pixels)?;
-    let triangle_id = gpu.zeroed::<u32>("aov-triangle-id", pixels)?;
-    let normal = gpu.zeroed::<[f32; 4]>("aov-normal", pixels)?;
-    let slots = [
-        RaySlot::new(gpu, 0, chunk as u64, per_pixel as u64)?,
-        RaySlot::new(gpu, 1, chunk as u64, per_pixel as u64)?,
-    ];
-
-    let mut frame = FrameParams::new(&inputs.camera);
-    frame.seed = options.seed as u32 ^ (options.seed >> 32) as u32;
-    frame.jitter = (options.spp > 1) as u32;
-    frame.ao_rays = ao_rays;
-    frame.ao_radius = options.ao_radius_fraction * inputs.scene_radius;
-    frame.ray_epsilon = 1e-4 * inputs.scene_radius.max(1e-3);
-    frame.light = inputs.light.into();
-
-    let mut rays_traced = 0u64;
-    let mut in_flight: [Option<TimelinePoint>; 2] = [None, None];
-    let mut step = 0usize;
-    for sample in 0..options.spp {
-        frame.sample_index = sample;
-        for offset in (0..pixels).step_by(chunk as usize) {
-            let count = chunk.min((pixels - offset) as u32);
-            frame.pixel_offset = offset as u32;
-            frame.pixel_count = count;
-            let slot = &slots[step % 2];
-            if let Some(previous) = in_flight[step % 2].take() {
-                gpu.wait(&previous)?;
+impl EyeIntegrator {
+    pub fn new(
+        gpu: &Gpu,
+        tracer: Box<dyn Tracer>,
+        inputs: &EyeInputs<'_>,
+        options: &EyeOptions,
+    ) -> vk::Result<Self> {
+        let kind = options.integrator;
+        let ao_rays = options.ao_rays.max(1);
+        let per_pixel = match kind {
+            IntegratorKind::Ao => ao_rays,
+            IntegratorKind::Shadow | IntegratorKind::Reflection => 1,
+            IntegratorKind::Primary | IntegratorKind::Path => 0,
+            other => {
+                return Err(vk::VkError::Usage(format!(
+                    "'{other}' is not a ray-workload integrator"
+                )))
             }
-            let n = count as u64;
-
-            let mut rec = gpu.recorder(StreamKind::Main)?;
-            rec.dispatch_items(&pipelines.camera_rays, &[(&slot.rays).into()], &frame, n)?;
-            let generated = rec.submit(&[])?;
-            let traced = tracer.trace(
-                &slot.rays,
-                &slot.hits,
-                count,
-                Query::ClosestHit,
-                &[&generated],
-            )?;
-            rays_traced += n;
-
-            let mut rec = gpu.recorder(StreamKind::Main)?;
-            if sample == 0 {
-                rec.dispatch_items(
-                    &pipelines.write_aovs,
-                    &[
-                        (&slot.rays).into(),
-                        (&slot.hits).into(),
-                        (&triangles).into(),
-                        (&depth).into(),
-                        (&triangle_id).into(),
-                        (&normal).into(),
-                    ],
-                    &frame,
-                    n,
-                )?;
-            }
-            let stage = Stage {
-                gpu,
-                pipelines: &pipelines,
-                slot,
-                triangles: &triangles,
-                triangle_material: &triangle_material,
-                materials: &materials,
-                accum: &accum,
-                count,
-            };
-            let (done, secondary) = match kind {
-                IntegratorKind::Primary => (stage.shade_primary(rec, &frame, &traced)?, 0),
-                IntegratorKind::Ao => stage.ambient_occlusion(rec, &frame, &traced, tracer)?,
-                IntegratorKind::Shadow => stage.shadow(rec, &frame, &traced, tracer)?,
-                IntegratorKind::Reflection => stage.reflection(rec, &frame, &traced, tracer)?,
-                IntegratorKind::Path => stage.path(rec, &mut frame, traced, tracer)?,
-                IntegratorKind::Pt => unreachable!("refused before the loop"),
-            };
-            rays_traced += secondary;
-            in_flight[step % 2] = Some(done);
-            step += 1;
-        }
-        progress(sample + 1);
+        };
+        let pixels = inputs.camera.width as usize * inputs.camera.height as usize;
+        let chunk = (options.max_rays_per_chunk / (1 + per_pixel)).clamp(1, pixels.max(1) as u32);
+        let mut frame = FrameParams::new(&inputs.camera);
+        frame.seed = options.seed as u32 ^ (options.seed >> 32) as u32;
+        frame.jitter = (options.spp > 1) as u32;
+        frame.ao_rays = ao_rays;
+        frame.ao_radius = options.ao_radius_fraction * inputs.scene_radius;
+        frame.ray_epsilon = 1e-4 * inputs.scene_radius.max(1e-3);
+        frame.light = inputs.light.into();
+        Ok(Self {
+            gpu: gpu.clone(),
+            tracer,
+            kind,
+            pipelines: Pipelines::new(gpu)?,
+            triangles: gpu.upload("shade-triangles", inputs.triangles)?,
+            triangle_material: gpu.upload("triangle-material", inputs.triangle_material)?,
+            materials: gpu.upload("materials", inputs.materials)?,
+            accum: gpu.zeroed::<[f32; 4]>("accum", pixels)?,
+            slots: [
+                RaySlot::new(gpu, 0, chunk as u64, per_pixel as u64)?,
+                RaySlot::new(gpu, 1, chunk as u64, per_pixel as u64)?,
+            ],
+            frame,
+            chunk,
+            passes: 0,
+            rays_traced: 0,
+        })
     }
-    gpu.wait_idle()?;
-    Ok(IntegratorOutput {
-        sum_rgb: accum.read()?,
-        depth: depth.read()?,
-        triangle_id: triangle_id.read()?,
-        normal: normal.read()?,
-        rays_traced,
-    })
+
+    fn pixels(&self) -> usize {
+        self.frame.width as usize * self.frame.height as usize
+    }
+
+    /// Records and submits one chunk of one sample; returns the point that marks it
+    /// shaded.
+    fn render_chunk(&mut self, slot: usize, count: u32) -> vk::Result<TimelinePoint> {
+        let gpu = &self.gpu;
+        let slot = &self.slots[slot];
+        let n = count as u64;
+        let mut rec = gpu.recorder(StreamKind::Main)?;
+        rec.dispatch_items(
+            &self.pipelines.camera_rays,
+            &[(&slot.rays).into()],
+            &self.frame,
+            n,
+        )?;
+        let generated = rec.submit(&[])?;
+        let tracer = self.tracer.as_mut();
+        let traced = tracer.trace(
+            &slot.rays,
+            &slot.hits,
+            count,
+            Query::ClosestHit,
+            &[&generated],
+        )?;
+        let rec = gpu.recorder(StreamKind::Main)?;
+        let stage = Stage {
+            gpu,
+            pipelines: &self.pipelines,
+            slot,
+            triangles: &self.triangles,
+            triangle_material: &self.triangle_material,
+            materials: &self.materials,
+            accum: &self.accum,
+            count,
+        };
+        let frame = &mut self.frame;
+        let (done, secondary) = match self.kind {
+            IntegratorKind::Ao => stage.ambient_occlusion(rec, frame, &traced, tracer)?,
+            IntegratorKind::Shadow => stage.shadow(rec, frame, &traced, tracer)?,
+            IntegratorKind::Reflection => stage.reflection(rec, frame, &traced, tracer)?,
+            IntegratorKind::Path => stage.path(rec, frame, traced, tracer)?,
+            _ => (stage.shade_primary(rec, frame, &traced)?, 0),
+        };
+        self.rays_traced += n + secondary;
+        Ok(done)
+    }
+}
+
+impl Integrator for EyeIntegrator {
+    fn name(&self) -> &'static str {
+        self.kind.name()
+    }
+
+    fn render_passes(&mut self, first: u32, count: u32) -> Result<(), IntegratorError> {
+        let pixels = self.pixels();
+        let mut in_flight: [Option<TimelinePoint>; 2] = [None, None];
+        let mut step = 0usize;
+        for sample in first..first + count {
+            self.frame.sample_index = sample;
+            for offset in (0..pixels).step_by(self.chunk as usize) {
+                let n = self.chunk.min((pixels - offset) as u32);
+                self.frame.pixel_offset = offset as u32;
+                self.frame.pixel_count = n;
+                if let Some(previous) = in_flight[step % 2].take() {
+                    self.gpu.wait(&previous)?;
+                }
+                in_flight[step % 2] = Some(self.render_chunk(step % 2, n)?);
+                step += 1;
+            }
+            self.passes += 1;
+        }
+        self.gpu.wait_idle()?;
+        Ok(())
+    }
+
+    fn sums(&mut self) -> Result<FilmSums, IntegratorError> {
+        let sum = self.accum.read::<[f32; 4]>()?;
+        let (w, h) = (self.frame.width, self.frame.height);
+        Ok(FilmSums::from_gpu(w, h, self.passes, 1, &sum, None))
+    }
+
+    fn restore(&mut self, sums: &FilmSums) -> Result<(), IntegratorError> {
+        check_film_size(sums, self.frame.width, self.frame.height, 1)?;
+        self.accum.write(&sums.to_gpu().0)?;
+        self.passes = sums.passes;
+        Ok(())
+    }
+
+    fn stats(&self) -> IntegratorStats {
+        IntegratorStats {
+            rays_traced: self.rays_traced,
+            ..Default::default()
+        }
+    }
 }
 
 /// The per-chunk stages after the camera rays are traced; each returns the point that

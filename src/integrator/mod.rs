@@ -1,21 +1,103 @@
 //! Integrators: what is computed along the rays a tracer casts.
 //!
-//! The ray workloads of the PDACRT paper's Tables 1–2 as integrators: `primary`
-//! (eye-light shading), `ao` (8 ambient-occlusion rays per hit), `shadow` (one point
-//! light), `reflection` (one mirror bounce) and `path` (7 diffuse bounces). Each runs as
-//! a sequence of named GPU stages per pass and chunk of pixels: generate camera rays →
-//! trace → generate secondary rays → trace → shade.
-//! `pt` is the physically based wavefront path tracer of [`pt`].
+//! Every integrator — GPU or CPU — renders through one interface, [`Integrator`]:
+//! progressive *passes* into a film of per-pass sums ([`FilmSums`]), so that the render
+//! loop (`crate::render`), progress, `--time`, checkpoints and shards treat them all
+//! alike. A pass adds [`Integrator::samples_per_pass`] samples to every pixel, and its
+//! random numbers are a function of (seed, pass index) only: the film after passes
+//! `0..n` is the same however the passes were grouped into calls, interrupted or resumed.
+//!
+//! The ray workloads of the PDACRT paper's Tables 1–2 are integrators too ([`eye`]):
+//! `primary` (eye-light shading), `ao` (8 ambient-occlusion rays per hit), `shadow` (one
+//! point light), `reflection` (one mirror bounce) and `path` (7 diffuse bounces). `pt` is
+//! the physically based wavefront path tracer of [`pt`]. First-hit AOVs (depth, triangle
+//! id, normal) come from one pass of pixel-centre rays for every integrator ([`aov`]).
 
+pub mod aov;
 mod eye;
 pub mod gpu_types;
 pub mod pt;
 
+use std::collections::BTreeMap;
 use std::fmt;
 use std::str::FromStr;
 
-pub use eye::{render_passes, IntegratorOutput, PassInputs, PassOptions};
+pub use eye::{EyeInputs, EyeIntegrator, EyeOptions};
 pub use gpu_types::{FrameParams, GpuMaterial};
+
+use crate::film::FilmSums;
+use crate::vk;
+
+/// What can go wrong while an integrator renders.
+#[derive(Debug, thiserror::Error)]
+pub enum IntegratorError {
+    #[error(transparent)]
+    Gpu(#[from] vk::VkError),
+    /// A caller asked for something the integrator cannot do (sums of the wrong size …).
+    #[error("{0}")]
+    Usage(String),
+}
+
+/// Figures an integrator counts while it renders (reported by `--stats`).
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct IntegratorStats {
+    /// Rays cast: closest-hit and occlusion queries alike.
+    pub rays_traced: u64,
+    /// Named counts: paths, connections, non-finite samples dropped, …
+    pub counters: BTreeMap<String, u64>,
+}
+
+/// An image an integrator writes beside the render (e.g. one per BPT technique).
+#[derive(Clone, Debug, PartialEq)]
+pub struct NamedImage {
+    /// A file-name-safe name, e.g. `s2_t3`.
+    pub name: String,
+    pub width: u32,
+    pub height: u32,
+    /// Row 0 at the top.
+    pub rgb: Vec<[f32; 3]>,
+}
+
+/// One integrator, set up for one scene, camera, film size and seed.
+pub trait Integrator {
+    /// The name `--integrator` takes.
+    fn name(&self) -> &'static str;
+
+    /// Samples per pixel that one pass adds.
+    fn samples_per_pass(&self) -> u32 {
+        1
+    }
+
+    /// The most passes a call to [`Integrator::render_passes`] should take: more per call
+    /// lets an integrator fill a wide device when the image is small.
+    fn passes_per_call(&self) -> u32 {
+        1
+    }
+
+    /// Renders passes `first..first + count` and adds them to the film. Pass `k` uses
+    /// the random numbers of pass `k`, whatever came before it.
+    fn render_passes(&mut self, first: u32, count: u32) -> Result<(), IntegratorError>;
+
+    /// The film so far.
+    fn sums(&mut self) -> Result<FilmSums, IntegratorError>;
+
+    /// Replaces the film (to resume a render): later passes add to these sums.
+    fn restore(&mut self, sums: &FilmSums) -> Result<(), IntegratorError>;
+
+    /// What it counted so far.
+    fn stats(&self) -> IntegratorStats;
+
+    /// Settings that change the image besides scene, size, seed and tracer (depths,
+    /// strategies …), as key/value pairs for file headers and checkpoints.
+    fn settings(&self) -> Vec<(String, String)> {
+        Vec::new()
+    }
+
+    /// Extra images to write beside the render, if the integrator was asked for any.
+    fn extra_images(&mut self) -> Result<Vec<NamedImage>, IntegratorError> {
+        Ok(Vec::new())
+    }
+}
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize)]
 #[serde(rename_all = "kebab-case")]
@@ -96,4 +178,29 @@ impl FromStr for IntegratorKind {
                 )
             })
     }
+}
+
+/// Refuses film sums that do not belong to a `width × height` film of
+/// `samples_per_pass` samples per pass (restoring them would mix two images).
+pub(crate) fn check_film_size(
+    sums: &FilmSums,
+    width: u32,
+    height: u32,
+    samples_per_pass: u32,
+) -> Result<(), IntegratorError> {
+    let expected = width as usize * height as usize;
+    let sq_ok = sums.sum_sq.as_ref().is_none_or(|q| q.len() == expected);
+    if (sums.width, sums.height) != (width, height) || sums.sum.len() != expected || !sq_ok {
+        return Err(IntegratorError::Usage(format!(
+            "film sums of {}x{} do not fit a {width}x{height} film",
+            sums.width, sums.height
+        )));
+    }
+    if sums.samples_per_pass != samples_per_pass {
+        return Err(IntegratorError::Usage(format!(
+            "film sums of {} samples per pass do not fit an integrator of {samples_per_pass}",
+            sums.samples_per_pass
+        )));
+    }
+    Ok(())
 }

@@ -40,13 +40,15 @@ use glam::Vec3;
 
 use self::gpu::{PathState, PtMaterial, PtParams, FLAG_BSDF, FLAG_NEE, FLAG_SORTED};
 pub use self::lights::LightTable;
+use super::{check_film_size, Integrator, IntegratorError, IntegratorStats};
 use crate::bsdf::BsdfParams;
+use crate::film::FilmSums;
 use crate::primitives::compact::Kept;
 use crate::primitives::{Compact, RadixSort, Tuning};
 use crate::scene::{CameraFrame, Scene};
 use crate::shaders;
 use crate::trace::{GpuTriangle, Hit, Query, Ray, Tracer};
-use crate::vk::{self, Buffer, ComputePipeline, Gpu, MemoryKind, StreamKind};
+use crate::vk::{self, Buffer, ComputePipeline, Gpu, MemoryKind, StreamKind, TimelinePoint};
 
 const WORKGROUP: u32 = 64;
 
@@ -230,8 +232,414 @@ fn upload_or_dummy<T: bytemuck::Pod>(gpu: &Gpu, name: &str, data: &[T]) -> vk::R
     }
 }
 
+/// The scene as the shading kernels read it.
+struct SceneBuffers {
+    triangles: Buffer,
+    triangle_material: Buffer,
+    materials: Buffer,
+    bsdfs: Buffer,
+    normals: Buffer,
+    lights: Buffer,
+    light_cdf: Buffer,
+    tri_pmf: Buffer,
+}
+
+impl SceneBuffers {
+    fn new(gpu: &Gpu, scene: &PtScene) -> vk::Result<Self> {
+        Ok(Self {
+            triangles: gpu.upload("pt-triangles", &scene.triangles)?,
+            triangle_material: gpu.upload("pt-triangle-material", &scene.triangle_material)?,
+            materials: upload_or_dummy(gpu, "pt-materials", &scene.materials)?,
+            bsdfs: upload_or_dummy(gpu, "pt-bsdfs", &scene.bsdfs)?,
+            normals: upload_or_dummy(gpu, "pt-normals", &scene.normals)?,
+            lights: upload_or_dummy(gpu, "pt-lights", &scene.lights.lights)?,
+            light_cdf: upload_or_dummy(gpu, "pt-light-cdf", &scene.lights.cdf)?,
+            tri_pmf: upload_or_dummy(gpu, "pt-tri-light-pmf", &scene.lights.tri_pmf)?,
+        })
+    }
+}
+
+/// The wavefront's per-path buffers, `chunk` paths each (two of the ray and active
+/// lists: compaction gathers survivors from one into the other).
+struct Wavefront {
+    rays: [Buffer; 2],
+    active: [Buffer; 2],
+    hits: Buffer,
+    paths: Buffer,
+    keys: Buffer,
+    order: Buffer,
+    shadow_rays: Buffer,
+    shadow_hits: Buffer,
+    nee: Buffer,
+    alive: Buffer,
+    kept: Buffer,
+    count: Buffer,
+    compact: Compact,
+    compact_scratch: Buffer,
+    sorter: Option<(RadixSort, crate::primitives::radix_sort::SortScratch)>,
+}
+
+impl Wavefront {
+    fn new(gpu: &Gpu, c: usize, sort: bool) -> vk::Result<Self> {
+        let tuning = Tuning::for_device(gpu.info());
+        let compact = Compact::new(gpu, &tuning)?;
+        let compact_scratch = gpu.create_buffer(
+            "pt-compact-scratch",
+            compact.scratch_bytes(c as u32),
+            MemoryKind::Device,
+        )?;
+        let sorter = if sort {
+            let sort = RadixSort::new(gpu, &tuning)?;
+            let scratch = sort.alloc_scratch(gpu, c as u32)?;
+            Some((sort, scratch))
+        } else {
+            None
+        };
+        Ok(Self {
+            rays: [
+                gpu.zeroed::<Ray>("pt-rays-0", c)?,
+                gpu.zeroed::<Ray>("pt-rays-1", c)?,
+            ],
+            active: [
+                gpu.zeroed::<u32>("pt-active-0", c)?,
+                gpu.zeroed::<u32>("pt-active-1", c)?,
+            ],
+            hits: gpu.zeroed::<Hit>("pt-hits", c)?,
+            paths: gpu.zeroed::<PathState>("pt-paths", c)?,
+            keys: gpu.zeroed::<u32>("pt-keys", c)?,
+            order: gpu.zeroed::<u32>("pt-order", c)?,
+            shadow_rays: gpu.zeroed::<Ray>("pt-shadow-rays", c)?,
+            shadow_hits: gpu.zeroed::<Hit>("pt-shadow-hits", c)?,
+            nee: gpu.zeroed::<[f32; 4]>("pt-nee", c)?,
+            alive: gpu.zeroed::<u32>("pt-alive", c)?,
+            kept: gpu.zeroed::<u32>("pt-kept", c)?,
+            count: gpu.create_buffer("pt-count", 4, MemoryKind::Readback)?,
+            compact,
+            compact_scratch,
+            sorter,
+        })
+    }
+}
+
+/// The path tracer as an [`Integrator`]: the film is the GPU's per-pixel Σ L and Σ L².
+pub struct PtIntegrator<'t> {
+    gpu: Gpu,
+    tracer: Box<dyn Tracer + 't>,
+    options: PtOptions,
+    pipelines: Pipelines,
+    scene: SceneBuffers,
+    wave: Wavefront,
+    accum: Buffer,
+    accum2: Buffer,
+    params: PtParams,
+    pixels: usize,
+    /// Whole passes per chunk when the image is small, else one pass in pixel ranges.
+    passes_per_chunk: u32,
+    pixels_per_chunk: usize,
+    nee_on: bool,
+    passes: u32,
+    rays_traced: u64,
+}
+
+impl<'t> PtIntegrator<'t> {
+    pub fn new(
+        gpu: &Gpu,
+        tracer: Box<dyn Tracer + 't>,
+        scene: &PtScene,
+        camera: &CameraFrame,
+        options: &PtOptions,
+    ) -> vk::Result<Self> {
+        let pixels = camera.width as usize * camera.height as usize;
+        let max_paths = options.max_paths_per_chunk.max(1) as usize;
+        let passes_per_chunk = (max_paths / pixels.max(1)).clamp(1, options.spp.max(1) as usize);
+        let pixels_per_chunk = pixels.min(max_paths);
+        let chunk = passes_per_chunk * pixels_per_chunk;
+
+        let mut params = PtParams::new(camera);
+        params.seed = options.seed as u32 ^ (options.seed >> 32) as u32;
+        params.max_depth = options.max_depth;
+        params.rr_depth = options.rr_depth;
+        params.light_count = scene.lights.lights.len() as u32;
+        params.ray_epsilon = 1e-4 * scene.scene_radius.max(1e-3);
+        params.flags = match options.strategy {
+            Strategy::Mis => FLAG_NEE | FLAG_BSDF,
+            Strategy::Nee => FLAG_NEE,
+            Strategy::Bsdf => FLAG_BSDF,
+        };
+        if options.sort {
+            params.flags |= FLAG_SORTED;
+        }
+        Ok(Self {
+            gpu: gpu.clone(),
+            tracer,
+            options: *options,
+            pipelines: Pipelines::new(gpu)?,
+            scene: SceneBuffers::new(gpu, scene)?,
+            wave: Wavefront::new(gpu, chunk, options.sort)?,
+            accum: gpu.zeroed::<[f32; 4]>("pt-accum", pixels)?,
+            accum2: gpu.zeroed::<[f32; 4]>("pt-accum2", pixels)?,
+            params,
+            pixels,
+            passes_per_chunk: passes_per_chunk as u32,
+            pixels_per_chunk,
+            nee_on: options.strategy != Strategy::Bsdf && !scene.lights.lights.is_empty(),
+            passes: 0,
+            rays_traced: 0,
+        })
+    }
+
+    /// The film so far as [`PtOutput`].
+    pub fn output(&self) -> vk::Result<PtOutput> {
+        self.gpu.wait_idle()?;
+        Ok(PtOutput {
+            sum_rgb: self.accum.read()?,
+            sum_sq: self.accum2.read()?,
+            passes: self.passes,
+            rays_traced: self.rays_traced,
+        })
+    }
+
+    /// One chunk: `batch` samples (from `params.sample_index`) of the pixels
+    /// `offset..offset + pixel_count`, traced bounce by bounce until every path ended,
+    /// then added to the film.
+    fn render_chunk(&mut self, offset: usize, pixel_count: u32, batch: u32) -> vk::Result<()> {
+        let n0 = pixel_count * batch;
+        self.params.pixel_offset = offset as u32;
+        self.params.pixel_count = pixel_count;
+        self.params.path_count = n0;
+        let w = &self.wave;
+        let mut rec = self.gpu.recorder(StreamKind::Main)?;
+        rec.dispatch_items(
+            &self.pipelines.generate,
+            &[
+                (&w.rays[0]).into(),
+                (&w.active[0]).into(),
+                (&w.paths).into(),
+            ],
+            &self.params,
+            n0 as u64,
+        )?;
+        let mut ready = rec.submit(&[])?;
+        let mut cur = 0usize;
+        let mut n = n0;
+        let mut bounce = 0u32;
+        while n > 0 {
+            self.params.active_count = n;
+            self.params.bounce = bounce;
+            let survivors = self.bounce(cur, n, &ready)?;
+            if survivors == 0 {
+                break;
+            }
+            ready = self.gather_survivors(cur, survivors)?;
+            cur = 1 - cur;
+            n = survivors;
+            bounce += 1;
+        }
+        let mut rec = self.gpu.recorder(StreamKind::Main)?;
+        rec.dispatch_items(
+            &self.pipelines.finish,
+            &[
+                (&self.wave.paths).into(),
+                (&self.accum).into(),
+                (&self.accum2).into(),
+            ],
+            &self.params,
+            pixel_count as u64,
+        )?;
+        self.gpu.wait(&rec.submit(&[])?)
+    }
+
+    /// One bounce of the `n` live paths in list `cur`: trace, sort, shade, shadow rays,
+    /// compaction. Returns how many paths survive.
+    fn bounce(&mut self, cur: usize, n: u32, ready: &TimelinePoint) -> vk::Result<u32> {
+        let (gpu, w, s, pl) = (&self.gpu, &self.wave, &self.scene, &self.pipelines);
+        let params = &self.params;
+        let traced = self
+            .tracer
+            .trace(&w.rays[cur], &w.hits, n, Query::ClosestHit, &[ready])?;
+        self.rays_traced += n as u64;
+
+        let mut rec = gpu.recorder(StreamKind::Main)?;
+        if let Some((sort, scratch)) = &w.sorter {
+            rec.dispatch_items(
+                &pl.sort_keys,
+                &[
+                    (&w.hits).into(),
+                    (&s.triangle_material).into(),
+                    (&s.materials).into(),
+                    (&w.keys).into(),
+                    (&w.order).into(),
+                ],
+                params,
+                n as u64,
+            )?;
+            rec.barrier();
+            sort.record(
+                &mut rec,
+                n,
+                (&w.keys).into(),
+                Some((&w.order).into()),
+                0..32,
+                scratch,
+            )?;
+        }
+        rec.dispatch_items(
+            &pl.shade,
+            &[
+                (&w.rays[cur]).into(),
+                (&w.hits).into(),
+                (&w.active[cur]).into(),
+                (&w.order).into(),
+                (&w.paths).into(),
+                (&s.triangles).into(),
+                (&s.triangle_material).into(),
+                (&s.materials).into(),
+                (&s.bsdfs).into(),
+                (&s.normals).into(),
+                (&s.lights).into(),
+                (&s.light_cdf).into(),
+                (&s.tri_pmf).into(),
+                (&w.shadow_rays).into(),
+                (&w.nee).into(),
+                (&w.alive).into(),
+            ],
+            params,
+            n as u64,
+        )?;
+        let shaded = rec.submit(&[&traced])?;
+
+        let mut rec = gpu.recorder(StreamKind::Main)?;
+        let after = if self.nee_on {
+            let occluded = self.tracer.trace(
+                &w.shadow_rays,
+                &w.shadow_hits,
+                n,
+                Query::Occlusion,
+                &[&shaded],
+            )?;
+            self.rays_traced += n as u64;
+            rec.dispatch_items(
+                &pl.nee_accumulate,
+                &[
+                    (&w.active[cur]).into(),
+                    (&w.shadow_hits).into(),
+                    (&w.nee).into(),
+                    (&w.paths).into(),
+                ],
+                params,
+                n as u64,
+            )?;
+            occluded
+        } else {
+            shaded
+        };
+        w.compact.record(
+            &mut rec,
+            n,
+            (&w.alive).into(),
+            Kept::Indices,
+            (&w.kept).into(),
+            (&w.count).into(),
+            &w.compact_scratch,
+        )?;
+        gpu.wait(&rec.submit(&[&after])?)?;
+        Ok(w.count.read::<u32>()?[0].min(n))
+    }
+
+    /// Moves the `survivors` paths' rays and ids of list `cur` to the front of the
+    /// other list, in their original order.
+    fn gather_survivors(&mut self, cur: usize, survivors: u32) -> vk::Result<TimelinePoint> {
+        let w = &self.wave;
+        self.params.active_count = survivors;
+        let mut rec = self.gpu.recorder(StreamKind::Main)?;
+        rec.dispatch_items(
+            &self.pipelines.gather,
+            &[
+                (&w.kept).into(),
+                (&w.rays[cur]).into(),
+                (&w.active[cur]).into(),
+                (&w.rays[1 - cur]).into(),
+                (&w.active[1 - cur]).into(),
+            ],
+            &self.params,
+            survivors as u64,
+        )?;
+        rec.submit(&[])
+    }
+}
+
+impl Integrator for PtIntegrator<'_> {
+    fn name(&self) -> &'static str {
+        "pt"
+    }
+
+    fn passes_per_call(&self) -> u32 {
+        self.passes_per_chunk
+    }
+
+    fn render_passes(&mut self, first: u32, count: u32) -> Result<(), IntegratorError> {
+        let mut done = 0;
+        while done < count {
+            let batch = self.passes_per_chunk.min(count - done);
+            self.params.sample_index = first + done;
+            for offset in (0..self.pixels).step_by(self.pixels_per_chunk) {
+                let pixel_count = self.pixels_per_chunk.min(self.pixels - offset) as u32;
+                self.render_chunk(offset, pixel_count, batch)?;
+            }
+            done += batch;
+        }
+        self.passes += count;
+        Ok(())
+    }
+
+    fn sums(&mut self) -> Result<FilmSums, IntegratorError> {
+        let out = self.output()?;
+        let (w, h) = (self.params.width, self.params.height);
+        Ok(FilmSums::from_gpu(
+            w,
+            h,
+            out.passes,
+            1,
+            &out.sum_rgb,
+            Some(&out.sum_sq),
+        ))
+    }
+
+    fn restore(&mut self, sums: &FilmSums) -> Result<(), IntegratorError> {
+        check_film_size(sums, self.params.width, self.params.height, 1)?;
+        let (sum, sum_sq) = sums.to_gpu();
+        let zeros = vec![[0.0f32; 4]; self.pixels];
+        self.accum.write(&sum)?;
+        self.accum2.write(sum_sq.as_deref().unwrap_or(&zeros))?;
+        self.passes = sums.passes;
+        Ok(())
+    }
+
+    fn stats(&self) -> IntegratorStats {
+        IntegratorStats {
+            rays_traced: self.rays_traced,
+            ..Default::default()
+        }
+    }
+
+    fn settings(&self) -> Vec<(String, String)> {
+        let o = &self.options;
+        vec![
+            ("max_depth".into(), o.max_depth.to_string()),
+            ("rr_depth".into(), o.rr_depth.to_string()),
+            (
+                "strategy".into(),
+                format!("{:?}", o.strategy).to_lowercase(),
+            ),
+            ("sort_materials".into(), o.sort.to_string()),
+        ]
+    }
+}
+
 /// Renders passes until `options.spp` are done or `options.time_limit` ran out;
-/// `progress` is called with the number of passes done.
+/// `progress` is called with the number of passes done. (The render loop of
+/// `crate::render` does the same for every integrator; this is the path tracer alone,
+/// for tests and benchmarks.)
 pub fn render_pt(
     gpu: &Gpu,
     tracer: &mut dyn Tracer,
@@ -241,235 +649,51 @@ pub fn render_pt(
     progress: &mut dyn FnMut(u32),
 ) -> vk::Result<PtOutput> {
     let start = Instant::now();
-    let pipelines = Pipelines::new(gpu)?;
-    let tuning = Tuning::for_device(gpu.info());
-    let pixels = camera.width as usize * camera.height as usize;
-    let max_paths = options.max_paths_per_chunk.max(1) as usize;
-    // Whole passes per chunk when the image is small, else one pass in pixel ranges.
-    let passes_per_chunk = (max_paths / pixels.max(1)).clamp(1, options.spp.max(1) as usize);
-    let pixels_per_chunk = pixels.min(max_paths);
-    let c = passes_per_chunk * pixels_per_chunk;
-    let chunk = c as u32;
-
-    let triangles = gpu.upload("pt-triangles", &scene.triangles)?;
-    let triangle_material = gpu.upload("pt-triangle-material", &scene.triangle_material)?;
-    let materials = upload_or_dummy(gpu, "pt-materials", &scene.materials)?;
-    let bsdfs = upload_or_dummy(gpu, "pt-bsdfs", &scene.bsdfs)?;
-    let normals = upload_or_dummy(gpu, "pt-normals", &scene.normals)?;
-    let lights = upload_or_dummy(gpu, "pt-lights", &scene.lights.lights)?;
-    let light_cdf = upload_or_dummy(gpu, "pt-light-cdf", &scene.lights.cdf)?;
-    let tri_pmf = upload_or_dummy(gpu, "pt-tri-light-pmf", &scene.lights.tri_pmf)?;
-
-    let accum = gpu.zeroed::<[f32; 4]>("pt-accum", pixels)?;
-    let accum2 = gpu.zeroed::<[f32; 4]>("pt-accum2", pixels)?;
-    let rays = [
-        gpu.zeroed::<Ray>("pt-rays-0", c)?,
-        gpu.zeroed::<Ray>("pt-rays-1", c)?,
-    ];
-    let active = [
-        gpu.zeroed::<u32>("pt-active-0", c)?,
-        gpu.zeroed::<u32>("pt-active-1", c)?,
-    ];
-    let hits = gpu.zeroed::<Hit>("pt-hits", c)?;
-    let paths = gpu.zeroed::<PathState>("pt-paths", c)?;
-    let keys = gpu.zeroed::<u32>("pt-keys", c)?;
-    let order = gpu.zeroed::<u32>("pt-order", c)?;
-    let shadow_rays = gpu.zeroed::<Ray>("pt-shadow-rays", c)?;
-    let shadow_hits = gpu.zeroed::<Hit>("pt-shadow-hits", c)?;
-    let nee = gpu.zeroed::<[f32; 4]>("pt-nee", c)?;
-    let alive = gpu.zeroed::<u32>("pt-alive", c)?;
-    let kept = gpu.zeroed::<u32>("pt-kept", c)?;
-    let count = gpu.create_buffer("pt-count", 4, MemoryKind::Readback)?;
-
-    let compact = Compact::new(gpu, &tuning)?;
-    let compact_scratch = gpu.create_buffer(
-        "pt-compact-scratch",
-        compact.scratch_bytes(chunk),
-        MemoryKind::Device,
+    let mut pt = PtIntegrator::new(
+        gpu,
+        Box::new(BorrowedTracer(tracer)),
+        scene,
+        camera,
+        options,
     )?;
-    let sorter = if options.sort {
-        let sort = RadixSort::new(gpu, &tuning)?;
-        let scratch = sort.alloc_scratch(gpu, chunk)?;
-        Some((sort, scratch))
-    } else {
-        None
-    };
-
-    let mut params = PtParams::new(camera);
-    params.seed = options.seed as u32 ^ (options.seed >> 32) as u32;
-    params.max_depth = options.max_depth;
-    params.rr_depth = options.rr_depth;
-    params.light_count = scene.lights.lights.len() as u32;
-    params.ray_epsilon = 1e-4 * scene.scene_radius.max(1e-3);
-    let nee_on = options.strategy != Strategy::Bsdf && params.light_count > 0;
-    params.flags = match options.strategy {
-        Strategy::Mis => FLAG_NEE | FLAG_BSDF,
-        Strategy::Nee => FLAG_NEE,
-        Strategy::Bsdf => FLAG_BSDF,
-    };
-    if sorter.is_some() {
-        params.flags |= FLAG_SORTED;
-    }
-
-    let mut rays_traced = 0u64;
-    let mut passes = 0u32;
-    while passes < options.spp {
-        let batch = (passes_per_chunk as u32).min(options.spp - passes);
-        params.sample_index = passes;
-        for offset in (0..pixels).step_by(pixels_per_chunk) {
-            let pixel_count = pixels_per_chunk.min(pixels - offset) as u32;
-            let n0 = pixel_count * batch;
-            params.pixel_offset = offset as u32;
-            params.pixel_count = pixel_count;
-            params.path_count = n0;
-            let mut rec = gpu.recorder(StreamKind::Main)?;
-            rec.dispatch_items(
-                &pipelines.generate,
-                &[(&rays[0]).into(), (&active[0]).into(), (&paths).into()],
-                &params,
-                n0 as u64,
-            )?;
-            let mut ready = rec.submit(&[])?;
-            let mut cur = 0usize;
-            let mut n = n0;
-            let mut bounce = 0u32;
-            while n > 0 {
-                params.active_count = n;
-                params.bounce = bounce;
-                let traced = tracer.trace(&rays[cur], &hits, n, Query::ClosestHit, &[&ready])?;
-                rays_traced += n as u64;
-
-                let mut rec = gpu.recorder(StreamKind::Main)?;
-                if let Some((sort, scratch)) = &sorter {
-                    rec.dispatch_items(
-                        &pipelines.sort_keys,
-                        &[
-                            (&hits).into(),
-                            (&triangle_material).into(),
-                            (&materials).into(),
-                            (&keys).into(),
-                            (&order).into(),
-                        ],
-                        &params,
-                        n as u64,
-                    )?;
-                    rec.barrier();
-                    sort.record(
-                        &mut rec,
-                        n,
-                        (&keys).into(),
-                        Some((&order).into()),
-                        0..32,
-                        scratch,
-                    )?;
-                }
-                rec.dispatch_items(
-                    &pipelines.shade,
-                    &[
-                        (&rays[cur]).into(),
-                        (&hits).into(),
-                        (&active[cur]).into(),
-                        (&order).into(),
-                        (&paths).into(),
-                        (&triangles).into(),
-                        (&triangle_material).into(),
-                        (&materials).into(),
-                        (&bsdfs).into(),
-                        (&normals).into(),
-                        (&lights).into(),
-                        (&light_cdf).into(),
-                        (&tri_pmf).into(),
-                        (&shadow_rays).into(),
-                        (&nee).into(),
-                        (&alive).into(),
-                    ],
-                    &params,
-                    n as u64,
-                )?;
-                let shaded = rec.submit(&[&traced])?;
-
-                let mut rec = gpu.recorder(StreamKind::Main)?;
-                let after = if nee_on {
-                    let occluded = tracer.trace(
-                        &shadow_rays,
-                        &shadow_hits,
-                        n,
-                        Query::Occlusion,
-                        &[&shaded],
-                    )?;
-                    rays_traced += n as u64;
-                    rec.dispatch_items(
-                        &pipelines.nee_accumulate,
-                        &[
-                            (&active[cur]).into(),
-                            (&shadow_hits).into(),
-                            (&nee).into(),
-                            (&paths).into(),
-                        ],
-                        &params,
-                        n as u64,
-                    )?;
-                    occluded
-                } else {
-                    shaded
-                };
-                compact.record(
-                    &mut rec,
-                    n,
-                    (&alive).into(),
-                    Kept::Indices,
-                    (&kept).into(),
-                    (&count).into(),
-                    &compact_scratch,
-                )?;
-                let compacted = rec.submit(&[&after])?;
-                gpu.wait(&compacted)?;
-                let survivors = count.read::<u32>()?[0].min(n);
-                if survivors == 0 {
-                    break;
-                }
-                params.active_count = survivors;
-                let mut rec = gpu.recorder(StreamKind::Main)?;
-                rec.dispatch_items(
-                    &pipelines.gather,
-                    &[
-                        (&kept).into(),
-                        (&rays[cur]).into(),
-                        (&active[cur]).into(),
-                        (&rays[1 - cur]).into(),
-                        (&active[1 - cur]).into(),
-                    ],
-                    &params,
-                    survivors as u64,
-                )?;
-                ready = rec.submit(&[])?;
-                cur = 1 - cur;
-                n = survivors;
-                bounce += 1;
-            }
-            let mut rec = gpu.recorder(StreamKind::Main)?;
-            rec.dispatch_items(
-                &pipelines.finish,
-                &[(&paths).into(), (&accum).into(), (&accum2).into()],
-                &params,
-                pixel_count as u64,
-            )?;
-            let done = rec.submit(&[])?;
-            gpu.wait(&done)?;
-        }
-        passes += batch;
-        progress(passes);
-        if let Some(limit) = options.time_limit {
-            if start.elapsed().as_secs_f64() >= limit {
-                break;
-            }
+    while pt.passes < options.spp {
+        let batch = pt.passes_per_chunk.min(options.spp - pt.passes);
+        pt.render_passes(pt.passes, batch).map_err(|e| match e {
+            IntegratorError::Gpu(e) => e,
+            IntegratorError::Usage(m) => vk::VkError::Usage(m),
+        })?;
+        progress(pt.passes);
+        if options
+            .time_limit
+            .is_some_and(|limit| start.elapsed().as_secs_f64() >= limit)
+        {
+            break;
         }
     }
-    gpu.wait_idle()?;
-    Ok(PtOutput {
-        sum_rgb: accum.read()?,
-        sum_sq: accum2.read()?,
-        passes,
-        rays_traced,
-    })
+    pt.output()
+}
+
+/// A tracer lent to an integrator that owns its tracer.
+struct BorrowedTracer<'a>(&'a mut dyn Tracer);
+
+impl Tracer for BorrowedTracer<'_> {
+    fn name(&self) -> &'static str {
+        self.0.name()
+    }
+    fn set_geometry(&mut self, triangles: &[crate::trace::GpuTriangle]) -> vk::Result<()> {
+        self.0.set_geometry(triangles)
+    }
+    fn trace(
+        &mut self,
+        rays: &Buffer,
+        hits: &Buffer,
+        ray_count: u32,
+        query: Query,
+        after: &[&TimelinePoint],
+    ) -> vk::Result<TimelinePoint> {
+        self.0.trace(rays, hits, ray_count, query, after)
+    }
+    fn level_stats(&self) -> Option<&crate::trace::pdacrt::TraceStats> {
+        self.0.level_stats()
+    }
 }

@@ -1,0 +1,248 @@
+//! [`FilmSums`]: what every integrator accumulates, pass by pass.
+//!
+//! A *pass* adds `samples_per_pass` samples to every pixel and yields one estimate of
+//! each pixel (the mean of its samples in that pass, plus whatever light tracing splatted
+//! there, normalised per pass). Passes are independent and identically distributed, so
+//! the per-pixel sums of the pass estimates and of their squares give both the image
+//! (their mean) and its standard error — for integrators whose samples within a pass are
+//! correlated (CBPT) as much as for one-sample passes (`pt`). Sums are `f64`: integrators
+//! that accumulate in `f32` on the GPU convert exactly, so a film can be saved and
+//! restored without changing a bit.
+
+use super::{Film, FilmError};
+
+/// Per-pixel sums of the pass estimates (row 0 at the top, `y * width + x`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct FilmSums {
+    pub width: u32,
+    pub height: u32,
+    /// Passes accumulated.
+    pub passes: u32,
+    /// Samples per pixel that one pass adds.
+    pub samples_per_pass: u32,
+    /// Σ over passes of each pixel's estimate (RGB).
+    pub sum: Vec<[f64; 3]>,
+    /// Σ over passes of the squared estimates, where the integrator keeps them.
+    pub sum_sq: Option<Vec<[f64; 3]>>,
+}
+
+impl FilmSums {
+    /// Empty sums of `width × height` pixels; `second_moments` keeps Σ estimate².
+    pub fn new(width: u32, height: u32, samples_per_pass: u32, second_moments: bool) -> Self {
+        let n = width as usize * height as usize;
+        Self {
+            width,
+            height,
+            passes: 0,
+            samples_per_pass,
+            sum: vec![[0.0; 3]; n],
+            sum_sq: second_moments.then(|| vec![[0.0; 3]; n]),
+        }
+    }
+
+    /// Sums of GPU accumulators: `sum` holds Σ L in rgb (its w is ignored), `sum_sq`
+    /// Σ L² in rgb.
+    pub fn from_gpu(
+        width: u32,
+        height: u32,
+        passes: u32,
+        samples_per_pass: u32,
+        sum: &[[f32; 4]],
+        sum_sq: Option<&[[f32; 4]]>,
+    ) -> Self {
+        let widen = |v: &[[f32; 4]]| -> Vec<[f64; 3]> {
+            v.iter()
+                .map(|s| [s[0] as f64, s[1] as f64, s[2] as f64])
+                .collect()
+        };
+        Self {
+            width,
+            height,
+            passes,
+            samples_per_pass,
+            sum: widen(sum),
+            sum_sq: sum_sq.map(widen),
+        }
+    }
+
+    /// The sums as the GPU accumulators hold them (`w` of the first = passes). Exact for
+    /// sums that came from [`FilmSums::from_gpu`].
+    pub fn to_gpu(&self) -> (Vec<[f32; 4]>, Option<Vec<[f32; 4]>>) {
+        let narrow = |v: &[[f64; 3]], w: f32| -> Vec<[f32; 4]> {
+            v.iter()
+                .map(|s| [s[0] as f32, s[1] as f32, s[2] as f32, w])
+                .collect()
+        };
+        (
+            narrow(&self.sum, self.passes as f32),
+            self.sum_sq.as_deref().map(|q| narrow(q, 0.0)),
+        )
+    }
+
+    pub fn pixel_count(&self) -> usize {
+        self.sum.len()
+    }
+
+    /// Samples per pixel so far.
+    pub fn spp(&self) -> u64 {
+        self.passes as u64 * self.samples_per_pass as u64
+    }
+
+    /// Adds one pass: `estimate[p]` is pixel p's estimate from that pass.
+    pub fn add_pass(&mut self, estimate: &[[f64; 3]]) {
+        assert_eq!(estimate.len(), self.sum.len(), "pass of the wrong size");
+        for (s, e) in self.sum.iter_mut().zip(estimate) {
+            for c in 0..3 {
+                s[c] += e[c];
+            }
+        }
+        if let Some(q) = &mut self.sum_sq {
+            for (q, e) in q.iter_mut().zip(estimate) {
+                for c in 0..3 {
+                    q[c] += e[c] * e[c];
+                }
+            }
+        }
+        self.passes += 1;
+    }
+
+    /// Per-pixel mean of the pass estimates (black before the first pass).
+    pub fn mean(&self) -> Vec<[f32; 3]> {
+        let n = self.passes.max(1) as f64;
+        self.sum.iter().map(|s| s.map(|v| (v / n) as f32)).collect()
+    }
+
+    /// Per-pixel standard error of [`FilmSums::mean`], from the passes' sample variance;
+    /// `None` without second moments or with fewer than two passes.
+    pub fn stderr(&self) -> Option<Vec<[f32; 3]>> {
+        let q = self.sum_sq.as_ref()?;
+        if self.passes < 2 {
+            return None;
+        }
+        let n = self.passes as f64;
+        Some(
+            self.sum
+                .iter()
+                .zip(q)
+                .map(|(s, q)| {
+                    let mut se = [0.0f32; 3];
+                    for c in 0..3 {
+                        let m = s[c] / n;
+                        let var = (q[c] / n - m * m).max(0.0) * n / (n - 1.0);
+                        se[c] = (var / n).sqrt() as f32;
+                    }
+                    se
+                })
+                .collect(),
+        )
+    }
+
+    /// Adds another render's sums of the same image (another shard, a resumed part):
+    /// the merged mean weights each part by its passes.
+    pub fn merge(&mut self, other: &FilmSums) -> Result<(), String> {
+        if (other.width, other.height) != (self.width, self.height) {
+            return Err(format!(
+                "film size {}x{} differs from {}x{}",
+                other.width, other.height, self.width, self.height
+            ));
+        }
+        if other.samples_per_pass != self.samples_per_pass {
+            return Err(format!(
+                "{} samples per pass differ from {}",
+                other.samples_per_pass, self.samples_per_pass
+            ));
+        }
+        for (s, o) in self.sum.iter_mut().zip(&other.sum) {
+            for c in 0..3 {
+                s[c] += o[c];
+            }
+        }
+        self.sum_sq = match (self.sum_sq.take(), &other.sum_sq) {
+            (Some(mut q), Some(o)) => {
+                for (q, o) in q.iter_mut().zip(o) {
+                    for c in 0..3 {
+                        q[c] += o[c];
+                    }
+                }
+                Some(q)
+            }
+            _ => None,
+        };
+        self.passes += other.passes;
+        Ok(())
+    }
+
+    /// The image as a [`Film`] (mean per pixel, no AOVs).
+    pub fn to_film(&self) -> Result<Film, FilmError> {
+        Film::from_mean_rgb(self.width, self.height, &self.mean())
+    }
+}
+
+/// Relative mean squared error of `image` against `reference`: the mean over pixels
+/// and channels of (v − r)² / (r² + ε), ε = 0.01, the usual guard against dividing by
+/// black pixels (Rousselle et al. 2011). `None` when the sizes differ.
+pub fn relative_mse(image: &[[f32; 3]], reference: &[[f32; 3]]) -> Option<f64> {
+    if image.len() != reference.len() || image.is_empty() {
+        return None;
+    }
+    let total: f64 = image
+        .iter()
+        .zip(reference)
+        .flat_map(|(v, r)| (0..3).map(move |c| (v[c] as f64, r[c] as f64)))
+        .map(|(v, r)| (v - r) * (v - r) / (r * r + 0.01))
+        .sum();
+    Some(total / (3 * image.len()) as f64)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn mean_and_stderr_of_passes() {
+        let mut s = FilmSums::new(2, 1, 1, true);
+        s.add_pass(&[[1.0, 2.0, 3.0], [0.0; 3]]);
+        s.add_pass(&[[3.0, 2.0, 1.0], [0.0; 3]]);
+        assert_eq!(s.mean(), vec![[2.0, 2.0, 2.0], [0.0; 3]]);
+        let se = s.stderr().unwrap();
+        // Sample variance of {1, 3} is 2; the stderr of the mean of two is 1.
+        assert!((se[0][0] - 1.0).abs() < 1e-6);
+        assert_eq!(se[0][1], 0.0);
+        assert_eq!(se[1], [0.0; 3]);
+    }
+
+    #[test]
+    fn gpu_round_trip_is_exact() {
+        let sum = [[0.1f32, 1e30, -3.5e-20, 4.0], [7.0, 8.0, 9.0, 4.0]];
+        let sq = [[0.3f32, 2.0, 5.0, 0.0], [1.0, 1.0, 1.0, 0.0]];
+        let s = FilmSums::from_gpu(2, 1, 4, 1, &sum, Some(&sq));
+        let (back, back_sq) = s.to_gpu();
+        assert_eq!(back, sum.to_vec());
+        assert_eq!(back_sq.unwrap(), sq.to_vec());
+    }
+
+    #[test]
+    fn merging_equals_accumulating_together() {
+        let passes = [[[1.0, 0.5, 0.0]], [[3.0, 1.5, 2.0]], [[0.0, 0.0, 4.0]]];
+        let mut all = FilmSums::new(1, 1, 1, true);
+        let (mut a, mut b) = (FilmSums::new(1, 1, 1, true), FilmSums::new(1, 1, 1, true));
+        for (i, p) in passes.iter().enumerate() {
+            all.add_pass(p);
+            if i < 2 { &mut a } else { &mut b }.add_pass(p);
+        }
+        a.merge(&b).unwrap();
+        assert_eq!(a, all);
+        assert!(a.merge(&FilmSums::new(2, 1, 1, true)).is_err());
+        assert!(a.merge(&FilmSums::new(1, 1, 4, true)).is_err());
+    }
+
+    #[test]
+    fn relative_mse_is_zero_on_the_reference_and_guards_black() {
+        let r = [[1.0, 0.0, 2.0]];
+        assert_eq!(relative_mse(&r, &r), Some(0.0));
+        let v = [[2.0, 0.1, 2.0]];
+        let expected = (1.0 / 1.01 + 0.01 / 0.01) / 3.0;
+        assert!((relative_mse(&v, &r).unwrap() - expected).abs() < 1e-6);
+        assert_eq!(relative_mse(&v, &[]), None);
+    }
+}
