@@ -11,6 +11,7 @@
 //! - [`integrator`]: what is computed along the rays.
 //! - [`render`]: ties a scene, a tracer and an integrator into a film.
 //! - [`bench`](mod@bench): the measurements behind `splitray bench`.
+//! - [`timeline`]: per-stream and per-thread timelines (Chrome trace-event JSON, SVG).
 
 pub mod bench;
 pub mod bsdf;
@@ -20,5 +21,6 @@ pub mod primitives;
 pub mod render;
 pub mod scene;
 pub mod shaders;
+pub mod timeline;
 pub mod trace;
 pub mod vk;

@@ -13,7 +13,7 @@ use crate::integrator::{
 };
 use crate::scene::{Scene, SceneError};
 use crate::trace::{GpuTriangle, Tracer, TracerKind};
-use crate::vk::{self, Gpu, KernelTime};
+use crate::vk::{self, Gpu, KernelTime, ProfileTree};
 
 #[derive(Debug, thiserror::Error)]
 pub enum RenderError {
@@ -149,6 +149,9 @@ pub struct RenderStats {
     pub counters: std::collections::BTreeMap<String, u64>,
     /// GPU time per kernel (timestamp queries), longest first.
     pub kernels: Vec<KernelTime>,
+    /// The GPU scopes as a tree: a node's total is its self time plus its children's
+    /// totals.
+    pub profile: ProfileTree,
 }
 
 pub struct RenderOutput {
@@ -248,6 +251,7 @@ pub fn render_with(
     film.set_triangle_id(aovs.triangle_id)?;
     film.set_normal(aovs.normal)?;
     let device = device_description(gpu);
+    let profile = gpu.take_profile();
     let pixels = options.width as f64 * options.height as f64;
     let stats = RenderStats {
         scene: scene.name.clone(),
@@ -268,7 +272,8 @@ pub fn render_with(
         stopped_early: run.stopped,
         relative_mse: run.relative_mse,
         counters: integrator_stats.counters,
-        kernels: gpu.take_profile().summary(),
+        kernels: profile.summary(),
+        profile: profile.tree(),
     };
     let mut extra = vec![
         ("scene".to_string(), scene.name.clone()),

@@ -9,7 +9,7 @@
 //! shared 2-vCPU VM this was written on, the 4M-pair sort's median was 108–124 ms in
 //! three runs and 73 ms in another, with the probe at 1.94–2.00 in all of them, so what
 //! came and went was not the cores (what it was is still open: docs/PERFORMANCE.md,
-//! "What the slow phase looks like").
+//! "Why medians swing").
 
 use std::time::Instant;
 

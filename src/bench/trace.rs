@@ -67,6 +67,8 @@ pub struct TracerRow {
     pub tracer_peak_bytes: u64,
     /// GPU time per kernel over the last frame.
     pub kernels: Vec<vk::KernelTime>,
+    /// The last frame's GPU scopes as a tree (total and self times).
+    pub profile: vk::ProfileTree,
     /// Fraction of the rays actually traced (1 unless extrapolated).
     pub subset: f64,
     /// Hits checked against brute force before timing, and how many differed.
@@ -202,6 +204,7 @@ struct Contender {
     baseline: u64,
     times: Vec<f64>,
     kernels: Vec<vk::KernelTime>,
+    profile: vk::ProfileTree,
     tracer: Option<Box<dyn Tracer>>,
 }
 
@@ -409,6 +412,7 @@ pub fn run(
             baseline,
             times: Vec::new(),
             kernels: Vec::new(),
+            profile: Default::default(),
             tracer: None,
         });
     }
@@ -429,7 +433,9 @@ pub fn run(
             let tracer = c.tracer.as_deref_mut().expect("created above");
             let ms = run_frame(gpu, tracer, &triangles, timed)?;
             c.times.push(ms * c.scale);
-            c.kernels = gpu.take_profile().summary();
+            let log = gpu.take_profile();
+            c.kernels = log.summary();
+            c.profile = log.tree();
         }
         eprint!(".");
         let _ = std::io::stderr().flush();
@@ -459,6 +465,7 @@ pub fn run(
             peak_gpu_bytes: c.peak,
             tracer_peak_bytes: c.peak.saturating_sub(c.baseline),
             kernels: c.kernels,
+            profile: c.profile,
             subset: 1.0 / c.scale,
             verified_rays: c.verified,
             mismatches: c.mismatches,

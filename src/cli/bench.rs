@@ -21,6 +21,10 @@ pub struct BenchArgs {
     /// Run with the validation layer (slower; for checking, not for figures).
     #[arg(long, global = true)]
     validation: bool,
+    /// Write a timeline of the benchmark (GPU streams, host threads, counters) as
+    /// trace-event JSON for ui.perfetto.dev or chrome://tracing.
+    #[arg(long, global = true, value_name = "FILE.json")]
+    timeline: Option<PathBuf>,
 }
 
 #[derive(Debug, Subcommand)]
@@ -83,7 +87,7 @@ enum BenchCommand {
         /// Print PDACRT's per-level statistics.
         #[arg(long)]
         levels: bool,
-        /// Print each tracer's per-kernel GPU times of its last frame.
+        /// Print each tracer's GPU scopes of its last frame as a tree (total and self times).
         #[arg(long)]
         profile: bool,
         /// PDACRT α: nodes with fewer triangles are terminal (default 256).
@@ -151,6 +155,7 @@ fn write_json<T: serde::Serialize>(path: &Option<PathBuf>, value: &T) -> anyhow:
 }
 
 pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
+    let mut timeline = super::timeline::TimelineOutput::start(args.timeline.as_deref())?;
     // Load inputs before opening the device, so bad input fails fast.
     let scene = match &args.what {
         BenchCommand::Trace { scene, .. } | BenchCommand::Pt { scene, .. } => {
@@ -166,6 +171,9 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         device: args.device.clone(),
         ..Default::default()
     })?;
+    if let Some(t) = timeline.as_mut() {
+        t.attach(&gpu)?;
+    }
     match &args.what {
         BenchCommand::Primitives {
             n,
@@ -276,8 +284,8 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             print!("{report}");
             if *profile {
                 for row in &report.rows {
-                    println!("\n{} kernels (last frame):", row.tracer);
-                    print!("{}", splitray::vk::ProfileLog::table_of(&row.kernels));
+                    println!("\n{} GPU scopes (last frame):", row.tracer);
+                    print!("{}", row.profile.table());
                 }
             }
             if *levels {
@@ -310,6 +318,9 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             "{} validation message(s) (see the log above)",
             messages.len()
         );
+    }
+    if let Some(t) = timeline {
+        t.finish(&super::timeline::command_line())?;
     }
     Ok(())
 }

@@ -128,6 +128,17 @@ pub fn run(args: &InfoArgs) -> anyhow::Result<()> {
             l.timestamp_period_ns
         );
         println!(
+            "    calibrated timestamps: {}",
+            if i.calibrated_time_domains.is_empty() {
+                "none (timelines align GPU times at submission)".to_string()
+            } else {
+                format!(
+                    "{} (timelines use them)",
+                    i.calibrated_time_domains.join(", ")
+                )
+            }
+        );
+        println!(
             "    features: timeline semaphores {}, synchronization2 {}, maintenance4 {}, push descriptors {}, buffer device address {}, ray query {}, subgroup arithmetic {}, subgroup ballot+shuffle {}, full subgroups {}, 64-bit buffer atomics {}",
             c.timeline_semaphore,
             c.synchronization2,

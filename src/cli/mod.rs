@@ -4,6 +4,7 @@
 mod bench;
 mod info;
 mod render;
+mod timeline;
 
 use clap::{Parser, Subcommand};
 
@@ -31,6 +32,9 @@ pub enum Command {
     /// Measure: `bench primitives` (GPU sort/scan/... vs CPU) or `bench trace SCENE`
     /// (tracers compared on a ray workload).
     Bench(bench::BenchArgs),
+    /// Draw a timeline (`--timeline FILE.json` of `render` or `bench`) as a Gantt chart:
+    /// `splitray timeline FILE.json -o timeline.svg` (or .png).
+    Timeline(timeline::TimelineArgs),
 }
 
 pub fn run(cli: Cli) -> anyhow::Result<()> {
@@ -38,6 +42,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Info(args) => info::run(&args),
         Command::Render(args) => render::run(&args),
         Command::Bench(args) => bench::run(&args),
+        Command::Timeline(args) => timeline::run(&args),
         Command::Scenes => {
             for (name, description) in splitray::scene::builtin_names() {
                 println!("{name:<14} {description}");

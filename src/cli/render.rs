@@ -69,7 +69,7 @@ pub struct RenderArgs {
     /// Write per-kernel GPU times, rays traced, rays/s and peak GPU memory as JSON.
     #[arg(long, value_name = "STATS.json")]
     stats: Option<PathBuf>,
-    /// Print the per-kernel GPU time table.
+    /// Print the GPU scopes as a tree with total and self times.
     #[arg(long)]
     profile: bool,
     /// A reference image (an EXR of this film size, e.g. a long render or a Mitsuba
@@ -77,6 +77,10 @@ pub struct RenderArgs {
     /// in the stats.
     #[arg(long, value_name = "REF.exr")]
     reference: Option<PathBuf>,
+    /// Write a timeline of the render (GPU streams, host threads, counters) as
+    /// trace-event JSON for ui.perfetto.dev or chrome://tracing.
+    #[arg(long, value_name = "FILE.json")]
+    timeline: Option<PathBuf>,
 }
 
 /// The output path, checked before any work so a bad path fails fast.
@@ -116,6 +120,7 @@ fn output_path(args: &RenderArgs, scene_name: &str) -> anyhow::Result<PathBuf> {
 }
 
 pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
+    let mut timeline = super::timeline::TimelineOutput::start(args.timeline.as_deref())?;
     let scene = splitray::scene::load(&args.scene)?;
     let output = output_path(args, &scene.name)?;
     let mut options = RenderOptions::resolve(
@@ -153,6 +158,9 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         device: args.device.clone(),
         ..Default::default()
     })?;
+    if let Some(t) = timeline.as_mut() {
+        t.attach(&gpu)?;
+    }
 
     let bar = match options.time_limit {
         // Timed: the bar runs over seconds; the message carries passes and samples/s.
@@ -211,7 +219,10 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             messages.len()
         );
     }
-    let written = write_outputs(&output, &result.film, &result.metadata)?;
+    let written = {
+        let _span = tracing::info_span!("write outputs").entered();
+        write_outputs(&output, &result.film, &result.metadata)?
+    };
     let s = &result.stats;
     println!(
         "{}: {}x{} {} spp, {} + {} on {} in {:.3} s: {} rays, {:.2} Mrays/s, peak GPU memory {:.1} MiB",
@@ -236,12 +247,15 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         println!("relative MSE against the reference: {mse:.6e}");
     }
     if args.profile {
-        print!("{}", splitray::vk::ProfileLog::table_of(&s.kernels));
+        print!("{}", s.profile.table());
     }
     if let Some(path) = &args.stats {
         let json = serde_json::to_vec_pretty(s)?;
         splitray::film::atomic::write_bytes_atomically(path, &json)
             .with_context(|| format!("cannot write {}", path.display()))?;
+    }
+    if let Some(t) = timeline {
+        t.finish(&super::timeline::command_line())?;
     }
     Ok(())
 }

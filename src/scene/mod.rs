@@ -469,6 +469,7 @@ pub fn framing_camera(bounds: &Aabb) -> Camera {
 /// file, or a path to an `.obj` mesh (which gets a framing camera and a 512×512 film).
 /// The result is validated ([`validate::validate_scene`]).
 pub fn load(spec: &str) -> Result<Scene, SceneError> {
+    let _span = tracing::info_span!("scene load", what = spec).entered();
     if let Some(scene) = builtin(spec) {
         return Ok(scene);
     }

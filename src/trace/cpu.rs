@@ -69,9 +69,18 @@ pub fn occluded(ray: &Ray, triangles: &[GpuTriangle]) -> bool {
     })
 }
 
-/// Brute-force closest hits of many rays, in parallel on the CPU.
+/// Brute-force closest hits of many rays, in parallel on the CPU (in chunks, each a
+/// span on its worker's timeline track).
 pub fn closest_hits(rays: &[Ray], triangles: &[GpuTriangle]) -> Vec<Hit> {
-    rays.par_iter().map(|r| closest_hit(r, triangles)).collect()
+    rays.par_chunks(4096)
+        .flat_map_iter(|chunk| {
+            let _span = tracing::info_span!("cpu closest hits", rays = chunk.len()).entered();
+            chunk
+                .iter()
+                .map(|r| closest_hit(r, triangles))
+                .collect::<Vec<_>>()
+        })
+        .collect()
 }
 
 /// `true` when two hit records agree: both miss, or both hit with t equal within

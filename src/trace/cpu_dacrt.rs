@@ -427,7 +427,9 @@ impl Tracer for CpuDacrtTracer {
             let mut host_rays = rays.read::<Ray>()?;
             host_rays.truncate(n);
             let start = Instant::now();
+            let span = tracing::info_span!("cpu-dacrt trace", rays = n as u64).entered();
             let (host_hits, stats) = trace(&host_rays, &self.triangles, query, &self.params);
+            drop(span);
             self.last_time = start.elapsed();
             self.last_stats = stats;
             // `read` drained the main stream and `after` is reached: nothing on the GPU

@@ -185,6 +185,7 @@ impl Gpu {
         unsafe { device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) }
             .call("vkBindBufferMemory")?;
         let now = self.0.memory.add(allocation.size());
+        crate::timeline_counter!("GPU memory", "bytes", now);
         // `RUST_LOG=splitray::vk=trace` lists every allocation: what makes up a peak.
         log::trace!("alloc {name} {} bytes, {now} in all", allocation.size());
         self.set_object_name(raw, name);
@@ -270,6 +271,8 @@ impl Buffer {
         if bytes.is_empty() {
             return Ok(());
         }
+        let _span =
+            tracing::info_span!("upload", what = %self.name, bytes = bytes.len() as u64).entered();
         if let Some(ptr) = self.allocation.as_ref().and_then(|a| a.mapped_ptr()) {
             // SAFETY: the allocation is mapped, at least `size` bytes long, and not in use
             // by the GPU (the caller's contract); the ranges cannot overlap.
@@ -300,6 +303,8 @@ impl Buffer {
         if bytes == 0 {
             return Ok(out);
         }
+        let _span =
+            tracing::info_span!("readback", what = %self.name, bytes = bytes as u64).entered();
         if let Some(ptr) = self.allocation.as_ref().and_then(|a| a.mapped_ptr()) {
             // Order the read after main-stream work that may write this buffer.
             let rec = self.gpu.recorder(super::StreamKind::Main)?;
@@ -333,6 +338,7 @@ impl Drop for Buffer {
     fn drop(&mut self) {
         if let Some(allocation) = self.allocation.take() {
             let now = self.gpu.0.memory.sub(allocation.size());
+            crate::timeline_counter!("GPU memory", "bytes", now);
             log::trace!(
                 "free {} {} bytes, {now} in all",
                 self.name,

@@ -7,7 +7,7 @@ use super::buffer::{Buffer, BufferSlice};
 use super::device::{Gpu, InFlight, QUERIES_PER_POOL};
 use super::error::{CallContext, Result, VkError};
 use super::pipeline::ComputePipeline;
-use super::profiler::QueryBatch;
+use super::profiler::{QueryBatch, ScopeInfo, ScopeQueries};
 use super::stream::{StreamKind, TimelinePoint};
 
 /// Records one command buffer for one stream. Every dispatch is named (debug label and
@@ -19,8 +19,11 @@ pub struct Recorder {
     pool: vk::CommandPool,
     cmd: vk::CommandBuffer,
     queries: QueryBatch,
-    open_scopes: Vec<(String, u32)>,
+    /// Indices into `queries.scopes` of the scopes still open, outermost first.
+    open_scopes: Vec<usize>,
     submitted: bool,
+    /// Host time spent recording, for timelines: from [`Gpu::recorder`] to submission.
+    span: tracing::Span,
 }
 
 /// Workgroup counts for `n` items in groups of `workgroup_size`, folded into y when x
@@ -40,6 +43,7 @@ pub fn grid_for(gpu: &Gpu, n: u64, workgroup_size: u32) -> [u32; 3] {
 impl Gpu {
     /// Starts recording a command buffer for `stream`.
     pub fn recorder(&self, stream: StreamKind) -> Result<Recorder> {
+        let span = tracing::info_span!("record", what = stream.name());
         self.reclaim(stream)?;
         let state = self.stream(stream);
         let device = &self.0.raw;
@@ -73,6 +77,7 @@ impl Gpu {
             queries: QueryBatch::default(),
             open_scopes: Vec::new(),
             submitted: false,
+            span,
         })
     }
 }
@@ -163,25 +168,57 @@ impl Recorder {
     /// Opens a named scope: a debug label and a timestamp pair around everything
     /// recorded until the matching [`Recorder::end_scope`].
     pub fn begin_scope(&mut self, name: &str) -> Result<()> {
+        self.begin_scope_with(name, ScopeInfo::default())
+    }
+
+    fn begin_scope_with(&mut self, name: &str, info: ScopeInfo) -> Result<()> {
         self.label_begin(name);
-        let q = self.timestamp()?;
-        // A `u32::MAX` marks "no timestamps on this queue".
-        self.open_scopes
-            .push((name.to_string(), q.unwrap_or(u32::MAX)));
+        let begin = self.timestamp()?;
+        self.open_scopes.push(self.queries.scopes.len());
+        self.queries.scopes.push(ScopeQueries {
+            name: name.to_string(),
+            begin,
+            end: None,
+            depth: self.open_scopes.len() as u32 - 1,
+            info,
+        });
         Ok(())
     }
 
     pub fn end_scope(&mut self) -> Result<()> {
-        let (name, begin) = self
+        let index = self
             .open_scopes
             .pop()
             .ok_or_else(|| VkError::Usage("end_scope without begin_scope".into()))?;
         let end = self.timestamp()?;
         self.label_end();
-        if let Some(end) = end {
-            self.queries.scopes.push((name, begin, end));
-        }
+        self.queries.scopes[index].end = end;
         Ok(())
+    }
+
+    /// Records a dispatch of `groups` workgroups inside a scope under the kernel's name.
+    fn dispatch_scope(
+        &mut self,
+        pipeline: &ComputePipeline,
+        bindings: &[BufferSlice<'_>],
+        groups: [u32; 3],
+        items: Option<u64>,
+    ) -> Result<()> {
+        let info = ScopeInfo {
+            workgroups: Some(groups),
+            items,
+            bytes_bound: Some(bindings.iter().map(|b| b.size).sum()),
+            first_use: pipeline.mark_dispatched(),
+        };
+        self.begin_scope_with(pipeline.name(), info)?;
+        // SAFETY: recording with a bound compute pipeline and pushed descriptors (the
+        // callers bind first); for ray-query kernels the acceleration structure is alive
+        // (borrowed by the caller) and built earlier on the timeline.
+        unsafe {
+            self.device()
+                .cmd_dispatch(self.cmd, groups[0], groups[1], groups[2])
+        };
+        self.end_scope()
     }
 
     fn bind(
@@ -299,6 +336,18 @@ impl Recorder {
         push: &P,
         groups: [u32; 3],
     ) -> Result<()> {
+        self.dispatch_counted(pipeline, bindings, bytemuck::bytes_of(push), groups, None)
+    }
+
+    /// [`Recorder::dispatch`] for `items` items where the caller counted them.
+    fn dispatch_counted(
+        &mut self,
+        pipeline: &ComputePipeline,
+        bindings: &[BufferSlice<'_>],
+        push: &[u8],
+        groups: [u32; 3],
+        items: Option<u64>,
+    ) -> Result<()> {
         let max = self.gpu.info().limits.max_compute_work_group_count;
         if groups.iter().zip(max).any(|(g, m)| *g > m) {
             return Err(VkError::Usage(format!(
@@ -306,17 +355,11 @@ impl Recorder {
                 pipeline.name()
             )));
         }
-        self.bind(pipeline, bindings, bytemuck::bytes_of(push))?;
+        self.bind(pipeline, bindings, push)?;
         if groups.contains(&0) {
             return Ok(());
         }
-        self.begin_scope(pipeline.name())?;
-        // SAFETY: recording with a bound compute pipeline and pushed descriptors.
-        unsafe {
-            self.device()
-                .cmd_dispatch(self.cmd, groups[0], groups[1], groups[2])
-        };
-        self.end_scope()
+        self.dispatch_scope(pipeline, bindings, groups, items)
     }
 
     /// Dispatches enough workgroups for `n` items of a kernel made with
@@ -334,14 +377,7 @@ impl Recorder {
         if groups.contains(&0) {
             return Ok(());
         }
-        self.begin_scope(pipeline.name())?;
-        // SAFETY: recording with a bound compute pipeline and pushed descriptors; the
-        // acceleration structure is alive (borrowed) and built earlier on the timeline.
-        unsafe {
-            self.device()
-                .cmd_dispatch(self.cmd, groups[0], groups[1], groups[2])
-        };
-        self.end_scope()
+        self.dispatch_scope(pipeline, bindings, groups, Some(n))
     }
 
     /// Dispatches enough workgroups for `n` items (see [`grid_for`]).
@@ -353,7 +389,13 @@ impl Recorder {
         n: u64,
     ) -> Result<()> {
         let groups = grid_for(&self.gpu, n, pipeline.workgroup_size());
-        self.dispatch(pipeline, bindings, push, groups)
+        self.dispatch_counted(
+            pipeline,
+            bindings,
+            bytemuck::bytes_of(push),
+            groups,
+            Some(n),
+        )
     }
 
     /// Records a dispatch whose workgroup counts are read from `args` at `offset`
@@ -367,7 +409,12 @@ impl Recorder {
         offset: u64,
     ) -> Result<()> {
         self.bind(pipeline, bindings, bytemuck::bytes_of(push))?;
-        self.begin_scope(pipeline.name())?;
+        let info = ScopeInfo {
+            bytes_bound: Some(bindings.iter().map(|b| b.size).sum()),
+            first_use: pipeline.mark_dispatched(),
+            ..Default::default()
+        };
+        self.begin_scope_with(pipeline.name(), info)?;
         // SAFETY: recording; args is an indirect-capable buffer of this device.
         unsafe {
             self.device()
@@ -518,9 +565,18 @@ impl Recorder {
         let device = &gpu.0.raw;
         // SAFETY: recording started in Gpu::recorder.
         unsafe { device.end_command_buffer(self.cmd) }.call("vkEndCommandBuffer")?;
+        // Recording ends here; the submission is a span of its own.
+        drop(std::mem::replace(&mut self.span, tracing::Span::none()));
         let stream = gpu.stream(self.stream);
         let mut state = stream.state.lock().unwrap();
         let value = state.last_value + 1;
+        let _span = tracing::info_span!(
+            "submit",
+            what = %format_args!("{}@{value}", self.stream.name()),
+            stream = self.stream.name(),
+            value
+        )
+        .entered();
         let mut wait_infos: Vec<vk::SemaphoreSubmitInfo> = waits
             .iter()
             .map(|p| {
@@ -547,6 +603,7 @@ impl Recorder {
             .wait_semaphore_infos(&wait_infos)
             .command_buffer_infos(&cmds)
             .signal_semaphore_infos(&signal);
+        let submitted = std::time::Instant::now();
         {
             let queue = gpu.0.queues[stream.queue].lock().unwrap();
             // SAFETY: the queue is externally synchronised by its mutex; the command
@@ -559,6 +616,7 @@ impl Recorder {
             value,
             pool: self.pool,
             queries: std::mem::take(&mut self.queries),
+            submitted,
         });
         self.submitted = true;
         Ok(gpu.timeline_point(self.stream, value))

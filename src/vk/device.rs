@@ -5,14 +5,16 @@ use std::collections::VecDeque;
 use std::mem::ManuallyDrop;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
+use std::time::Instant;
 
 use ash::{ext, khr, vk};
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 
+use super::clock::Calibrator;
 use super::error::{CallContext, Result, VkError};
 use super::instance::{Instance, InstanceDesc};
 use super::physical::{self, PhysicalDeviceInfo};
-use super::profiler::{ProfileLog, QueryBatch};
+use super::profiler::{GpuBatch, ProfileLog, QueryBatch};
 use super::stream::{StreamKind, StreamMapping, StreamPlacement, TimelineHandle, TimelinePoint};
 
 /// How to open a device.
@@ -56,6 +58,9 @@ pub(crate) struct InFlight {
     pub(crate) value: u64,
     pub(crate) pool: vk::CommandPool,
     pub(crate) queries: QueryBatch,
+    /// When the host submitted it (timelines align GPU clocks at submission where the
+    /// device cannot calibrate them).
+    pub(crate) submitted: Instant,
 }
 
 pub(crate) struct StreamState {
@@ -92,6 +97,11 @@ pub(crate) struct GpuInner {
     pub(crate) queues: Vec<Mutex<vk::Queue>>,
     pub(crate) streams: Vec<StreamState>,
     pub(crate) profile: Mutex<ProfileLog>,
+    /// Every harvested command buffer's scopes while a timeline is kept
+    /// ([`Gpu::start_timeline`]); `None` otherwise, so that nothing is kept for nothing.
+    pub(crate) timeline: Mutex<Option<Vec<GpuBatch>>>,
+    /// Present where the device offers VK_KHR/EXT_calibrated_timestamps.
+    pub(crate) calibrator: Option<Calibrator>,
 }
 
 /// The device handle every other object holds.
@@ -137,6 +147,9 @@ impl Gpu {
         // them all; elsewhere the device is opened exactly as without them.
         let ray_query = info.capabilities.ray_query;
         let mut extensions = vec![khr::push_descriptor::NAME.as_ptr()];
+        if let Some(calibration) = info.calibration {
+            extensions.push(calibration.name().as_ptr());
+        }
         if ray_query {
             extensions.extend([
                 khr::acceleration_structure::NAME.as_ptr(),
@@ -242,6 +255,9 @@ impl Gpu {
                     .max(1),
             }
         });
+        let calibrator = info
+            .calibration
+            .map(|extension| Calibrator::new(&instance, &raw, extension));
         let debug_utils = instance
             .has_debug_utils()
             .then(|| ext::debug_utils::Device::new(&instance.raw, &raw));
@@ -258,6 +274,8 @@ impl Gpu {
             queues,
             streams,
             profile: Mutex::new(ProfileLog::default()),
+            timeline: Mutex::new(None),
+            calibrator,
         }));
         for s in &gpu.0.streams {
             gpu.set_object_name(s.timeline.raw, &format!("timeline:{}", s.kind.name()));
@@ -324,6 +342,13 @@ impl Gpu {
 
     /// Blocks until `point` has been reached.
     pub fn wait(&self, point: &TimelinePoint) -> Result<()> {
+        let _span = tracing::info_span!(
+            "wait",
+            what = %self.awaited(point),
+            stream = point.stream.name(),
+            value = point.value
+        )
+        .entered();
         let semaphores = [point.semaphore.raw];
         let values = [point.value];
         let info = vk::SemaphoreWaitInfo::default()
@@ -332,6 +357,21 @@ impl Gpu {
         // SAFETY: the semaphore belongs to this device.
         unsafe { self.0.raw.wait_semaphores(&info, u64::MAX) }.call("vkWaitSemaphores")?;
         self.reclaim(point.stream)
+    }
+
+    /// What a host wait waits for, as a timeline names it: the stream, the value and the
+    /// last outermost scope of the command buffer that signals it (when still in flight).
+    fn awaited(&self, point: &TimelinePoint) -> String {
+        let st = self.stream(point.stream).state.lock().unwrap();
+        let last_scope = st
+            .in_flight
+            .iter()
+            .find(|f| f.value == point.value)
+            .and_then(|f| f.queries.scopes.iter().rev().find(|s| s.depth == 0));
+        match last_scope {
+            Some(scope) => format!("{}@{} ({})", point.stream.name(), point.value, scope.name),
+            None => format!("{}@{}", point.stream.name(), point.value),
+        }
     }
 
     /// The value a stream's timeline has reached.
@@ -376,7 +416,7 @@ impl Gpu {
             }
         }
         for f in finished {
-            let records = super::profiler::read_batch(self, stream, &f.queries)?;
+            let records = super::profiler::read_batch(self, stream, &f.queries, f.value)?;
             // SAFETY: the pool's command buffers have completed (timeline reached).
             unsafe {
                 self.0
@@ -384,12 +424,33 @@ impl Gpu {
                     .reset_command_pool(f.pool, vk::CommandPoolResetFlags::empty())
             }
             .call("vkResetCommandPool")?;
+            if let Some(batches) = self.0.timeline.lock().unwrap().as_mut() {
+                batches.push(GpuBatch {
+                    stream: kind,
+                    submission: f.value,
+                    submitted: f.submitted,
+                    records: records.clone(),
+                });
+            }
             self.0.profile.lock().unwrap().records.extend(records);
             let mut st = stream.state.lock().unwrap();
             st.free_pools.push(f.pool);
             st.free_query_pools.extend(f.queries.pools);
         }
         Ok(())
+    }
+
+    /// Starts keeping every finished command buffer's scopes and submission time for a
+    /// timeline (until [`Gpu::take_timeline`]), independently of [`Gpu::take_profile`].
+    pub fn start_timeline(&self) {
+        *self.0.timeline.lock().unwrap() = Some(Vec::new());
+    }
+
+    /// Stops keeping command buffers for a timeline and returns those kept, in the order
+    /// they were harvested. Wait for the streams first ([`Gpu::wait_idle`]) so that all
+    /// finished work is in.
+    pub fn take_timeline(&self) -> Vec<GpuBatch> {
+        self.0.timeline.lock().unwrap().take().unwrap_or_default()
     }
 
     /// Takes the per-dispatch GPU times collected so far (after [`Gpu::wait_idle`] or

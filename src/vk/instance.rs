@@ -38,7 +38,7 @@ impl InstanceDesc {
 /// Owns the loader entry, the instance and (with validation) the debug messenger.
 pub struct Instance {
     /// Keeps libvulkan loaded for as long as the instance lives.
-    _entry: ash::Entry,
+    pub(crate) entry: ash::Entry,
     pub(crate) raw: ash::Instance,
     debug_utils: Option<(ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
     /// Boxed so the debug callback's user-data pointer stays valid.
@@ -141,7 +141,7 @@ impl Instance {
             None
         };
         Ok(Arc::new(Self {
-            _entry: entry,
+            entry,
             raw,
             debug_utils,
             log,

@@ -7,18 +7,21 @@
 
 mod accel;
 mod buffer;
+mod clock;
 mod command;
 mod device;
 mod error;
 mod instance;
 mod physical;
 mod pipeline;
+mod profile_tree;
 mod profiler;
 mod stream;
 mod validation;
 
 pub use accel::{AccelerationStructure, VERTEX_STRIDE};
 pub use buffer::{Buffer, BufferSlice, BufferUsage, MemoryKind};
+pub use clock::ClockCalibration;
 pub use command::{grid_for, Recorder};
 pub use device::{Gpu, GpuDesc};
 pub use error::{Result, VkError};
@@ -29,7 +32,8 @@ pub use physical::{
 pub use pipeline::{
     compute_pipeline, compute_pipeline_full_subgroups, ComputePipeline, PipelineDesc,
 };
-pub use profiler::{KernelTime, ProfileLog, ProfileRecord};
+pub use profile_tree::{ProfileNode, ProfileTree};
+pub use profiler::{GpuBatch, KernelTime, ProfileLog, ProfileRecord, ScopeInfo};
 pub use stream::{QueueSlot, StreamKind, StreamMapping, StreamPlacement, TimelinePoint};
 pub use validation::{ValidationMessage, SUPPRESSED};
 

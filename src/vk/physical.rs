@@ -2,7 +2,7 @@
 
 use std::ffi::CStr;
 
-use ash::{khr, vk};
+use ash::{ext, khr, vk};
 use serde::Serialize;
 
 use super::error::{CallContext, Result, VkError};
@@ -74,6 +74,13 @@ pub struct PhysicalDeviceInfo {
     pub queue_families: Vec<QueueFamilyInfo>,
     pub limits: LimitsInfo,
     pub capabilities: CapabilityInfo,
+    /// Time domains that VK_KHR/EXT_calibrated_timestamps can sample together with the
+    /// device's timestamps ("device", "clock-monotonic", ...); empty where neither
+    /// extension is offered. With "device" and a host domain, GPU timelines are placed
+    /// on the host clock by calibration rather than at submission.
+    pub calibrated_time_domains: Vec<String>,
+    #[serde(skip)]
+    pub(crate) calibration: Option<CalibrationExtension>,
     #[serde(skip)]
     pub(crate) raw: vk::PhysicalDevice,
     #[serde(skip)]
@@ -101,6 +108,8 @@ impl PhysicalDeviceInfo {
             queue_families: Vec::new(),
             limits,
             capabilities,
+            calibrated_time_domains: Vec::new(),
+            calibration: None,
             raw: vk::PhysicalDevice::null(),
             api_version_raw: vk::API_VERSION_1_3,
             type_rank: 0,
@@ -133,6 +142,66 @@ impl PhysicalDeviceInfo {
             missing.push("a compute queue".into());
         }
         missing
+    }
+}
+
+/// Which calibrated-timestamps extension a device offers (the KHR one where both are).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum CalibrationExtension {
+    Khr,
+    Ext,
+}
+
+impl CalibrationExtension {
+    pub(crate) fn name(self) -> &'static CStr {
+        match self {
+            Self::Khr => khr::calibrated_timestamps::NAME,
+            Self::Ext => ext::calibrated_timestamps::NAME,
+        }
+    }
+}
+
+/// The name `splitray info` and timeline metadata give a time domain.
+pub(crate) fn time_domain_name(domain: vk::TimeDomainKHR) -> String {
+    match domain {
+        vk::TimeDomainKHR::DEVICE => "device".into(),
+        vk::TimeDomainKHR::CLOCK_MONOTONIC => "clock-monotonic".into(),
+        vk::TimeDomainKHR::CLOCK_MONOTONIC_RAW => "clock-monotonic-raw".into(),
+        vk::TimeDomainKHR::QUERY_PERFORMANCE_COUNTER => "query-performance-counter".into(),
+        other => format!("time-domain-{}", other.as_raw()),
+    }
+}
+
+/// The time domains a device can calibrate, through whichever extension it offers.
+fn calibrateable_domains(
+    instance: &Instance,
+    pd: vk::PhysicalDevice,
+    exts: &[vk::ExtensionProperties],
+) -> (Option<CalibrationExtension>, Vec<vk::TimeDomainKHR>) {
+    let extension = if has_extension(exts, khr::calibrated_timestamps::NAME) {
+        CalibrationExtension::Khr
+    } else if has_extension(exts, ext::calibrated_timestamps::NAME) {
+        CalibrationExtension::Ext
+    } else {
+        return (None, Vec::new());
+    };
+    // SAFETY: valid physical device of this instance, which offers the extension.
+    let domains = unsafe {
+        match extension {
+            CalibrationExtension::Khr => {
+                khr::calibrated_timestamps::Instance::new(&instance.entry, &instance.raw)
+                    .get_physical_device_calibrateable_time_domains(pd)
+            }
+            CalibrationExtension::Ext => {
+                ext::calibrated_timestamps::Instance::new(&instance.entry, &instance.raw)
+                    .get_physical_device_calibrateable_time_domains(pd)
+            }
+        }
+    };
+    // A device that cannot list its domains is treated as one without calibration.
+    match domains {
+        Ok(d) if d.contains(&vk::TimeDomainKHR::DEVICE) => (Some(extension), d),
+        _ => (None, Vec::new()),
     }
 }
 
@@ -204,6 +273,7 @@ pub fn enumerate(instance: &Instance) -> Result<Vec<PhysicalDeviceInfo>> {
             _ => ("other", 4),
         };
         let v = p.api_version;
+        let (calibration, domains) = calibrateable_domains(instance, pd, &exts);
         out.push(PhysicalDeviceInfo {
             index,
             name: name_of(&p.device_name),
@@ -275,6 +345,8 @@ pub fn enumerate(instance: &Instance) -> Result<Vec<PhysicalDeviceInfo>> {
                 buffer_int64_atomics: f10.shader_int64 == vk::TRUE
                     && f12.shader_buffer_int64_atomics == vk::TRUE,
             },
+            calibrated_time_domains: domains.into_iter().map(time_domain_name).collect(),
+            calibration,
             raw: pd,
             api_version_raw: v,
             type_rank,

@@ -36,6 +36,8 @@ pub struct ComputePipeline {
     name: &'static str,
     /// Workgroup size along x (specialization constant 0).
     workgroup_size: u32,
+    /// Set by the first dispatch (drivers such as lavapipe compile at first use).
+    dispatched: std::sync::atomic::AtomicBool,
 }
 
 /// [`ComputePipeline::new`] with the description's fields as arguments: the form every
@@ -117,6 +119,7 @@ impl ComputePipeline {
         tlas_binding: bool,
         full_subgroups: bool,
     ) -> Result<Self> {
+        let _span = tracing::info_span!("create pipeline", what = desc.kernel.name).entered();
         let device = &gpu.0.raw;
         let words = ash::util::read_spv(&mut std::io::Cursor::new(desc.kernel.spirv))
             .map_err(|_| VkError::BadSpirv(desc.kernel.name))?;
@@ -238,6 +241,7 @@ impl ComputePipeline {
                 push_constant_bytes: desc.push_constant_bytes,
                 name: desc.kernel.name,
                 workgroup_size: desc.spec.first().copied().unwrap_or(1),
+                dispatched: Default::default(),
             })
         }
     }
@@ -248,6 +252,13 @@ impl ComputePipeline {
 
     pub fn workgroup_size(&self) -> u32 {
         self.workgroup_size
+    }
+
+    /// Notes a dispatch; true for the first.
+    pub(crate) fn mark_dispatched(&self) -> bool {
+        !self
+            .dispatched
+            .swap(true, std::sync::atomic::Ordering::Relaxed)
     }
 }
 

@@ -6,6 +6,7 @@
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
+use std::time::Instant;
 
 use ash::vk;
 use serde::Serialize;
@@ -13,6 +14,22 @@ use serde::Serialize;
 use super::device::{Gpu, StreamState, QUERIES_PER_POOL};
 use super::error::{CallContext, Result};
 use super::stream::StreamKind;
+
+/// What a scope knows about the work inside it (dispatches fill it in; plain scopes
+/// leave it empty).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct ScopeInfo {
+    /// Workgroups dispatched (x, y, z).
+    pub workgroups: Option<[u32; 3]>,
+    /// Items the dispatch covers, where the caller gave a count.
+    pub items: Option<u64>,
+    /// Bytes bound to the dispatch's storage-buffer bindings: an upper bound on what it
+    /// reads and writes.
+    pub bytes_bound: Option<u64>,
+    /// The pipeline's first dispatch: on drivers that compile shaders at first use
+    /// (lavapipe), its time includes the compilation.
+    pub first_use: bool,
+}
 
 /// One timed scope.
 #[derive(Clone, Debug, Serialize)]
@@ -22,6 +39,13 @@ pub struct ProfileRecord {
     /// GPU clock at scope start and end in nanoseconds (for queue timelines).
     pub start_ns: f64,
     pub end_ns: f64,
+    /// Nesting depth in its command buffer (0 = outermost). A command buffer's records
+    /// are contiguous in a [`ProfileLog`], in the order their scopes began, so depths
+    /// alone rebuild the nesting.
+    pub depth: u32,
+    /// The value the command buffer signals on its stream's timeline.
+    pub submission: u64,
+    pub info: ScopeInfo,
 }
 
 impl ProfileRecord {
@@ -30,12 +54,26 @@ impl ProfileRecord {
     }
 }
 
+/// The timed scopes of one submitted command buffer, with the host time of its
+/// submission (for timelines).
+#[derive(Clone, Debug)]
+pub struct GpuBatch {
+    pub stream: StreamKind,
+    pub submission: u64,
+    pub submitted: Instant,
+    pub records: Vec<ProfileRecord>,
+}
+
 /// Per-name totals.
 #[derive(Clone, Debug, Serialize)]
 pub struct KernelTime {
     pub name: String,
     pub count: usize,
+    /// Time inside scopes of this name, nested scopes included.
     pub total_ms: f64,
+    /// Time inside scopes of this name less the time of the scopes nested in them: the
+    /// self times of all names add up to the GPU time.
+    pub self_ms: f64,
     pub mean_ms: f64,
     pub max_ms: f64,
 }
@@ -49,20 +87,23 @@ pub struct ProfileLog {
 impl ProfileLog {
     /// Totals per scope name, longest total first.
     pub fn summary(&self) -> Vec<KernelTime> {
-        let mut by_name: BTreeMap<&str, (usize, f64, f64)> = BTreeMap::new();
-        for r in &self.records {
+        let self_ms = super::profile_tree::self_times_ms(&self.records);
+        let mut by_name: BTreeMap<&str, (usize, f64, f64, f64)> = BTreeMap::new();
+        for (r, own) in self.records.iter().zip(self_ms) {
             let e = by_name.entry(&r.name).or_default();
             let ms = r.duration_ms();
             e.0 += 1;
             e.1 += ms;
             e.2 = e.2.max(ms);
+            e.3 += own;
         }
         let mut out: Vec<_> = by_name
             .into_iter()
-            .map(|(name, (count, total_ms, max_ms))| KernelTime {
+            .map(|(name, (count, total_ms, max_ms, self_ms))| KernelTime {
                 name: name.to_string(),
                 count,
                 total_ms,
+                self_ms,
                 mean_ms: total_ms / count as f64,
                 max_ms,
             })
@@ -80,17 +121,22 @@ impl ProfileLog {
     pub fn table_of(rows: &[KernelTime]) -> String {
         let width = rows.iter().map(|r| r.name.len()).max().unwrap_or(6).max(6);
         let mut s = format!(
-            "{:<width$}  {:>7}  {:>11}  {:>10}  {:>10}\n",
-            "kernel", "count", "total ms", "mean ms", "max ms"
+            "{:<width$}  {:>7}  {:>11}  {:>11}  {:>10}  {:>10}\n",
+            "kernel", "count", "total ms", "self ms", "mean ms", "max ms"
         );
         for r in rows {
             let _ = writeln!(
                 s,
-                "{:<width$}  {:>7}  {:>11.3}  {:>10.4}  {:>10.4}",
-                r.name, r.count, r.total_ms, r.mean_ms, r.max_ms
+                "{:<width$}  {:>7}  {:>11.3}  {:>11.3}  {:>10.4}  {:>10.4}",
+                r.name, r.count, r.total_ms, r.self_ms, r.mean_ms, r.max_ms
             );
         }
         s
+    }
+
+    /// The scopes as a tree aggregated by path, with total and self times.
+    pub fn tree(&self) -> super::ProfileTree {
+        super::ProfileTree::from_records(&self.records)
     }
 
     pub fn extend(&mut self, other: ProfileLog) {
@@ -102,9 +148,19 @@ impl ProfileLog {
 #[derive(Default)]
 pub(crate) struct QueryBatch {
     pub(crate) pools: Vec<vk::QueryPool>,
-    /// (name, index of the begin query, index of the end query).
-    pub(crate) scopes: Vec<(String, u32, u32)>,
+    /// In the order the scopes began.
+    pub(crate) scopes: Vec<ScopeQueries>,
     pub(crate) next: u32,
+}
+
+/// One scope's queries: `None` where the queue writes no timestamps (or, for `end`,
+/// while the scope is open).
+pub(crate) struct ScopeQueries {
+    pub(crate) name: String,
+    pub(crate) begin: Option<u32>,
+    pub(crate) end: Option<u32>,
+    pub(crate) depth: u32,
+    pub(crate) info: ScopeInfo,
 }
 
 impl QueryBatch {
@@ -121,6 +177,7 @@ pub(crate) fn read_batch(
     gpu: &Gpu,
     stream: &StreamState,
     batch: &QueryBatch,
+    submission: u64,
 ) -> Result<Vec<ProfileRecord>> {
     if batch.scopes.is_empty() {
         return Ok(Vec::new());
@@ -147,18 +204,21 @@ pub(crate) fn read_batch(
     Ok(batch
         .scopes
         .iter()
-        .map(|(name, begin, end)| {
-            let t0 = raw[*begin as usize] & mask;
-            let t1 = raw[*end as usize] & mask;
+        .filter_map(|scope| {
+            let t0 = raw[scope.begin? as usize] & mask;
+            let t1 = raw[scope.end? as usize] & mask;
             // Masked subtraction handles a counter that wrapped inside the scope.
             let ticks = t1.wrapping_sub(t0) & mask;
             let start_ns = t0 as f64 * period;
-            ProfileRecord {
+            Some(ProfileRecord {
                 stream: stream.kind,
-                name: name.clone(),
+                name: scope.name.clone(),
                 start_ns,
                 end_ns: start_ns + ticks as f64 * period,
-            }
+                depth: scope.depth,
+                submission,
+                info: scope.info,
+            })
         })
         .collect())
 }

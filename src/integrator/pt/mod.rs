@@ -424,10 +424,13 @@ impl<'t> PtIntegrator<'t> {
         let mut n = n0;
         let mut bounce = 0u32;
         while n > 0 {
+            crate::timeline_counter!("pt", "live paths", n);
+            let _bounce = tracing::info_span!("pt bounce", bounce, paths = n).entered();
             self.params.active_count = n;
             self.params.bounce = bounce;
             let survivors = self.bounce(cur, n, &ready)?;
             if survivors == 0 {
+                crate::timeline_counter!("pt", "live paths", 0);
                 break;
             }
             ready = self.gather_survivors(cur, survivors)?;

@@ -160,7 +160,7 @@ impl PdacrtParams {
     ///   (docs/PERFORMANCE.md); on a GPU it is strictly fewer passes over the same data.
     /// - Devices with 64-bit buffer atomics reduce flushes atomically
     ///   ([`FlushReduce::AtomicMin`]): no sort by ray id, no per-entry arrays (bunny on
-    ///   lavapipe: 1 224 → 1 006 ms per frame, same session).
+    ///   lavapipe: 1 224 → 1 006 ms per frame, back to back).
     /// - The paper's α = β = 256 and N = T = 256 are for a GTX 580; on CPU devices
     ///   (lavapipe) a sweep on the bunny (512², primary rays, docs/PERFORMANCE.md) found
     ///   α = 64 with β = 256 about 2× faster than 256/256: each level costs a fixed
@@ -898,6 +898,7 @@ impl PdacrtTracer {
             term.rays += totals.term_rays;
             term.segment_count += totals.term_nodes;
 
+            crate::timeline_counter!("pdacrt", "rays per level", current.rays.total);
             self.stats.levels.push(LevelStats {
                 chunk: index,
                 level: depth,
@@ -1450,6 +1451,7 @@ impl Tracer for PdacrtTracer {
         query: Query,
         after: &[&TimelinePoint],
     ) -> vk::Result<TimelinePoint> {
+        let _span = tracing::info_span!("pdacrt trace", rays = ray_count).entered();
         self.stats = TraceStats::default();
         // Everything below runs on the main stream after `after`.
         let rec = self.gpu.recorder(StreamKind::Main)?;
@@ -1468,6 +1470,9 @@ impl Tracer for PdacrtTracer {
             self.trace_chunk(chunk, self.stats.chunks)?;
             self.stats.chunks += 1;
             offset += n;
+        }
+        if !self.stats.levels.is_empty() {
+            crate::timeline_counter!("pdacrt", "rays per level", 0);
         }
         self.gpu.recorder(StreamKind::Main)?.submit(&[])
     }

@@ -1,0 +1,134 @@
+//! `--timeline FILE.json` on `render` and `bench`, and `splitray timeline` (a trace
+//! drawn as SVG or PNG).
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context};
+use clap::Args;
+use splitray::film::atomic::write_bytes_atomically;
+use splitray::timeline::{self, draw::DrawOptions, Capture, ClockAlignment};
+use splitray::vk::Gpu;
+
+/// The folder of `path` (the current one for a bare file name).
+fn folder_of(path: &Path) -> &Path {
+    path.parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."))
+}
+
+/// Checks an output path before any work: its extension is one of `extensions` and its
+/// folder exists. Returns the extension.
+fn check_output(path: &Path, extensions: &[&str]) -> anyhow::Result<String> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .unwrap_or_default();
+    if !extensions.contains(&ext.as_str()) {
+        bail!(
+            "{}: the output must be a {} file",
+            path.display(),
+            extensions
+                .iter()
+                .map(|e| format!(".{e}"))
+                .collect::<Vec<_>>()
+                .join(" or ")
+        );
+    }
+    let folder = folder_of(path);
+    if !folder.is_dir() {
+        bail!(
+            "{}: the folder {} does not exist",
+            path.display(),
+            folder.display()
+        );
+    }
+    Ok(ext)
+}
+
+/// A timeline being recorded for `--timeline FILE.json`.
+pub struct TimelineOutput {
+    path: PathBuf,
+    capture: Capture,
+}
+
+impl TimelineOutput {
+    /// Checks the path and starts recording host spans, or does nothing without a path.
+    pub fn start(path: Option<&Path>) -> anyhow::Result<Option<Self>> {
+        let Some(path) = path else {
+            return Ok(None);
+        };
+        check_output(path, &["json"])?;
+        Ok(Some(Self {
+            path: path.to_path_buf(),
+            capture: Capture::start()?,
+        }))
+    }
+
+    /// Records `gpu`'s streams too.
+    pub fn attach(&mut self, gpu: &Gpu) -> anyhow::Result<()> {
+        Ok(self.capture.attach(gpu)?)
+    }
+
+    /// Stops recording and writes the file (atomically); `command` goes into its metadata.
+    pub fn finish(self, command: &str) -> anyhow::Result<()> {
+        let mut trace = self.capture.finish()?.trace(ClockAlignment::Best);
+        trace
+            .metadata
+            .insert("command".into(), serde_json::Value::String(command.into()));
+        write_bytes_atomically(&self.path, timeline::json::to_json(&trace).as_bytes())
+            .with_context(|| format!("cannot write {}", self.path.display()))?;
+        println!(
+            "wrote {} ({} tracks; open it in ui.perfetto.dev or chrome://tracing)",
+            self.path.display(),
+            trace.tracks.len()
+        );
+        Ok(())
+    }
+}
+
+/// The command line as run, for a timeline's metadata.
+pub fn command_line() -> String {
+    std::env::args().collect::<Vec<_>>().join(" ")
+}
+
+#[derive(Debug, Args)]
+pub struct TimelineArgs {
+    /// A trace-event JSON file (from `--timeline`).
+    input: PathBuf,
+    /// The chart: .svg or .png.
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Width in pixels.
+    #[arg(long, default_value_t = 1600)]
+    width: u32,
+    /// Draw from this time on (ms from the trace's start).
+    #[arg(long, value_name = "MS")]
+    from: Option<f64>,
+    /// Draw up to this time (ms from the trace's start).
+    #[arg(long, value_name = "MS")]
+    to: Option<f64>,
+}
+
+pub fn run(args: &TimelineArgs) -> anyhow::Result<()> {
+    let ext = check_output(&args.output, &["svg", "png"])?;
+    let text = std::fs::read_to_string(&args.input)
+        .with_context(|| format!("cannot read {}", args.input.display()))?;
+    let trace =
+        timeline::json::from_json(&text).with_context(|| format!("{}", args.input.display()))?;
+    let options = DrawOptions {
+        width: args.width,
+        from_ms: args.from,
+        to_ms: args.to,
+    };
+    let bytes = if ext == "png" {
+        timeline::draw::png(&trace, &options)?
+    } else {
+        timeline::draw::svg(&trace, &options)?.into_bytes()
+    };
+    write_bytes_atomically(&args.output, &bytes)
+        .with_context(|| format!("cannot write {}", args.output.display()))?;
+    print!("{}", trace.summary());
+    println!("wrote {}", args.output.display());
+    Ok(())
+}
