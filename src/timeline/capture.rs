@@ -297,6 +297,7 @@ impl Capture {
     /// host's where it can.
     pub fn attach(&mut self, gpu: &Gpu) -> Result<(), TimelineError> {
         gpu.start_timeline();
+        crate::timeline_counter!("GPU memory", "bytes", gpu.memory_bytes().0);
         let calibration = gpu.calibrate_clocks()?;
         self.gpu = Some((gpu.clone(), calibration));
         Ok(())

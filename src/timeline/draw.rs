@@ -183,8 +183,18 @@ pub fn svg(trace: &Trace, options: &DrawOptions) -> Result<String, TimelineError
                 .and_then(|a| a.as_str())
                 .map_or(String::new(), |a| format!("GPU clock aligned: {a}"))
         );
-        root.draw(&Text::new(title, (10, 10), ("sans-serif", 13).into_font()))
+        root.draw(&Text::new(title, (10, 6), ("sans-serif", 13).into_font()))
             .map_err(draw_error)?;
+        if let Some(command) = trace.metadata.get("command").and_then(|c| c.as_str()) {
+            root.draw(&Text::new(
+                command.to_string(),
+                (10, 22),
+                ("sans-serif", FONT_PX)
+                    .into_font()
+                    .color(&RGBColor(90, 90, 90)),
+            ))
+            .map_err(draw_error)?;
+        }
         let (left, right) = root.split_horizontally(LABEL_WIDTH);
         for (r, name) in &labels {
             let y = (TOP_PX + r * ROW_PX + 2) as i32;
@@ -215,11 +225,14 @@ pub fn svg(trace: &Trace, options: &DrawOptions) -> Result<String, TimelineError
         let y = |r: f64| total - r;
         chart
             .draw_series(bars.iter().map(|b| {
+                // A pixel of gap at the end of wide bars tells neighbours apart.
+                let x1 = if (b.x1 - b.x0) > 3.0 * ms_per_px {
+                    b.x1 - ms_per_px
+                } else {
+                    b.x1
+                };
                 Rectangle::new(
-                    [
-                        (b.x0, y(b.row as f64 + 0.08)),
-                        (b.x1, y(b.row as f64 + 0.92)),
-                    ],
+                    [(b.x0, y(b.row as f64 + 0.08)), (x1, y(b.row as f64 + 0.92))],
                     b.color.filled(),
                 )
             }))

@@ -121,6 +121,7 @@ pub(crate) const QUERIES_PER_POOL: u32 = 512;
 impl Gpu {
     /// Creates the instance, picks a device and opens it with every stream.
     pub fn new(desc: &GpuDesc) -> Result<Self> {
+        let _span = tracing::info_span!("open device").entered();
         let instance = Instance::new(desc.instance)?;
         let devices = physical::enumerate(&instance)?;
         let info = physical::select(&devices, desc.device.as_deref())?;
