@@ -10,9 +10,10 @@
 # Idempotent: does nothing (and needs no network) when everything is already present.
 set -euo pipefail
 
+# fonts-dejavu-core: a sans-serif font for the labels of `splitray timeline -o X.png`.
 packages=(
   libvulkan1 libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers vulkan-tools
-  libshaderc-dev glslang-dev spirv-tools pkg-config
+  libshaderc-dev glslang-dev spirv-tools pkg-config fonts-dejavu-core
 )
 
 missing=()
