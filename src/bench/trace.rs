@@ -13,8 +13,8 @@ use serde::Serialize;
 use super::workloads::{self, RayBatch, Workload};
 use crate::scene::Scene;
 use crate::trace::{
-    cpu, BruteForceTracer, GpuTriangle, Hit, LevelSplit, PdacrtParams, PdacrtTracer, Query, Ray,
-    Tracer, TracerKind,
+    cpu, BruteForceTracer, GpuTriangle, Hit, HostTiming, LevelSplit, PdacrtParams, PdacrtTracer,
+    Query, Ray, Tracer, TracerKind,
 };
 use crate::vk::{self, Buffer, Gpu};
 
@@ -77,6 +77,22 @@ pub struct TracerRow {
     /// Host round trips per frame (PDACRT's level loop), when the tracer counts them.
     pub host_round_trips: Option<u32>,
     pub levels: Option<usize>,
+    /// For tracers that trace on the CPU: their build and traversal alone.
+    pub host: Option<HostRow>,
+}
+
+/// A CPU tracer's own work per frame, GPU buffer transfers excluded (medians over the
+/// timed frames).
+#[derive(Clone, Debug, Serialize)]
+pub struct HostRow {
+    /// Building the acceleration structure (`set_geometry`).
+    pub build_ms: f64,
+    /// The traversals alone.
+    pub trace_ms: f64,
+    /// Rays per second of the traversals alone.
+    pub trace_mrays_per_s: f64,
+    /// Threads the traversal ran on (rayon's pool).
+    pub threads: usize,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -141,6 +157,18 @@ impl fmt::Display for TraceReport {
                     String::new()
                 }
             )?;
+            if let Some(h) = &r.host {
+                writeln!(
+                    f,
+                    "{:<12} on the host: build {:.2} ms, trace {:.2} ms = {:.2} Mrays/s on {} threads (frame less build and trace: {:.2} ms of ray and hit transfers)",
+                    "",
+                    h.build_ms,
+                    h.trace_ms,
+                    h.trace_mrays_per_s,
+                    h.threads,
+                    (r.frame_ms - h.build_ms - h.trace_ms).max(0.0)
+                )?;
+            }
             if let (Some(trips), Some(levels)) = (r.host_round_trips, r.levels) {
                 writeln!(
                     f,
@@ -203,13 +231,16 @@ struct Contender {
     peak: u64,
     baseline: u64,
     times: Vec<f64>,
+    /// Host build and trace times per timed frame (CPU tracers).
+    host: Vec<HostTiming>,
     kernels: Vec<vk::KernelTime>,
     profile: vk::ProfileTree,
     tracer: Option<Box<dyn Tracer>>,
 }
 
 /// One frame as a dynamic scene would run it: new geometry (PDACRT and the CPU DACRT
-/// only take the triangles; ray-query rebuilds), then every batch. Returns its ms.
+/// only take the triangles; ray-query and cpu-bvh rebuild), then every batch. Returns
+/// its ms.
 fn run_frame(
     gpu: &Gpu,
     tracer: &mut dyn Tracer,
@@ -411,6 +442,7 @@ pub fn run(
             peak,
             baseline,
             times: Vec::new(),
+            host: Vec::new(),
             kernels: Vec::new(),
             profile: Default::default(),
             tracer: None,
@@ -433,6 +465,7 @@ pub fn run(
             let tracer = c.tracer.as_deref_mut().expect("created above");
             let ms = run_frame(gpu, tracer, &triangles, timed)?;
             c.times.push(ms * c.scale);
+            c.host.extend(tracer.host_timing());
             let log = gpu.take_profile();
             c.kernels = log.summary();
             c.profile = log.tree();
@@ -471,6 +504,7 @@ pub fn run(
             mismatches: c.mismatches,
             host_round_trips: trips,
             levels,
+            host: host_row(&c.host),
         });
     }
     Ok(TraceReport {
@@ -492,6 +526,30 @@ pub fn run(
             .contains(&TracerKind::Pdacrt)
             .then(|| opts.pdacrt.unwrap_or_else(|| PdacrtParams::for_device(gpu))),
         date: super::today(),
+    })
+}
+
+/// Medians of a CPU tracer's per-frame host timings (`None` for GPU tracers).
+fn host_row(frames: &[HostTiming]) -> Option<HostRow> {
+    if frames.is_empty() {
+        return None;
+    }
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    let ms = |d: std::time::Duration| d.as_secs_f64() * 1e3;
+    let trace_ms = median(frames.iter().map(|h| ms(h.trace)).collect());
+    Some(HostRow {
+        build_ms: median(frames.iter().map(|h| ms(h.build)).collect()),
+        trace_ms,
+        trace_mrays_per_s: median(
+            frames
+                .iter()
+                .map(|h| h.rays as f64 / (h.trace.as_secs_f64().max(1e-9) * 1e6))
+                .collect(),
+        ),
+        threads: rayon::current_num_threads(),
     })
 }
 

@@ -7,6 +7,7 @@ use super::types::{GpuTriangle, Hit, Ray, MISS};
 
 /// Möller–Trumbore, mirroring `intersect_triangle` in glsl/common/geometry.glsl operation
 /// for operation. Returns t in (tmin, tmax) or +inf, and the barycentrics (u, v).
+#[inline]
 pub fn intersect_triangle(
     o: Vec3,
     d: Vec3,

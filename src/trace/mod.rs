@@ -7,6 +7,7 @@
 
 pub mod brute_force;
 pub mod cpu;
+pub mod cpu_bvh;
 pub mod cpu_dacrt;
 pub mod pdacrt;
 pub mod ray_query;
@@ -16,6 +17,7 @@ use std::fmt;
 use std::str::FromStr;
 
 pub use brute_force::BruteForceTracer;
+pub use cpu_bvh::{CpuBvh, CpuBvhTracer};
 pub use cpu_dacrt::{CpuDacrtTracer, DacrtParams};
 pub use pdacrt::{FlushReduce, LevelSplit, PdacrtParams, PdacrtTracer};
 pub use ray_query::RayQueryTracer;
@@ -57,6 +59,23 @@ pub trait Tracer {
     fn level_stats(&self) -> Option<&pdacrt::TraceStats> {
         None
     }
+
+    /// Host time of the geometry build and of the traversals since the last
+    /// `set_geometry`, for tracers that trace on the CPU (GPU buffer transfers excluded).
+    fn host_timing(&self) -> Option<HostTiming> {
+        None
+    }
+}
+
+/// What a CPU tracer spent on the host since its last `set_geometry`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct HostTiming {
+    /// Building the acceleration structure (zero for tracers that build nothing).
+    pub build: std::time::Duration,
+    /// The traversals alone: rays read back and hits written are not included.
+    pub trace: std::time::Duration,
+    /// Rays traced in that time.
+    pub rays: u64,
 }
 
 /// The tracers a user can pick.
@@ -67,6 +86,7 @@ pub enum TracerKind {
     Pdacrt,
     BruteForce,
     CpuDacrt,
+    CpuBvh,
     RayQuery,
 }
 
@@ -85,6 +105,10 @@ impl TracerKind {
             "serial divide-and-conquer ray tracing on one CPU thread (Mora 2011): the baseline",
         ),
         (
+            TracerKind::CpuBvh,
+            "a BVH (obvhs: PLOC + 8-wide CWBVH) built and traced on every CPU core; rays and hits pass through host memory",
+        ),
+        (
             TracerKind::RayQuery,
             "the driver's BLAS/TLAS traced with VK_KHR_ray_query (where the device offers it)",
         ),
@@ -95,6 +119,7 @@ impl TracerKind {
             Self::Pdacrt => "pdacrt",
             Self::BruteForce => "brute-force",
             Self::CpuDacrt => "cpu-dacrt",
+            Self::CpuBvh => "cpu-bvh",
             Self::RayQuery => "ray-query",
         }
     }
@@ -105,6 +130,7 @@ impl TracerKind {
             Self::Pdacrt => Ok(Box::new(PdacrtTracer::new(gpu, triangles)?)),
             Self::BruteForce => Ok(Box::new(BruteForceTracer::new(gpu, triangles)?)),
             Self::CpuDacrt => Ok(Box::new(CpuDacrtTracer::new(gpu, triangles))),
+            Self::CpuBvh => Ok(Box::new(CpuBvhTracer::new(gpu, triangles))),
             Self::RayQuery => Ok(Box::new(RayQueryTracer::new(gpu, triangles)?)),
         }
     }

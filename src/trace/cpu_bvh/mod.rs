@@ -1,0 +1,258 @@
+//! CPU ray casting with a bounding volume hierarchy: closest-hit and occlusion queries of
+//! single, incoherent rays from many threads at once, for the CPU integrators (the CPU
+//! BPT, CBPT's CPU path sampling) and as the `cpu-bvh` tracer.
+//!
+//! # The crate: obvhs
+//!
+//! The hierarchy is built by [`obvhs`]: PLOC (Meister and Bittner 2018) over the
+//! triangles' boxes, parallel reinsertion, then collapse into an 8-wide compressed BVH
+//! (CWBVH, Ylitie et al. 2017), and traversed with obvhs's own `traverse!` loop (its
+//! octant-ordered child groups and stack). `obvhs` and `bvh` were measured on the bunny
+//! (docs/PERFORMANCE.md, "CPU BVH"): obvhs built its tree in a fraction of the time and
+//! traced primary and diffuse-bounce rays several times faster; `bvh` stores one triangle
+//! per leaf in a binary tree, offers closest-hit only as an iterator that cannot shrink
+//! the ray as hits are found, and requires Rust 1.90 (this crate targets 1.85).
+//!
+//! # What splitray adds, and why
+//!
+//! obvhs's `traverse!` takes the node test and the primitive test as arguments. splitray
+//! supplies both, so that every hit equals brute force ([`cpu::closest_hit`]) bit for
+//! bit (save on degenerate triangles, below):
+//! - **Primitive test**: [`cpu::intersect_triangle`], the arithmetic of every other
+//!   tracer and of the GPU kernels; a ray keeps the lexicographic minimum of (t, scene
+//!   index), so when two triangles meet a ray at the same t the smaller index wins however
+//!   the tree orders them, as in brute force.
+//! - **Node test** ([`node::WideNode::intersect`]): obvhs's own test culls every box the
+//!   ray leaves before t = 10⁻⁴ (an absolute distance: a scene a millimetre across would
+//!   vanish, and a ray starting on a surface misses its neighbours), and reads child boxes
+//!   quantised to 8 bits without a rounding margin. splitray keeps each child's exact box
+//!   (the union of its triangles' boxes, padded outwards by a small fraction of the scene
+//!   size), honours the ray's `tmin`, and widens the ray's segment by a relative 10⁻⁵, so
+//!   rounding can cost an extra box visit but never a hit. Zero direction components give
+//!   infinite slab distances and are handled exactly.
+//!
+//! Degenerate triangles (the scene's test: zero area within f32 precision relative to
+//! the edges, or non-finite; repeated vertices, collinear ones) are left out of the tree
+//! ([`is_hittable`]): a hit on one would have no normal to shade with. Here alone the BVH
+//! departs from brute force, whose Möller–Trumbore determinant e1 · (d × e2) is rounded
+//! differently from e1 × e2 and can be non-zero on such a triangle, so that it sometimes
+//! reports a hit on one. A ray with a NaN component or a non-finite origin or direction misses
+//! without being traced, as it does in brute force.
+
+mod build;
+mod node;
+mod tracer;
+
+use glam::{UVec2, Vec3};
+use obvhs::faststack::{FastStack, HeapStack, StackStack};
+pub use obvhs::BvhBuildParams;
+use rayon::prelude::*;
+
+use super::{cpu, GpuTriangle, Hit, Ray};
+pub use build::is_hittable;
+use node::{BoxRay, WideNode};
+pub use tracer::CpuBvhTracer;
+
+/// A BVH over one scene's triangles. Immutable once built, so any number of threads may
+/// query it at once (`Send + Sync`); [`CpuBvh::rebuild`] replaces the geometry.
+#[derive(Clone, Debug, Default)]
+pub struct CpuBvh {
+    nodes: Vec<WideNode>,
+    /// The triangles in leaf order (obvhs's `primitive_indices`), so that a leaf's
+    /// triangles are contiguous in memory.
+    triangles: Vec<GpuTriangle>,
+    /// Scene index of each entry of `triangles`.
+    scene_index: Vec<u32>,
+    /// Triangles in the scene, those left out of the tree included.
+    triangle_count: usize,
+    /// Node levels below the root: the traversal stack needs at most this many entries.
+    depth: u32,
+}
+
+/// Traversal state under the names obvhs's `traverse!` loop reads and writes.
+struct Traversal<S> {
+    stack: S,
+    current_group: UVec2,
+    primitive_group: UVec2,
+    oct_inv4: u32,
+    primitive_id: u32,
+    hitmask: u32,
+}
+
+/// obvhs's build preset: PLOC search radius 14, reinsertion of 5% of the nodes, up to 3
+/// triangles per leaf.
+pub const BUILD_PARAMS: BvhBuildParams = BvhBuildParams::medium_build();
+
+/// Depth up to which the traversal stack lives on the thread's stack; deeper trees
+/// (thousands of coincident triangles) use a heap stack of their own size.
+const INLINE_STACK: usize = 32;
+
+/// What a traversal looks for.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Mode {
+    Closest,
+    Any,
+}
+
+impl CpuBvh {
+    /// Builds the hierarchy over `triangles` (scene order), in parallel on rayon's pool.
+    pub fn new(triangles: &[GpuTriangle]) -> CpuBvh {
+        Self::with_params(triangles, BUILD_PARAMS)
+    }
+
+    /// Builds with obvhs parameters other than splitray's choice ([`BUILD_PARAMS`]).
+    pub fn with_params(triangles: &[GpuTriangle], params: BvhBuildParams) -> CpuBvh {
+        build::build(triangles, params)
+    }
+
+    /// Replaces the geometry, as a dynamic scene does every frame.
+    pub fn rebuild(&mut self, triangles: &[GpuTriangle]) {
+        *self = build::build(triangles, BUILD_PARAMS);
+    }
+
+    /// Triangles of the scene it was built from (those left out of the tree included).
+    pub fn triangle_count(&self) -> usize {
+        self.triangle_count
+    }
+
+    /// Nodes of the 8-wide tree.
+    pub fn node_count(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// Node levels of the tree (0 when empty).
+    pub fn depth(&self) -> u32 {
+        self.depth
+    }
+
+    /// The nearest hit in (tmin, tmax): the same record as [`cpu::closest_hit`].
+    pub fn closest_hit(&self, ray: &Ray) -> Hit {
+        self.trace(ray, Mode::Closest)
+    }
+
+    /// Whether anything blocks the ray in (tmin, tmax); stops at the first blocker found.
+    pub fn occluded(&self, ray: &Ray) -> bool {
+        self.trace(ray, Mode::Any).is_hit()
+    }
+
+    /// The first blocker found in (tmin, tmax), or [`Hit::NONE`]: a real hit of that
+    /// triangle, not necessarily the nearest (what an occlusion query writes).
+    pub fn any_hit(&self, ray: &Ray) -> Hit {
+        self.trace(ray, Mode::Any)
+    }
+
+    /// [`CpuBvh::any_hit`] of every ray, in parallel.
+    pub fn any_hits(&self, rays: &[Ray]) -> Vec<Hit> {
+        rays.par_iter()
+            .with_min_len(RAYS_PER_TASK)
+            .map(|r| self.any_hit(r))
+            .collect()
+    }
+
+    /// [`CpuBvh::closest_hit`] of every ray, in parallel.
+    pub fn closest_hits(&self, rays: &[Ray]) -> Vec<Hit> {
+        rays.par_iter()
+            .with_min_len(RAYS_PER_TASK)
+            .map(|r| self.closest_hit(r))
+            .collect()
+    }
+
+    /// [`CpuBvh::occluded`] of every ray, in parallel.
+    pub fn occluded_all(&self, rays: &[Ray]) -> Vec<bool> {
+        rays.par_iter()
+            .with_min_len(RAYS_PER_TASK)
+            .map(|r| self.occluded(r))
+            .collect()
+    }
+
+    fn trace(&self, ray: &Ray, mode: Mode) -> Hit {
+        let origin = Vec3::from(ray.origin);
+        let dir = Vec3::from(ray.dir);
+        if self.nodes.is_empty()
+            || !origin.is_finite()
+            || !dir.is_finite()
+            || ray.tmin.is_nan()
+            || ray.tmax.is_nan()
+        {
+            return Hit::NONE;
+        }
+        if self.depth as usize <= INLINE_STACK {
+            let stack = StackStack::<UVec2, INLINE_STACK>::default();
+            self.traverse(stack, ray, origin, dir, mode)
+        } else {
+            let stack = HeapStack::<UVec2>::new_with_capacity(self.depth as usize + 1);
+            self.traverse(stack, ray, origin, dir, mode)
+        }
+    }
+
+    #[inline(always)]
+    fn traverse<S: FastStack<UVec2>>(
+        &self,
+        stack: S,
+        ray: &Ray,
+        origin: Vec3,
+        dir: Vec3,
+        mode: Mode,
+    ) -> Hit {
+        let box_ray = BoxRay {
+            origin,
+            inv_dir: dir.recip(),
+            negative: [
+                dir.x.is_sign_negative(),
+                dir.y.is_sign_negative(),
+                dir.z.is_sign_negative(),
+            ],
+            tmin: ray.tmin,
+        };
+        // Children are visited in the order of obvhs's octant (its convention: a set bit
+        // for each non-negative component).
+        let oct_inv4 = (if dir.x < 0.0 { 0 } else { 0x0404_0404 })
+            | (if dir.y < 0.0 { 0 } else { 0x0202_0202 })
+            | (if dir.z < 0.0 { 0 } else { 0x0101_0101 });
+        let mut state = Traversal {
+            stack,
+            current_group: UVec2::new(0, 0x8000_0000),
+            primitive_group: UVec2::ZERO,
+            oct_inv4,
+            primitive_id: 0,
+            hitmask: 0,
+        };
+        let mut best = Hit::NONE;
+        let mut node;
+        'search: {
+            obvhs::traverse!(
+                self,
+                node,
+                state,
+                node.intersect(&box_ray, ray.tmax.min(best.t), state.oct_inv4),
+                {
+                    let i = state.primitive_id as usize;
+                    let (t, u, v) = cpu::intersect_triangle(
+                        origin,
+                        dir,
+                        ray.tmin,
+                        ray.tmax,
+                        &self.triangles[i],
+                    );
+                    let index = self.scene_index[i];
+                    if t < best.t || (t == best.t && t.is_finite() && index < best.triangle) {
+                        best = Hit {
+                            t,
+                            triangle: index,
+                            u,
+                            v,
+                        };
+                        if mode == Mode::Any {
+                            break 'search;
+                        }
+                    }
+                }
+            );
+        }
+        best
+    }
+}
+
+/// Rays per rayon task at least: enough to amortise a task, few enough to balance two
+/// to hundreds of threads on a million rays.
+const RAYS_PER_TASK: usize = 256;
