@@ -75,7 +75,9 @@ enum BenchCommand {
         /// per hit) or path (7 diffuse bounces).
         #[arg(long, default_value = "primary")]
         workload: Workload,
-        /// Comma-separated tracers to compare.
+        /// Comma-separated tracers to compare: pdacrt, brute-force, cpu-dacrt, cpu-bvh
+        /// (also prints its BVH build time and trace rate without GPU transfers),
+        /// ray-query.
         #[arg(long, value_delimiter = ',', default_value = "pdacrt,brute-force")]
         tracers: Vec<TracerKind>,
         /// Timed frames per tracer (at least 5, after a warm-up frame).

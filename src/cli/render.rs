@@ -54,7 +54,8 @@ pub struct RenderArgs {
     #[arg(long, default_value = "mis")]
     strategy: splitray::integrator::pt::Strategy,
     /// How rays are cast: pdacrt (default; no acceleration structure), brute-force (the
-    /// oracle), cpu-dacrt (serial CPU baseline) or ray-query (driver BVH, where offered).
+    /// oracle), cpu-dacrt (serial CPU baseline), cpu-bvh (a BVH built and traced on every
+    /// CPU core) or ray-query (driver BVH, where offered).
     #[arg(long)]
     tracer: Option<TracerKind>,
     /// Vulkan device by index or name substring (see `splitray info`); also SPLITRAY_DEVICE.

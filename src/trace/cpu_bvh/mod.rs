@@ -176,7 +176,11 @@ impl CpuBvh {
         {
             return Hit::NONE;
         }
-        if self.depth as usize <= INLINE_STACK {
+        // The stack holds at most one entry per level; a small one is cheaper to clear.
+        if self.depth <= 16 {
+            let stack = StackStack::<UVec2, 16>::default();
+            self.traverse(stack, ray, origin, dir, mode)
+        } else if self.depth as usize <= INLINE_STACK {
             let stack = StackStack::<UVec2, INLINE_STACK>::default();
             self.traverse(stack, ray, origin, dir, mode)
         } else {
@@ -234,16 +238,18 @@ impl CpuBvh {
                         ray.tmax,
                         &self.triangles[i],
                     );
-                    let index = self.scene_index[i];
-                    if t < best.t || (t == best.t && t.is_finite() && index < best.triangle) {
-                        best = Hit {
-                            t,
-                            triangle: index,
-                            u,
-                            v,
-                        };
-                        if mode == Mode::Any {
-                            break 'search;
+                    if t <= best.t && t.is_finite() {
+                        let index = self.scene_index[i];
+                        if t < best.t || index < best.triangle {
+                            best = Hit {
+                                t,
+                                triangle: index,
+                                u,
+                                v,
+                            };
+                            if mode == Mode::Any {
+                                break 'search;
+                            }
                         }
                     }
                 }

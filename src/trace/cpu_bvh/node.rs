@@ -139,7 +139,9 @@ impl WideNode {
                 t0 = nan_ignoring_max(t0, (near - o) * inv);
                 t1 = nan_ignoring_min(t1, (far - o) * inv);
             }
-            let hit = t0 - T_MARGIN * t0.abs() <= t1 + T_MARGIN * t1.abs();
+            // t1 widened by both ends' margins: conservative whatever the signs (when t1
+            // < 0 < t0 the exact test rejects too).
+            let hit = t0 <= t1 + 2.0 * T_MARGIN * t1.abs();
             entered |= (hit as u32) << c;
         }
         if entered == 0 {
