@@ -41,13 +41,15 @@ pub(super) fn build(triangles: &[GpuTriangle], params: BvhBuildParams) -> CpuBvh
     let leaf_bounds: Vec<(Vec3, Vec3)> = order.iter().map(|&p| bounds[p as usize]).collect();
     let scene_index: Vec<u32> = order.iter().map(|&p| kept[p as usize]).collect();
     let mut nodes: Vec<WideNode> = cwbvh.nodes.iter().map(WideNode::from_compressed).collect();
-    let depth = set_exact_boxes(&mut nodes, &leaf_bounds, box_padding(&leaf_bounds));
+    let pad = box_padding(&leaf_bounds);
+    let (depth, (lo, hi)) = set_exact_boxes(&mut nodes, &leaf_bounds, pad);
     CpuBvh {
         nodes,
         triangles: scene_index.iter().map(|&i| triangles[i as usize]).collect(),
         scene_index,
         triangle_count: triangles.len(),
         depth,
+        bounds: (lo - pad, hi + pad),
     }
 }
 
@@ -97,10 +99,14 @@ fn box_padding(bounds: &[(Vec3, Vec3)]) -> f32 {
 }
 
 /// Replaces every child's quantised box by the exact union of its triangles' boxes,
-/// padded by `pad`, and returns the tree's depth in node levels. Children always come
+/// padded by `pad`, and returns the tree's depth in node levels and the root's box. Children always come
 /// after their parent in obvhs's node order, so one backwards pass sees every child
 /// before its parent.
-fn set_exact_boxes(nodes: &mut [WideNode], leaf_bounds: &[(Vec3, Vec3)], pad: f32) -> u32 {
+fn set_exact_boxes(
+    nodes: &mut [WideNode],
+    leaf_bounds: &[(Vec3, Vec3)],
+    pad: f32,
+) -> (u32, (Vec3, Vec3)) {
     let mut node_bounds = vec![(Vec3::INFINITY, Vec3::NEG_INFINITY); nodes.len()];
     let mut depth = vec![1u32; nodes.len()];
     for n in (0..nodes.len()).rev() {
@@ -126,7 +132,7 @@ fn set_exact_boxes(nodes: &mut [WideNode], leaf_bounds: &[(Vec3, Vec3)], pad: f3
         }
         node_bounds[n] = union;
     }
-    depth[0]
+    (depth[0], node_bounds[0])
 }
 
 #[cfg(test)]

@@ -67,6 +67,8 @@ pub struct CpuBvh {
     triangle_count: usize,
     /// Node levels below the root: the traversal stack needs at most this many entries.
     depth: u32,
+    /// The root's box, padded like every child box: rays that miss it skip the traversal.
+    bounds: (Vec3, Vec3),
 }
 
 /// Traversal state under the names obvhs's `traverse!` loop reads and writes.
@@ -208,6 +210,11 @@ impl CpuBvh {
             ],
             tmin: ray.tmin,
         };
+        // Rays that miss the root box skip the rest (the stack's clearing is sunk past this).
+        if !node::segment_meets(&box_ray, ray.tmax, self.bounds.0, self.bounds.1) {
+            return Hit::NONE;
+        }
+
         // Children are visited in the order of obvhs's octant (its convention: a set bit
         // for each non-negative component).
         let oct_inv4 = (if dir.x < 0.0 { 0 } else { 0x0404_0404 })

@@ -42,27 +42,16 @@ pub(super) struct BoxRay {
 const T_MARGIN: f32 = 1e-5;
 
 impl WideNode {
+    /// The node's structure; every child box starts empty (no ray enters it) until
+    /// [`WideNode::set_child_box`] stores the exact one.
     pub(super) fn from_compressed(node: &CwBvhNode) -> Self {
-        let mut lo = [[f32::INFINITY; 8]; 3];
-        let mut hi = [[f32::NEG_INFINITY; 8]; 3];
-        // Until the exact boxes are filled in, every occupied slot gets the quantised box
-        // (only used if a caller forgets `set_child_box`: debug builds check it).
-        for child in 0..8 {
-            if !node.is_child_empty(child) {
-                let b = node.child_aabb(child);
-                for axis in 0..3 {
-                    lo[axis][child] = b.min[axis];
-                    hi[axis][child] = b.max[axis];
-                }
-            }
-        }
         Self {
             child_base_idx: node.child_base_idx,
             primitive_base_idx: node.primitive_base_idx,
             imask: node.imask,
             child_meta: node.child_meta,
-            lo,
-            hi,
+            lo: [[f32::INFINITY; 8]; 3],
+            hi: [[f32::NEG_INFINITY; 8]; 3],
         }
     }
 
@@ -103,11 +92,7 @@ impl WideNode {
 
     /// The hit mask obvhs's `traverse!` expects from a node test (interior children in the
     /// top byte by traversal priority, leaf primitives in the low 24 bits), for the
-    /// children whose box the segment [max(tmin, box entry), min(`t_far`, box exit)]
-    /// meets. Conservative: rounding never drops a child the exact ray enters.
-    ///
-    /// NaN slab distances (a zero direction component with the origin exactly on a slab
-    /// plane: 0 · ∞) are skipped, i.e. the slab counts as entered.
+    /// children whose box the ray's segment (tmin, `t_far`) meets ([`segment_meets_box`]).
     #[inline(always)]
     pub(super) fn intersect(&self, ray: &BoxRay, t_far: f32, oct_inv4: u32) -> u32 {
         let mut entered = 0u32;
@@ -127,22 +112,10 @@ impl WideNode {
         };
         let (nx, ny, nz) = (near(0), near(1), near(2));
         let (fx, fy, fz) = (far(0), far(1), far(2));
-        let (o, inv) = (ray.origin, ray.inv_dir);
         for c in 0..8 {
-            let mut t0 = ray.tmin;
-            let mut t1 = t_far;
-            for (near, far, o, inv) in [
-                (nx[c], fx[c], o.x, inv.x),
-                (ny[c], fy[c], o.y, inv.y),
-                (nz[c], fz[c], o.z, inv.z),
-            ] {
-                t0 = nan_ignoring_max(t0, (near - o) * inv);
-                t1 = nan_ignoring_min(t1, (far - o) * inv);
-            }
-            // t1 widened by both ends' margins: conservative whatever the signs (when t1
-            // < 0 < t0 the exact test rejects too).
-            let hit = t0 <= t1 + 2.0 * T_MARGIN * t1.abs();
-            entered |= (hit as u32) << c;
+            let near = [nx[c], ny[c], nz[c]];
+            let far = [fx[c], fy[c], fz[c]];
+            entered |= (segment_meets_box(ray, t_far, near, far) as u32) << c;
         }
         if entered == 0 {
             return 0;
@@ -156,6 +129,40 @@ impl WideNode {
         }
         hit_mask
     }
+}
+
+/// Whether the segment [max(tmin, box entry), min(`t_far`, box exit)] is non-empty, for
+/// a box given by its planes on the ray's near and far side per axis. Conservative:
+/// rounding never rejects a box the exact ray enters.
+///
+/// NaN slab distances (a zero direction component with the origin exactly on a slab
+/// plane: 0 · ∞) are skipped, i.e. the slab counts as entered.
+#[inline(always)]
+fn segment_meets_box(ray: &BoxRay, t_far: f32, near: [f32; 3], far: [f32; 3]) -> bool {
+    let mut t0 = ray.tmin;
+    let mut t1 = t_far;
+    for axis in 0..3 {
+        let (o, inv) = (ray.origin[axis], ray.inv_dir[axis]);
+        t0 = nan_ignoring_max(t0, (near[axis] - o) * inv);
+        t1 = nan_ignoring_min(t1, (far[axis] - o) * inv);
+    }
+    // t1 widened by both ends' margins: conservative whatever the signs (when t1 < 0 <
+    // t0 the exact test rejects too).
+    t0 <= t1 + 2.0 * T_MARGIN * t1.abs()
+}
+
+/// Whether the ray's segment (tmin, `t_far`) meets the box [lo, hi].
+#[inline(always)]
+pub(super) fn segment_meets(ray: &BoxRay, t_far: f32, lo: Vec3, hi: Vec3) -> bool {
+    let side = |axis: usize| {
+        if ray.negative[axis] {
+            (hi[axis], lo[axis])
+        } else {
+            (lo[axis], hi[axis])
+        }
+    };
+    let (x, y, z) = (side(0), side(1), side(2));
+    segment_meets_box(ray, t_far, [x.0, y.0, z.0], [x.1, y.1, z.1])
 }
 
 /// max(acc, x), keeping `acc` when x is NaN. Written as a comparison so that it compiles
