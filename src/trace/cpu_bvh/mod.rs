@@ -76,6 +76,12 @@ pub struct CpuBvh {
     bounds: (Vec3, Vec3),
 }
 
+// Shared by every thread of the CPU integrators.
+const _: () = {
+    const fn shareable<T: Send + Sync>() {}
+    shareable::<CpuBvh>();
+};
+
 /// Traversal state under the names obvhs's `traverse!` loop reads and writes.
 struct Traversal<S> {
     stack: S,
