@@ -17,7 +17,9 @@ pub struct CpuBvhTracer {
 impl CpuBvhTracer {
     pub fn new(gpu: &Gpu, triangles: &[GpuTriangle]) -> Self {
         let start = Instant::now();
+        let span = tracing::info_span!("cpu-bvh build", triangles = triangles.len()).entered();
         let bvh = CpuBvh::new(triangles);
+        drop(span);
         Self {
             gpu: gpu.clone(),
             bvh,
@@ -40,6 +42,7 @@ impl Tracer for CpuBvhTracer {
 
     fn set_geometry(&mut self, triangles: &[GpuTriangle]) -> vk::Result<()> {
         let start = Instant::now();
+        let _span = tracing::info_span!("cpu-bvh build", triangles = triangles.len()).entered();
         self.bvh.rebuild(triangles);
         self.timing = HostTiming {
             build: start.elapsed(),
@@ -76,10 +79,12 @@ impl Tracer for CpuBvhTracer {
             let mut host_rays = rays.read::<Ray>()?;
             host_rays.truncate(n);
             let start = Instant::now();
+            let span = tracing::info_span!("cpu-bvh trace", rays = n as u64).entered();
             let host_hits = match query {
                 Query::ClosestHit => self.bvh.closest_hits(&host_rays),
                 Query::Occlusion => self.bvh.any_hits(&host_rays),
             };
+            drop(span);
             self.timing.trace += start.elapsed();
             self.timing.rays += n as u64;
             // `read` drained the main stream and `after` is reached: nothing on the GPU
