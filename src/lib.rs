@@ -10,6 +10,7 @@
 //! - [`trace`]: the `Tracer` interface and its implementations.
 //! - [`integrator`]: what is computed along the rays.
 //! - [`render`]: ties a scene, a tracer and an integrator into a film.
+//! - [`scene_export`]: the resolved scene as JSON, for reference renderers.
 //! - [`bench`](mod@bench): the measurements behind `splitray bench`.
 //! - [`timeline`]: per-stream and per-thread timelines (Chrome trace-event JSON, SVG).
 
@@ -20,6 +21,7 @@ pub mod integrator;
 pub mod primitives;
 pub mod render;
 pub mod scene;
+pub mod scene_export;
 pub mod shaders;
 pub mod timeline;
 pub mod trace;

@@ -312,3 +312,81 @@ fn bench_trace_runs_the_papers_pdacrt_steps_on_request() {
     assert_eq!(json["rows"][0]["mismatches"], 0);
     assert!(json["rows"][0]["levels"].as_u64().unwrap() > 0);
 }
+
+#[test]
+fn export_scene_writes_the_resolved_scene_or_a_clear_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let glossy = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/glossy.toml");
+    let glossy = glossy.to_str().unwrap();
+    let args = [
+        "export-scene",
+        glossy,
+        "-o",
+        "glossy.json",
+        "--width",
+        "64",
+        "--height",
+        "48",
+    ];
+    let out = splitray(&args, d);
+    assert!(out.status.success(), "{}", text(&out));
+    let text_json = std::fs::read_to_string(d.join("glossy.json")).unwrap();
+    let written: splitray::scene_export::SceneExport = serde_json::from_str(&text_json).unwrap();
+    let scene = splitray::scene::load(glossy).unwrap();
+    let film = splitray::scene::FilmSize {
+        width: 64,
+        height: 48,
+    };
+    assert_eq!(written, splitray::scene_export::export(&scene, film));
+    let metal = written
+        .materials
+        .iter()
+        .find(|m| m.name == "metal")
+        .unwrap();
+    assert!(
+        matches!(
+            metal.layers[0].bsdf,
+            splitray::scene_export::ExportBsdf::MicrofacetReflection { roughness, .. }
+                if roughness == 0.3
+        ),
+        "{metal:?}"
+    );
+
+    for (args, expect) in [
+        (
+            &["export-scene", "no-such-scene", "-o", "a.json"][..],
+            "no-such-scene",
+        ),
+        (&["export-scene", "cornell-box", "-o", "a.txt"][..], ".json"),
+        (
+            &[
+                "export-scene",
+                "cornell-box",
+                "-o",
+                "a.json",
+                "--width",
+                "0",
+            ][..],
+            "width 0",
+        ),
+        (
+            &["export-scene", "cornell-box", "-o", "nowhere/a.json"][..],
+            "nowhere",
+        ),
+    ] {
+        let out = splitray(args, d);
+        let t = text(&out);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {t}");
+        assert!(
+            !t.contains("panicked") && t.contains(expect),
+            "{args:?}: {t}"
+        );
+    }
+    let mut files: Vec<_> = std::fs::read_dir(d)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    files.sort();
+    assert_eq!(files, ["glossy.json"]);
+}

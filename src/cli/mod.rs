@@ -2,6 +2,7 @@
 //! edge; the library speaks in typed errors.
 
 mod bench;
+mod export;
 mod info;
 mod render;
 mod timeline;
@@ -35,6 +36,11 @@ pub enum Command {
     /// Draw a timeline (`--timeline FILE.json` of `render` or `bench`) as a Gantt chart:
     /// `splitray timeline FILE.json -o timeline.svg` (or .png).
     Timeline(timeline::TimelineArgs),
+    /// Write the scene as splitray resolves it — triangles in order with their winding,
+    /// per-triangle materials, emission and BSDF layers as `pt` evaluates them, point
+    /// lights, camera and film — as JSON: the input of reference renderers
+    /// (tools/mitsuba_reference.py builds its Mitsuba 3 scene from it).
+    ExportScene(export::ExportArgs),
 }
 
 pub fn run(cli: Cli) -> anyhow::Result<()> {
@@ -43,6 +49,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Render(args) => render::run(&args),
         Command::Bench(args) => bench::run(&args),
         Command::Timeline(args) => timeline::run(&args),
+        Command::ExportScene(args) => export::run(&args),
         Command::Scenes => {
             for (name, description) in splitray::scene::builtin_names() {
                 println!("{name:<14} {description}");
