@@ -2,6 +2,8 @@
 //! validation error or warning fails it.
 #![allow(dead_code)]
 
+pub mod reference;
+
 use splitray::vk::{Gpu, GpuDesc, InstanceDesc, StreamPlacement};
 
 /// Opens the default device with validation (and synchronization validation if `sync`).
