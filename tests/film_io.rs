@@ -3,7 +3,8 @@
 use std::path::Path;
 
 use splitray::film::{
-    read_exr, write_exr, write_outputs, write_png_preview, Film, FilmError, RenderMetadata,
+    read_exr, write_exr, write_outputs, write_png_preview, Film, FilmError, ImageFiles,
+    RenderMetadata,
 };
 
 fn meta() -> RenderMetadata {
@@ -70,6 +71,12 @@ fn test_film(width: u32, height: u32, aovs: bool) -> Film {
                 .collect(),
         )
         .unwrap();
+        film.set_stderr(
+            (0..n)
+                .map(|i| [i as f32 * 1e-3, 0.0, f32::MIN_POSITIVE])
+                .collect(),
+        )
+        .unwrap();
     }
     film
 }
@@ -115,6 +122,10 @@ fn exr_round_trip_is_bit_exact_with_aovs_and_metadata() {
         assert_eq!(
             bits3(back.normal.as_ref().unwrap()),
             bits3(film.normal.as_ref().unwrap())
+        );
+        assert_eq!(
+            bits3(back.stderr.as_ref().unwrap()),
+            bits3(film.stderr.as_ref().unwrap())
         );
 
         let mut expected = meta();
@@ -419,6 +430,9 @@ fn exr_channel_names_and_types_as_documented() {
         ("normal.X", false),
         ("normal.Y", false),
         ("normal.Z", false),
+        ("stderr.B", false),
+        ("stderr.G", false),
+        ("stderr.R", false),
         ("triangle_id", true),
     ];
     let expect: Vec<(String, bool)> = expect.iter().map(|(n, u)| (n.to_string(), *u)).collect();
@@ -429,4 +443,33 @@ fn exr_channel_names_and_types_as_documented() {
         spp,
         Some(exr::meta::attribute::AttributeValue::I32(1024))
     ));
+}
+
+#[test]
+fn image_files_are_created_before_the_work_and_leave_nothing_when_dropped() {
+    let dir = tempfile::tempdir().unwrap();
+    let target = dir.path().join("later.exr");
+    let files = ImageFiles::create(&target).unwrap();
+    // Both temporary files exist from the start, hidden beside their targets.
+    let temps = dir_entries(dir.path());
+    assert_eq!(temps.len(), 2, "{temps:?}");
+    assert!(temps
+        .iter()
+        .all(|t| t.starts_with(".later.") && t.contains(".tmp-")));
+    drop(files);
+    assert!(dir_entries(dir.path()).is_empty());
+
+    let film = test_film(3, 2, true);
+    let written = ImageFiles::create(&target)
+        .unwrap()
+        .write(&film, &meta())
+        .unwrap();
+    assert_eq!(written.exr, target);
+    assert_eq!(dir_entries(dir.path()), ["later.exr", "later.png"]);
+
+    // An unwritable target fails at creation, naming the target once.
+    let err = ImageFiles::create("/proc/later.exr")
+        .unwrap_err()
+        .to_string();
+    assert_eq!(err.matches("/proc/later.exr").count(), 1, "{err}");
 }

@@ -38,6 +38,9 @@ pub struct Film {
     pub triangle_id: Option<Vec<u32>>,
     /// Shading (or geometric — the renderer decides) normal at the hit; zero for a miss.
     pub normal: Option<Vec<[f32; 3]>>,
+    /// Standard error of each pixel's estimate (RGB), where the integrator kept second
+    /// moments and rendered two passes or more; what merging shards needs besides the mean.
+    pub stderr: Option<Vec<[f32; 3]>>,
 }
 
 impl Film {
@@ -56,6 +59,7 @@ impl Film {
             depth: None,
             triangle_id: None,
             normal: None,
+            stderr: None,
         }
     }
 
@@ -191,8 +195,18 @@ impl Film {
         Ok(())
     }
 
+    /// Sets the standard error of each pixel's estimate.
+    pub fn set_stderr(&mut self, stderr: Vec<[f32; 3]>) -> Result<(), FilmError> {
+        self.check_len("standard error", stderr.len())?;
+        self.stderr = Some(stderr);
+        Ok(())
+    }
+
     /// Checks that every present AOV has one element per pixel.
     pub fn validate_aovs(&self) -> Result<(), FilmError> {
+        if let Some(s) = &self.stderr {
+            self.check_len("standard error", s.len())?;
+        }
         if let Some(d) = &self.depth {
             self.check_len("depth AOV", d.len())?;
         }

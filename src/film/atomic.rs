@@ -3,16 +3,60 @@
 //! A reader of the target path sees either the previous file (or nothing) or the complete
 //! new file, never a partially written one. On any error — and on a panic during the
 //! write — the temporary file is removed.
+//!
+//! Every live temporary file is also listed in one process-wide registry, so that a
+//! process told to exit at once (a second Ctrl-C) can remove them all first
+//! ([`discard_all_temporaries`]) without waiting for the writers to unwind.
 
+use std::collections::BTreeSet;
 use std::fs::{File, OpenOptions};
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Mutex, MutexGuard};
 
 use super::FilmError;
 
 /// Distinguishes temporary files of concurrent writes within one process.
 static TEMP_COUNTER: AtomicU64 = AtomicU64::new(0);
+
+/// The temporary files of every live [`AtomicFile`]. Creating, committing and discarding
+/// a temporary file happen under this lock, so a temporary file is either listed here or
+/// gone (renamed over its target or removed).
+static LIVE_TEMPORARIES: Mutex<BTreeSet<PathBuf>> = Mutex::new(BTreeSet::new());
+
+fn live_temporaries() -> MutexGuard<'static, BTreeSet<PathBuf>> {
+    // A writer that panicked while holding the lock left the set consistent: every
+    // change to it is a single insert or remove.
+    LIVE_TEMPORARIES
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner())
+}
+
+/// Holds every [`AtomicFile`] of the process still: while it lives, none can be created
+/// or committed. Returned by [`discard_all_temporaries`] for a caller about to exit.
+pub struct TemporariesDiscarded {
+    _lock: MutexGuard<'static, BTreeSet<PathBuf>>,
+    /// The temporary files removed.
+    pub removed: Vec<PathBuf>,
+}
+
+/// Removes the temporary file of every live [`AtomicFile`] and blocks all of them (other
+/// threads that try to create or commit one wait forever) until the returned guard is
+/// dropped: for a process that exits at once and must leave no partial output behind.
+/// A file being renamed over its target meanwhile is complete, so it is left in place.
+pub fn discard_all_temporaries() -> TemporariesDiscarded {
+    let mut live = live_temporaries();
+    let removed: Vec<PathBuf> = std::mem::take(&mut *live).into_iter().collect();
+    for temp in &removed {
+        // Best effort: the process is about to exit and has nobody to tell.
+        let _ = std::fs::remove_file(temp);
+    }
+    TemporariesDiscarded {
+        _lock: live,
+        removed,
+    }
+}
 
 /// A temporary file that becomes `target` on [`AtomicFile::commit`] and is deleted if
 /// dropped uncommitted.
@@ -30,8 +74,8 @@ impl AtomicFile {
     /// Creates the temporary file for `target`.
     ///
     /// Fails with [`FilmError::MissingDirectory`] when the target's folder does not exist,
-    /// and with [`FilmError::Io`] when the temporary file cannot be created (e.g. the
-    /// folder is not writable).
+    /// and with [`FilmError::Io`] naming the target when the temporary file cannot be
+    /// created (e.g. the folder is not writable).
     pub fn create(target: impl AsRef<Path>) -> Result<Self, FilmError> {
         let target = target.as_ref().to_path_buf();
         let file_name = target
@@ -52,11 +96,14 @@ impl AtomicFile {
             TEMP_COUNTER.fetch_add(1, Ordering::Relaxed)
         ));
         let temp = dir.join(temp_name);
+        let mut live = live_temporaries();
         let file = OpenOptions::new()
             .write(true)
             .create_new(true)
             .open(&temp)
-            .map_err(|e| FilmError::io(&temp, "create temporary file", e))?;
+            .map_err(|e| FilmError::io(&target, "create a temporary file for it", e))?;
+        live.insert(temp.clone());
+        drop(live);
         Ok(Self {
             target,
             temp,
@@ -87,12 +134,28 @@ impl AtomicFile {
         let writer = self.writer.take().expect("AtomicFile committed twice");
         let file = writer
             .into_inner()
-            .map_err(|e| FilmError::io(&self.temp, "flush temporary file", e.into_error()))?;
+            .map_err(|e| FilmError::io(&self.target, "flush its temporary file", e.into_error()))?;
         file.sync_all()
-            .map_err(|e| FilmError::io(&self.temp, "sync temporary file", e))?;
+            .map_err(|e| FilmError::io(&self.target, "sync its temporary file", e))?;
         drop(file);
-        std::fs::rename(&self.temp, &self.target)
-            .map_err(|e| FilmError::io(&self.target, "rename temporary file over", e))?;
+        let mut live = live_temporaries();
+        if !live.remove(&self.temp) {
+            // Discarded by `discard_all_temporaries` between the sync and the lock.
+            self.temp = PathBuf::new();
+            return Err(FilmError::invalid(
+                &self.target,
+                "discarded before the rename",
+            ));
+        }
+        if let Err(e) = std::fs::rename(&self.temp, &self.target) {
+            live.insert(self.temp.clone());
+            return Err(FilmError::io(
+                &self.target,
+                "rename its temporary file over it",
+                e,
+            ));
+        }
+        drop(live);
         // Renamed: nothing left to clean up.
         self.temp = PathBuf::new();
         #[cfg(unix)]
@@ -108,6 +171,11 @@ impl Drop for AtomicFile {
     fn drop(&mut self) {
         if !self.temp.as_os_str().is_empty() {
             drop(self.writer.take());
+            let mut live = live_temporaries();
+            if !live.remove(&self.temp) {
+                // Already removed by `discard_all_temporaries`.
+                return;
+            }
             if let Err(e) = std::fs::remove_file(&self.temp) {
                 log::warn!(
                     "could not remove temporary file {}: {e}",

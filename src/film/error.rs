@@ -14,36 +14,34 @@ pub enum FilmError {
         path: PathBuf,
     },
 
-    /// An I/O operation on `path` failed.
-    #[error("{}: {op} failed: {source}", .path.display())]
+    /// An I/O operation on `path` failed. The underlying error is part of the message,
+    /// not a `source`: an error chain printed whole would repeat it.
+    #[error("{}: cannot {op}: {error}", .path.display())]
     Io {
-        /// The file or folder the operation was about.
+        /// The file or folder the operation was about (the target, not its temporary file).
         path: PathBuf,
-        /// What was attempted ("create temporary file", "rename", ...).
+        /// What was attempted ("create a temporary file for it", "open", ...).
         op: &'static str,
         /// The underlying error.
-        #[source]
-        source: std::io::Error,
+        error: std::io::Error,
     },
 
     /// The EXR encoder or decoder failed.
-    #[error("{}: EXR error: {source}", .path.display())]
+    #[error("{}: EXR error: {error}", .path.display())]
     Exr {
         /// The EXR file.
         path: PathBuf,
         /// The underlying error.
-        #[source]
-        source: exr::error::Error,
+        error: exr::error::Error,
     },
 
     /// The PNG encoder failed.
-    #[error("{}: PNG error: {source}", .path.display())]
+    #[error("{}: PNG error: {error}", .path.display())]
     Png {
         /// The PNG file.
         path: PathBuf,
         /// The underlying error.
-        #[source]
-        source: png::EncodingError,
+        error: png::EncodingError,
     },
 
     /// A file was read successfully but its content is not what we expect
@@ -74,11 +72,11 @@ pub enum FilmError {
 }
 
 impl FilmError {
-    pub(crate) fn io(path: impl Into<PathBuf>, op: &'static str, source: std::io::Error) -> Self {
+    pub(crate) fn io(path: impl Into<PathBuf>, op: &'static str, error: std::io::Error) -> Self {
         Self::Io {
             path: path.into(),
             op,
-            source,
+            error,
         }
     }
 

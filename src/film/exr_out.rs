@@ -12,6 +12,7 @@
 //! | `depth.Z`                        | f32  | hit distance along the unit ray, `+inf` = miss |
 //! | `normal.X`, `normal.Y`, `normal.Z` | f32 | normal AOV                                    |
 //! | `triangle_id`                    | u32  | hit triangle, `u32::MAX` = miss                |
+//! | `stderr.R`, `stderr.G`, `stderr.B` | f32 | standard error of `R`, `G`, `B`              |
 //!
 //! AOV channels are present only when the film has that AOV. Row 0 of the film is the top
 //! scan line of the file (EXR's y axis points down, as the film's does).
@@ -50,6 +51,8 @@ pub const CHANNEL_DEPTH: &str = "depth.Z";
 pub const CHANNEL_TRIANGLE_ID: &str = "triangle_id";
 /// Normal channel names.
 pub const CHANNELS_NORMAL: [&str; 3] = ["normal.X", "normal.Y", "normal.Z"];
+/// Standard-error channel names.
+pub const CHANNELS_STDERR: [&str; 3] = ["stderr.R", "stderr.G", "stderr.B"];
 
 const ATTR_SPP: &str = "splitray.spp";
 const ATTR_SEED: &str = "splitray.seed";
@@ -187,6 +190,14 @@ pub(crate) fn encode_exr<W: Write + Seek>(
             ));
         }
     }
+    if let Some(stderr) = &film.stderr {
+        for (c, name) in CHANNELS_STDERR.iter().enumerate() {
+            channels.push(AnyChannel::new(
+                *name,
+                FlatSamples::F32(stderr.iter().map(|s| s[c]).collect()),
+            ));
+        }
+    }
     if let Some(ids) = &film.triangle_id {
         channels.push(AnyChannel::new(
             CHANNEL_TRIANGLE_ID,
@@ -209,9 +220,9 @@ pub(crate) fn encode_exr<W: Write + Seek>(
     Image::from_layer(layer)
         .write()
         .to_buffered(out)
-        .map_err(|source| FilmError::Exr {
+        .map_err(|error| FilmError::Exr {
             path: path.to_path_buf(),
-            source,
+            error,
         })
 }
 
@@ -233,9 +244,9 @@ pub fn read_exr(path: impl AsRef<Path>) -> Result<(Film, RenderMetadata), FilmEr
         .all_layers()
         .all_attributes()
         .from_buffered(BufReader::new(file))
-        .map_err(|source| FilmError::Exr {
+        .map_err(|error| FilmError::Exr {
             path: path.to_path_buf(),
-            source,
+            error,
         })?;
 
     // Gather channels of all layers under their full `layer.channel` names.
@@ -307,6 +318,13 @@ pub fn read_exr(path: impl AsRef<Path>) -> Result<(Film, RenderMetadata), FilmEr
         .collect::<Result<_, _>>()?;
     if let [Some(x), Some(y), Some(z)] = normal.as_slice() {
         film.normal = Some((0..n).map(|i| [x[i], y[i], z[i]]).collect());
+    }
+    let stderr: Vec<Option<Vec<f32>>> = CHANNELS_STDERR
+        .iter()
+        .map(|name| f32_channel(name))
+        .collect::<Result<_, _>>()?;
+    if let [Some(r), Some(g), Some(b)] = stderr.as_slice() {
+        film.stderr = Some((0..n).map(|i| [r[i], g[i], b[i]]).collect());
     }
     match channels.get(CHANNEL_TRIANGLE_ID) {
         None => {}

@@ -24,10 +24,10 @@ pub mod png_out;
 pub mod sums;
 
 pub use accum::Film;
-pub use atomic::{write_atomically, AtomicFile};
+pub use atomic::{discard_all_temporaries, write_atomically, AtomicFile};
 pub use error::FilmError;
 pub use exr_out::{read_exr, write_exr};
 pub use metadata::RenderMetadata;
-pub use outputs::{write_outputs, WrittenOutputs};
+pub use outputs::{write_outputs, ImageFiles, WrittenOutputs};
 pub use png_out::{write_png_preview, write_png_preview_with, PreviewSettings, ToneMap};
 pub use sums::{relative_mse, FilmSums};

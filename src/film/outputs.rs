@@ -1,4 +1,4 @@
-//! [`write_outputs`]: the EXR and its PNG preview, together.
+//! [`write_outputs`] and [`ImageFiles`]: the EXR and its PNG preview, together.
 
 use std::path::{Path, PathBuf};
 
@@ -31,31 +31,62 @@ pub fn write_outputs(
     film: &Film,
     meta: &RenderMetadata,
 ) -> Result<WrittenOutputs, FilmError> {
-    let exr_path = exr_path.as_ref();
-    let png_path = exr_path.with_extension("png");
-    if png_path == exr_path {
-        return Err(FilmError::invalid(
-            exr_path,
-            "EXR output path must not end in .png",
-        ));
+    ImageFiles::create(exr_path)?.write(film, meta)
+}
+
+/// The EXR and PNG outputs of one image, their temporary files created ahead of the work
+/// that fills them: a render checks that it can write its outputs before it starts, and
+/// a render that fails or is dropped leaves nothing behind.
+#[derive(Debug)]
+pub struct ImageFiles {
+    exr: AtomicFile,
+    png: AtomicFile,
+}
+
+impl ImageFiles {
+    /// Creates the temporary files of `exr_path` and of its PNG preview.
+    pub fn create(exr_path: impl AsRef<Path>) -> Result<Self, FilmError> {
+        let exr_path = exr_path.as_ref();
+        let png_path = exr_path.with_extension("png");
+        if png_path == exr_path {
+            return Err(FilmError::invalid(
+                exr_path,
+                "EXR output path must not end in .png",
+            ));
+        }
+        Ok(Self {
+            exr: AtomicFile::create(exr_path)?,
+            png: AtomicFile::create(&png_path)?,
+        })
     }
 
-    let mut exr_file = AtomicFile::create(exr_path)?;
-    encode_exr(film, meta, exr_file.writer(), exr_path)?;
-    let mut png_file = AtomicFile::create(&png_path)?;
-    encode_png(
-        film,
-        &PreviewSettings::default(),
-        png_file.writer(),
-        &png_path,
-    )?;
+    /// The EXR's final path.
+    pub fn exr_path(&self) -> &Path {
+        self.exr.target()
+    }
 
-    let non_finite_pixels = warn_non_finite(film, exr_path);
-    let exr = exr_file.commit()?;
-    let png = png_file.commit()?;
-    Ok(WrittenOutputs {
-        exr,
-        png,
-        non_finite_pixels,
-    })
+    /// Encodes both files, then renames them over their targets (see [`write_outputs`]).
+    pub fn write(self, film: &Film, meta: &RenderMetadata) -> Result<WrittenOutputs, FilmError> {
+        let Self {
+            exr: mut exr_file,
+            png: mut png_file,
+        } = self;
+        let exr_path = exr_file.target().to_path_buf();
+        let png_path = png_file.target().to_path_buf();
+        encode_exr(film, meta, exr_file.writer(), &exr_path)?;
+        encode_png(
+            film,
+            &PreviewSettings::default(),
+            png_file.writer(),
+            &png_path,
+        )?;
+        let non_finite_pixels = warn_non_finite(film, &exr_path);
+        let exr = exr_file.commit()?;
+        let png = png_file.commit()?;
+        Ok(WrittenOutputs {
+            exr,
+            png,
+            non_finite_pixels,
+        })
+    }
 }

@@ -135,9 +135,9 @@ pub(crate) fn encode_png<W: Write>(
             ),
         ));
     }
-    let png_err = |source| FilmError::Png {
+    let png_err = |error| FilmError::Png {
         path: path.to_path_buf(),
-        source,
+        error,
     };
     let mut encoder = png::Encoder::new(out, film.width(), film.height());
     encoder.set_color(png::ColorType::Rgb);
