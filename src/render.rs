@@ -1,7 +1,15 @@
 //! A render from start to finish: scene → GPU data → tracer → AOVs → integrator passes
 //! → film, with the statistics a user profiles by. The pass loop is the same for every
-//! integrator ([`run_passes`]).
+//! integrator ([`run_passes`]); a [`RenderPlan`] makes it continue a [`Checkpoint`],
+//! take one [`Shard`]'s passes, or save its film as it goes.
 
+pub mod checkpoint;
+pub mod fingerprint;
+pub mod merge;
+pub mod part;
+pub mod shard;
+
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use serde::Serialize;
@@ -14,6 +22,10 @@ use crate::integrator::{
 use crate::scene::{Scene, SceneError};
 use crate::trace::{GpuTriangle, Tracer, TracerKind};
 use crate::vk::{self, Gpu, KernelTime, ProfileTree};
+pub use checkpoint::Checkpoint;
+pub use fingerprint::Fingerprint;
+pub use part::PartRecord;
+pub use shard::{PassRanges, Shard};
 
 #[derive(Debug, thiserror::Error)]
 pub enum RenderError {
@@ -27,6 +39,9 @@ pub enum RenderError {
     Integrator(#[from] IntegratorError),
     #[error("{0}")]
     Options(String),
+    /// A checkpoint or image part that cannot be used, and why.
+    #[error("{}: {message}", .path.display())]
+    BadFile { path: PathBuf, message: String },
 }
 
 impl From<SceneError> for RenderError {
@@ -158,6 +173,13 @@ pub struct RenderOutput {
     pub film: Film,
     /// The film's sums (mean and standard error), for checkpoints and merging.
     pub sums: FilmSums,
+    /// The scene and settings it was rendered from, and the passes it holds (also in
+    /// `metadata`'s header entries).
+    pub record: PartRecord,
+    /// Global index of the film's first pass.
+    pub first_pass: u32,
+    /// Seconds spent rendering the film, resumed runs included.
+    pub total_render_time_s: f64,
     pub metadata: RenderMetadata,
     pub stats: RenderStats,
     /// Images the integrator was asked for besides the render (technique images …).
@@ -176,6 +198,56 @@ pub struct Progress {
     pub time_limit: Option<f64>,
     /// Relative MSE against the reference, when one was given.
     pub relative_mse: Option<f64>,
+}
+
+/// Where a render starts, which of the image's passes it takes and when it saves its
+/// film. The default is a whole render from pass 0 that saves nothing.
+#[derive(Default)]
+pub struct RenderPlan<'a> {
+    /// The part of the image's passes to take ([`Shard::WHOLE`] by default).
+    pub shard: Shard,
+    /// A checkpoint to continue: the render restores its film and goes on after its
+    /// passes, and refuses it when the scene or settings changed.
+    pub resume: Option<Resume<'a>>,
+    /// Saves the film every so many seconds, at a pass boundary.
+    pub checkpoint: Option<CheckpointHook<'a>>,
+}
+
+/// A checkpoint to continue, and the file it came from (errors name it).
+pub struct Resume<'a> {
+    pub checkpoint: &'a Checkpoint,
+    pub path: &'a Path,
+}
+
+/// Called with the film every `every_s` seconds of rendering, at a pass boundary (not
+/// after the last pass: the caller has the finished film then).
+pub struct CheckpointHook<'a> {
+    pub every_s: f64,
+    pub save: &'a mut dyn FnMut(&FilmSnapshot<'_>) -> Result<(), RenderError>,
+}
+
+/// A render's film at a pass boundary, with what continuing it needs.
+pub struct FilmSnapshot<'s> {
+    pub sums: &'s FilmSums,
+    pub fingerprint: &'s Fingerprint,
+    pub shard: Shard,
+    /// Global index of the film's first pass.
+    pub first_pass: u32,
+    /// Seconds spent rendering the film, resumed runs included.
+    pub render_time_s: f64,
+}
+
+impl RenderOutput {
+    /// The finished film as a [`FilmSnapshot`], e.g. for a last checkpoint.
+    pub fn snapshot(&self) -> FilmSnapshot<'_> {
+        FilmSnapshot {
+            sums: &self.sums,
+            fingerprint: &self.record.fingerprint,
+            shard: self.record.shard.unwrap_or_default(),
+            first_pass: self.first_pass,
+            render_time_s: self.total_render_time_s,
+        }
+    }
 }
 
 /// What a caller can do while a render runs.
@@ -218,6 +290,18 @@ pub fn render_with(
     options: &RenderOptions,
     control: RenderControl<'_>,
 ) -> Result<RenderOutput, RenderError> {
+    render_from(gpu, scene, options, RenderPlan::default(), control)
+}
+
+/// [`render_with`] following `plan`: a shard's passes, continuing a checkpoint, saving
+/// the film as it goes.
+pub fn render_from(
+    gpu: &Gpu,
+    scene: &Scene,
+    options: &RenderOptions,
+    mut plan: RenderPlan<'_>,
+    control: RenderControl<'_>,
+) -> Result<RenderOutput, RenderError> {
     let limit = gpu.info().limits.max_storage_buffer_range;
     scene.check_fits(limit, size_of::<GpuTriangle>() as u64)?;
     let triangles: Vec<GpuTriangle> = scene
@@ -237,7 +321,35 @@ pub fn render_with(
         aov::render_aovs(gpu, tracer.as_mut(), &triangle_buffer, &camera)?
     };
     let mut integrator = integrator_on(gpu, scene, options, &triangles, tracer)?;
-    let run = run_passes(integrator.as_mut(), options, control, start)?;
+    let fingerprint = Fingerprint::new(
+        scene,
+        options.width,
+        options.height,
+        options.seed,
+        options.integrator.name(),
+        integrator.samples_per_pass(),
+        integrator.settings(),
+    );
+    let (first_pass, resumed_passes) =
+        start_film(integrator.as_mut(), options, &plan, &fingerprint)?;
+    let previous_time_s = plan
+        .resume
+        .as_ref()
+        .map_or(0.0, |r| r.checkpoint.header.render_time_s);
+    let run = run_passes(
+        integrator.as_mut(),
+        options,
+        control,
+        PassLoop {
+            first_pass,
+            resumed_passes,
+            shard: plan.shard,
+            fingerprint: &fingerprint,
+            previous_time_s,
+            checkpoint: plan.checkpoint.take(),
+        },
+        start,
+    )?;
     let sums = integrator.sums()?;
     let extra_images = integrator.extra_images()?;
     let integrator_stats = integrator.stats();
@@ -247,6 +359,9 @@ pub fn render_with(
     let (_, peak_gpu_bytes) = gpu.memory_bytes();
 
     let mut film = sums.to_film()?;
+    if let Some(stderr) = sums.stderr() {
+        film.set_stderr(stderr)?;
+    }
     film.set_depth(aovs.depth)?;
     film.set_triangle_id(aovs.triangle_id)?;
     film.set_normal(aovs.normal)?;
@@ -265,7 +380,8 @@ pub fn render_with(
         tracer: options.tracer.name().into(),
         device: device.clone(),
         render_time_s: seconds,
-        samples_per_second: sums.spp() as f64 * pixels / seconds.max(1e-9),
+        samples_per_second: run.passes_rendered as f64 * sums.samples_per_pass as f64 * pixels
+            / seconds.max(1e-9),
         rays_traced: integrator_stats.rays_traced,
         rays_per_second: integrator_stats.rays_traced as f64 / seconds.max(1e-9),
         peak_gpu_bytes,
@@ -284,18 +400,30 @@ pub fn render_with(
         extra.push(("stopped_early".into(), "true".into()));
     }
     extra.extend(settings);
+    let record = PartRecord {
+        fingerprint,
+        passes: PassRanges::single(first_pass..first_pass + sums.passes),
+        samples_per_pass: sums.samples_per_pass,
+        second_moments: sums.sum_sq.is_some(),
+        shard: (!plan.shard.is_whole()).then_some(plan.shard),
+    };
+    extra.extend(record.extra());
+    let total_render_time_s = previous_time_s + seconds;
     let metadata = RenderMetadata {
         spp: sums.spp().min(u32::MAX as u64) as u32,
         seed: options.seed,
         integrator: options.integrator.name().into(),
         tracer: options.tracer.name().into(),
         device,
-        render_time_s: seconds,
+        render_time_s: total_render_time_s,
         extra,
     };
     Ok(RenderOutput {
         film,
         sums,
+        record,
+        first_pass,
+        total_render_time_s,
         metadata,
         stats,
         extra_images,
@@ -379,44 +507,136 @@ fn integrator_on(
     })
 }
 
+/// Restores the film of the checkpoint `plan` continues, after checking that it was
+/// saved from this scene, these settings and this shard; returns the global index of the
+/// film's first pass and the passes it holds already.
+fn start_film(
+    integrator: &mut dyn Integrator,
+    options: &RenderOptions,
+    plan: &RenderPlan<'_>,
+    fingerprint: &Fingerprint,
+) -> Result<(u32, u32), RenderError> {
+    let per_pass = integrator.samples_per_pass().max(1);
+    let block = plan.shard.passes(options.spp.div_ceil(per_pass));
+    let Some(resume) = &plan.resume else {
+        return Ok((block.start, 0));
+    };
+    let header = &resume.checkpoint.header;
+    let refuse = |message: String| RenderError::BadFile {
+        path: resume.path.to_path_buf(),
+        message,
+    };
+    if header.fingerprint != *fingerprint {
+        let differences =
+            header
+                .fingerprint
+                .differences(fingerprint, "in the checkpoint", "in this render");
+        return Err(refuse(format!(
+            "was saved from another scene or settings: {}",
+            differences.join("; ")
+        )));
+    }
+    if header.shard != plan.shard {
+        return Err(refuse(format!(
+            "was saved as shard {}, not {}",
+            header.shard, plan.shard
+        )));
+    }
+    if header.first_pass != block.start {
+        return Err(refuse(format!(
+            "its passes start at index {}, where shard {} of {} samples per pixel starts \
+             at {}: continue it with the samples per pixel (or --time) it was started with",
+            header.first_pass, plan.shard, options.spp, block.start
+        )));
+    }
+    integrator
+        .restore(&resume.checkpoint.sums)
+        .map_err(|e| refuse(e.to_string()))?;
+    Ok((block.start, resume.checkpoint.sums.passes))
+}
+
+/// What the pass loop continues from and hands its film to.
+struct PassLoop<'f, 'h> {
+    /// Global index of the film's first pass.
+    first_pass: u32,
+    /// Passes the film holds before the loop starts (from a checkpoint).
+    resumed_passes: u32,
+    shard: Shard,
+    fingerprint: &'f Fingerprint,
+    /// Render time of the runs before this one.
+    previous_time_s: f64,
+    checkpoint: Option<CheckpointHook<'h>>,
+}
+
 /// How the pass loop ended.
 struct PassRun {
     stopped: bool,
+    /// Passes this run added.
+    passes_rendered: u32,
     relative_mse: Option<f64>,
 }
 
 /// Seconds between two relative-MSE readings while a render runs (each reads the film).
 const MSE_INTERVAL_S: f64 = 0.5;
 
-/// The render loop every integrator shares: batches of passes until the spp are done,
-/// the time ran out (checked after each batch) or the caller asks to stop (checked
-/// before each batch).
+/// Seconds a batch of passes should last, where an integrator could take more passes
+/// per call: between batches the loop asks whether to stop, checks the time limit and
+/// saves checkpoints, so this bounds how late each of those comes. (A fast device still
+/// gets its integrator's full batches: the size follows the measured time per pass.)
+const BATCH_TARGET_S: f64 = 0.25;
+
+/// Passes for the next batch: what lasts about [`BATCH_TARGET_S`] (or the time left) at
+/// `seconds_per_pass`, within 1 ..= `most`.
+fn batch_size(seconds_per_pass: f64, time_left_s: Option<f64>, most: u32) -> u32 {
+    let budget = time_left_s.map_or(BATCH_TARGET_S, |t| t.min(BATCH_TARGET_S));
+    let fits = (budget / seconds_per_pass.max(1e-9)).floor();
+    (fits.min(most as f64) as u32).clamp(1, most.max(1))
+}
+
+/// The render loop every integrator shares: batches of passes until the shard's passes
+/// are done, the time ran out (checked after each batch) or the caller asks to stop
+/// (checked before each batch); the film is handed to the checkpoint hook when due.
+/// Batches last about [`BATCH_TARGET_S`]; how passes are grouped never changes the film.
 fn run_passes(
     integrator: &mut dyn Integrator,
     options: &RenderOptions,
     control: RenderControl<'_>,
+    mut job: PassLoop<'_, '_>,
     start: Instant,
 ) -> Result<PassRun, RenderError> {
     let per_pass = integrator.samples_per_pass().max(1);
-    let target_passes = options.spp.div_ceil(per_pass);
-    let mut passes = 0u32;
+    let block = job.shard.passes(options.spp.div_ceil(per_pass));
+    let target_spp = (block.end - block.start) as u64 * per_pass as u64;
+    let mut passes = job.resumed_passes;
+    let mut next = job.first_pass.saturating_add(passes);
     let mut stopped = false;
     let mut relative_mse = None;
     let mut mse_read_at = f64::NEG_INFINITY;
-    while passes < target_passes {
+    let mut saved_at = 0.0;
+    // The first batch is one pass: it measures the time per pass (and pays for the
+    // shaders' first compilation).
+    let mut batch = 1;
+    while next < block.end {
         if (control.stop)() {
             stopped = true;
             break;
         }
-        let count = integrator
-            .passes_per_call()
-            .max(1)
-            .min(target_passes - passes);
-        integrator.render_passes(passes, count)?;
+        let count = batch.min(block.end - next);
+        let batch_start = Instant::now();
+        integrator.render_passes(next, count)?;
+        let time_left_s = options
+            .time_limit
+            .map(|t| t - start.elapsed().as_secs_f64());
+        batch = batch_size(
+            batch_start.elapsed().as_secs_f64() / count as f64,
+            time_left_s,
+            integrator.passes_per_call(),
+        );
+        next += count;
         passes += count;
         let elapsed_s = start.elapsed().as_secs_f64();
         let out_of_time = options.time_limit.is_some_and(|t| elapsed_s >= t);
-        let last = passes == target_passes || out_of_time;
+        let last = next == block.end || out_of_time;
         if let Some(reference) = &options.reference {
             if last || elapsed_s - mse_read_at >= MSE_INTERVAL_S {
                 relative_mse = film::relative_mse(&integrator.sums()?.mean(), reference);
@@ -426,11 +646,24 @@ fn run_passes(
         (control.progress)(&Progress {
             passes,
             spp: passes as u64 * per_pass as u64,
-            target_spp: target_passes as u64 * per_pass as u64,
+            target_spp,
             elapsed_s,
             time_limit: options.time_limit,
             relative_mse,
         });
+        if let Some(hook) = &mut job.checkpoint {
+            if !last && elapsed_s - saved_at >= hook.every_s {
+                let sums = integrator.sums()?;
+                (hook.save)(&FilmSnapshot {
+                    sums: &sums,
+                    fingerprint: job.fingerprint,
+                    shard: job.shard,
+                    first_pass: job.first_pass,
+                    render_time_s: job.previous_time_s + elapsed_s,
+                })?;
+                saved_at = elapsed_s;
+            }
+        }
         if out_of_time {
             break;
         }
@@ -440,6 +673,7 @@ fn run_passes(
     }
     Ok(PassRun {
         stopped,
+        passes_rendered: passes - job.resumed_passes,
         relative_mse,
     })
 }
@@ -455,5 +689,20 @@ pub fn shadow_light(scene: &Scene) -> glam::Vec4 {
             let d = (position - scene.bounds().center()).length();
             position.extend(d * d)
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn batches_last_about_the_target_within_the_integrators_bounds() {
+        assert_eq!(batch_size(0.0625, None, 682), 4);
+        assert_eq!(batch_size(1.0, None, 682), 1);
+        assert_eq!(batch_size(1e-7, None, 682), 682);
+        assert_eq!(batch_size(0.0625, Some(0.125), 682), 2);
+        assert_eq!(batch_size(0.0625, Some(-1.0), 682), 1);
+        assert_eq!(batch_size(0.0625, None, 0), 1);
     }
 }

@@ -283,6 +283,17 @@ impl Integrator for EyeIntegrator {
             ..Default::default()
         }
     }
+
+    fn settings(&self) -> Vec<(String, String)> {
+        // One-sample renders go through pixel centres, longer ones jitter: a film of
+        // the one cannot be continued into the other.
+        let mut settings = vec![("jitter".to_string(), (self.frame.jitter != 0).to_string())];
+        if self.kind == IntegratorKind::Ao {
+            settings.push(("ao_rays".into(), self.frame.ao_rays.to_string()));
+            settings.push(("ao_radius".into(), self.frame.ao_radius.to_string()));
+        }
+        settings
+    }
 }
 
 /// The per-chunk stages after the camera rays are traced; each returns the point that
