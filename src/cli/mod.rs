@@ -4,8 +4,13 @@
 mod bench;
 mod export;
 mod info;
+mod merge;
 mod render;
+mod render_files;
+mod signals;
 mod timeline;
+
+use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
@@ -26,8 +31,12 @@ pub enum Command {
     /// List Vulkan devices, their queue families, the stream-to-queue mapping, the limits
     /// that matter and whether the validation layer is installed.
     Info(info::InfoArgs),
-    /// Render a scene to an EXR (linear HDR, with AOVs) and a PNG preview beside it.
+    /// Render a scene to an EXR (linear HDR, with AOVs) and a PNG preview beside it; or
+    /// one shard of it (--shard), or continue a checkpoint (--resume).
     Render(render::RenderArgs),
+    /// Merge the shards of one image (`render --shard I/N`) into one EXR, weighted by
+    /// their samples, with the merged standard error.
+    Merge(merge::MergeArgs),
     /// List the built-in scenes (usable as `splitray render NAME`).
     Scenes,
     /// Measure: `bench primitives` (GPU sort/scan/... vs CPU) or `bench trace SCENE`
@@ -43,10 +52,13 @@ pub enum Command {
     ExportScene(export::ExportArgs),
 }
 
-pub fn run(cli: Cli) -> anyhow::Result<()> {
+/// Runs a command; the exit code is not 0 only for a render a signal stopped (errors
+/// come back as `Err`).
+pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
     match cli.command {
         Command::Info(args) => info::run(&args),
-        Command::Render(args) => render::run(&args),
+        Command::Render(args) => return render::run(&args),
+        Command::Merge(args) => merge::run(&args),
         Command::Bench(args) => bench::run(&args),
         Command::Timeline(args) => timeline::run(&args),
         Command::ExportScene(args) => export::run(&args),
@@ -57,4 +69,5 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
             Ok(())
         }
     }
+    .map(|()| ExitCode::SUCCESS)
 }

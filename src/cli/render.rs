@@ -1,21 +1,36 @@
-//! `splitray render`.
+//! `splitray render`: a render, a shard of one, or the continuation of a checkpoint.
+//!
+//! Order of work: signals are handled first, then the checkpoint to resume, the scene
+//! and the options are read, every output's temporary file is created (so a path that
+//! cannot be written fails before any work), and only then does the scene go to the
+//! GPU.
 
 use std::path::{Path, PathBuf};
+use std::process::ExitCode;
 
-use anyhow::{bail, Context};
+use anyhow::{anyhow, bail, Context};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use splitray::film::write_outputs;
 use splitray::integrator::IntegratorKind;
-use splitray::render::{render, RenderOptions};
+use splitray::render::{
+    render_from, Checkpoint, CheckpointHook, FilmSnapshot, Progress, RenderControl, RenderError,
+    RenderOptions, RenderOutput, RenderPlan, Resume, Shard,
+};
+use splitray::scene::Scene;
 use splitray::trace::TracerKind;
 use splitray::vk::{Gpu, GpuDesc, InstanceDesc};
 
+use super::render_files::{write_stats, RenderFiles};
+use super::signals::{self, StopSignals};
+
+/// The scene rendered when none is named.
+const DEFAULT_SCENE: &str = "cornell-box";
+
 #[derive(Debug, Args)]
 pub struct RenderArgs {
-    /// A built-in scene name (see `splitray scenes`), a scene .toml or an .obj mesh.
-    #[arg(default_value = "cornell-box")]
-    scene: String,
+    /// A built-in scene name (see `splitray scenes`), a scene .toml or an .obj mesh
+    /// (default: cornell-box; with --resume, the checkpoint's scene).
+    scene: Option<String>,
     /// Output EXR; the PNG preview goes beside it. Default: out/<scene>.exr.
     #[arg(short, long)]
     output: Option<PathBuf>,
@@ -44,15 +59,15 @@ pub struct RenderArgs {
     /// light, -1 = unbounded; default: the scene's, else -1).
     #[arg(long, allow_hyphen_values = true)]
     max_depth: Option<i32>,
-    /// pt: Russian roulette from this depth on (Mitsuba's default 5).
-    #[arg(long, default_value_t = 5)]
-    rr_depth: u32,
+    /// pt: Russian roulette from this depth on (default: Mitsuba's 5).
+    #[arg(long)]
+    rr_depth: Option<u32>,
     /// pt: do not sort paths by material before shading (same image, other speed).
     #[arg(long)]
     no_sort: bool,
     /// pt: estimators: mis (default), nee (light sampling only) or bsdf (BSDF sampling only).
-    #[arg(long, default_value = "mis")]
-    strategy: splitray::integrator::pt::Strategy,
+    #[arg(long)]
+    strategy: Option<splitray::integrator::pt::Strategy>,
     /// How rays are cast: pdacrt (default; no acceleration structure), brute-force (the
     /// oracle), cpu-dacrt (serial CPU baseline), cpu-bvh (a BVH built and traced on every
     /// CPU core) or ray-query (driver BVH, where offered).
@@ -82,10 +97,37 @@ pub struct RenderArgs {
     /// trace-event JSON for ui.perfetto.dev or chrome://tracing.
     #[arg(long, value_name = "FILE.json")]
     timeline: Option<PathBuf>,
+    /// Save the film (its sums, the samples done, seed, settings and a fingerprint of the
+    /// scene) to FILE every --checkpoint-every seconds, and when the render ends or is
+    /// stopped; `splitray render --resume FILE` continues it.
+    #[arg(long, value_name = "FILE")]
+    checkpoint: Option<PathBuf>,
+    /// Seconds of rendering between two checkpoints (saved at a pass boundary).
+    #[arg(
+        long,
+        value_name = "SECONDS",
+        default_value_t = 300.0,
+        requires = "checkpoint"
+    )]
+    checkpoint_every: f64,
+    /// Continue the render saved in this checkpoint: to --spp N samples per pixel in all,
+    /// for --time S more seconds, or else to the target it was started with. Scene, size
+    /// and settings come from the checkpoint; options given that change the image must
+    /// match it, and a scene file that changed since is refused.
+    #[arg(long, value_name = "FILE")]
+    resume: Option<PathBuf>,
+    /// Render the I-th of N statistically independent parts of the image (numbered from
+    /// 0: 0/4 … 3/4), each a disjoint block of the passes; `splitray merge` combines
+    /// them. `auto` takes I and N from a Slurm job array (SLURM_ARRAY_TASK_ID,
+    /// SLURM_ARRAY_TASK_COUNT) or a Kubernetes Indexed Job (JOB_COMPLETION_INDEX, with
+    /// SPLITRAY_SHARD_COUNT set to its completions).
+    #[arg(long, value_name = "I/N|auto")]
+    shard: Option<String>,
 }
 
-/// The output path, checked before any work so a bad path fails fast.
-fn output_path(args: &RenderArgs, scene_name: &str) -> anyhow::Result<PathBuf> {
+/// The output path (default `out/<scene>.exr`, `out/<scene>.shard-I-of-N.exr` for a
+/// shard), checked before any work so a bad path fails fast.
+fn output_path(args: &RenderArgs, scene_name: &str, shard: Shard) -> anyhow::Result<PathBuf> {
     let path = match &args.output {
         Some(p) => p.clone(),
         None => {
@@ -100,7 +142,12 @@ fn output_path(args: &RenderArgs, scene_name: &str) -> anyhow::Result<PathBuf> {
                 })
                 .collect();
             std::fs::create_dir_all("out").context("cannot create the folder out/")?;
-            PathBuf::from("out").join(format!("{stem}.exr"))
+            let suffix = if shard.is_whole() {
+                String::new()
+            } else {
+                format!(".shard-{}-of-{}", shard.index, shard.count)
+            };
+            PathBuf::from("out").join(format!("{stem}{suffix}.exr"))
         }
     };
     if path.extension().and_then(|e| e.to_str()) != Some("exr") {
@@ -120,37 +167,31 @@ fn output_path(args: &RenderArgs, scene_name: &str) -> anyhow::Result<PathBuf> {
     Ok(path)
 }
 
-pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
+pub fn run(args: &RenderArgs) -> anyhow::Result<ExitCode> {
+    let signals = StopSignals::install()?;
     let mut timeline = super::timeline::TimelineOutput::start(args.timeline.as_deref())?;
-    let scene = splitray::scene::load(&args.scene)?;
-    let output = output_path(args, &scene.name)?;
-    let mut options = RenderOptions::resolve(
-        &scene,
-        args.width,
-        args.height,
-        args.spp,
-        args.seed,
-        args.integrator,
-        args.tracer,
-    )?;
-    if let Some(t) = args.time {
-        if t.is_nan() || t <= 0.0 {
-            bail!("--time must be a positive number of seconds");
-        }
-        options.time_limit = Some(t);
-        if args.spp.is_none() {
-            options.spp = u32::MAX;
-        }
+    let resume = match &args.resume {
+        Some(path) => Some((Checkpoint::read(path)?, path.as_path())),
+        None => None,
+    };
+    let checkpoint = resume.as_ref().map(|(c, _)| c);
+    let scene_spec = match (&args.scene, checkpoint) {
+        (Some(spec), _) => spec.clone(),
+        (None, Some(c)) => c.header.scene.clone(),
+        (None, None) => DEFAULT_SCENE.to_string(),
+    };
+    let scene = splitray::scene::load(&scene_spec)?;
+    let shard = match (&args.shard, checkpoint) {
+        (Some(spec), _) => parse_shard(spec)?,
+        (None, Some(c)) => c.header.shard,
+        (None, None) => Shard::WHOLE,
+    };
+    let options = render_options(args, &scene, resume.as_ref())?;
+    if !(args.checkpoint_every.is_finite() && args.checkpoint_every >= 0.0) {
+        bail!("--checkpoint-every must be a number of seconds, 0 or more");
     }
-    if let Some(d) = args.max_depth {
-        options.max_depth = d;
-    }
-    options.rr_depth = args.rr_depth;
-    options.sort_materials = !args.no_sort;
-    options.strategy = args.strategy;
-    if let Some(path) = &args.reference {
-        options.reference = Some(std::sync::Arc::new(read_reference(path, &options)?));
-    }
+    let output = output_path(args, &scene.name, shard)?;
+    let files = RenderFiles::create(&output, args.stats.as_deref(), args.checkpoint.as_deref())?;
     let gpu = Gpu::new(&GpuDesc {
         instance: InstanceDesc {
             validation: args.validation,
@@ -163,6 +204,200 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         t.attach(&gpu)?;
     }
 
+    let RenderFiles {
+        image,
+        stats,
+        checkpoint: mut checkpoint_file,
+    } = files;
+    let label = match shard.is_whole() {
+        true => format!("{} {}x{}", scene.name, options.width, options.height),
+        false => format!(
+            "{} {}x{} shard {shard}",
+            scene.name, options.width, options.height
+        ),
+    };
+    let bar = progress_bar(&options, &label);
+    let pixels = options.width as f64 * options.height as f64;
+    let mut save = |snapshot: &FilmSnapshot<'_>| -> Result<(), RenderError> {
+        if let Some(file) = checkpoint_file.as_mut() {
+            file.save(&Checkpoint::new(&scene_spec, &options, snapshot))?;
+        }
+        Ok(())
+    };
+    let plan = RenderPlan {
+        shard,
+        resume: resume
+            .as_ref()
+            .map(|(checkpoint, path)| Resume { checkpoint, path }),
+        checkpoint: args.checkpoint.is_some().then_some(CheckpointHook {
+            every_s: args.checkpoint_every,
+            save: &mut save,
+        }),
+    };
+    let result = render_from(
+        &gpu,
+        &scene,
+        &options,
+        plan,
+        RenderControl {
+            progress: &mut |p| show_progress(&bar, &label, p, pixels, options.time_limit),
+            stop: &|| signals.received().is_some(),
+        },
+    );
+    bar.finish_and_clear();
+    let result = result?;
+
+    let messages = gpu.validation_messages();
+    if !messages.is_empty() {
+        bail!(
+            "{} validation message(s) (see the log above); nothing was written",
+            messages.len()
+        );
+    }
+    let stopped_by = signals.received();
+    if result.sums.passes == 0 {
+        let name = stopped_by.map_or("a stop", signals::name);
+        eprintln!("{name}: stopped before the first pass; nothing written");
+        return Ok(exit_code(stopped_by));
+    }
+    let written = {
+        let _span = tracing::info_span!("write outputs").entered();
+        image.write(&result.film, &result.metadata)?
+    };
+    print_summary(&result, args.profile);
+    println!(
+        "wrote {} and {}",
+        written.exr.display(),
+        written.png.display()
+    );
+    if let Some(file) = stats {
+        write_stats(file, &result.stats)?;
+    }
+    if let Some(file) = checkpoint_file.as_mut() {
+        let path = file.save(&Checkpoint::new(&scene_spec, &options, &result.snapshot()))?;
+        println!(
+            "checkpoint {} holds {} spp: `splitray render --resume {} --spp N` continues it",
+            path.display(),
+            result.sums.spp(),
+            path.display()
+        );
+    }
+    if let Some(t) = timeline {
+        t.finish(&super::timeline::command_line())?;
+    }
+    if let Some(signal) = stopped_by {
+        eprintln!(
+            "{}: the render stopped at {} spp; {} records the samples reached",
+            signals::name(signal),
+            result.sums.spp(),
+            written.exr.display()
+        );
+    }
+    Ok(exit_code(stopped_by))
+}
+
+fn exit_code(stopped_by: Option<i32>) -> ExitCode {
+    match stopped_by {
+        Some(signal) => ExitCode::from(signals::exit_status(signal)),
+        None => ExitCode::SUCCESS,
+    }
+}
+
+fn parse_shard(spec: &str) -> anyhow::Result<Shard> {
+    let shard = if spec == "auto" {
+        Shard::from_environment(|name| std::env::var(name).ok())
+    } else {
+        spec.parse()
+    };
+    shard.map_err(|e| anyhow!("--shard: {e}"))
+}
+
+/// The options of this render: the scene's, or the checkpoint's when resuming,
+/// overridden by whatever the command line gives.
+fn render_options(
+    args: &RenderArgs,
+    scene: &Scene,
+    resume: Option<&(Checkpoint, &Path)>,
+) -> anyhow::Result<RenderOptions> {
+    let mut options = match resume {
+        None => RenderOptions::resolve(
+            scene,
+            args.width,
+            args.height,
+            args.spp,
+            args.seed,
+            args.integrator,
+            args.tracer,
+        )?,
+        Some((checkpoint, path)) => resumed_options(args, checkpoint, path)?,
+    };
+    if let Some(t) = args.time {
+        if !t.is_finite() || t <= 0.0 {
+            bail!("--time must be a positive number of seconds");
+        }
+        options.time_limit = Some(t);
+        if args.spp.is_none() && resume.is_none() {
+            options.spp = u32::MAX;
+        }
+    }
+    if let Some(d) = args.max_depth {
+        options.max_depth = d;
+    }
+    if let Some(r) = args.rr_depth {
+        options.rr_depth = r;
+    }
+    if args.no_sort {
+        options.sort_materials = false;
+    }
+    if let Some(s) = args.strategy {
+        options.strategy = s;
+    }
+    if let Some(path) = &args.reference {
+        options.reference = Some(std::sync::Arc::new(read_reference(path, &options)?));
+    }
+    Ok(options)
+}
+
+/// The checkpoint's options with the command line's on top; without --spp or --time,
+/// the render goes on to the checkpoint's own target (its spp, or what is left of its
+/// time).
+fn resumed_options(
+    args: &RenderArgs,
+    checkpoint: &Checkpoint,
+    path: &Path,
+) -> anyhow::Result<RenderOptions> {
+    let header = &checkpoint.header;
+    let mut options = header
+        .options
+        .to_options()
+        .map_err(|e| anyhow!("{}: {e}", path.display()))?;
+    options.width = args.width.unwrap_or(options.width);
+    options.height = args.height.unwrap_or(options.height);
+    options.seed = args.seed.unwrap_or(options.seed);
+    options.integrator = args.integrator.unwrap_or(options.integrator);
+    options.tracer = args.tracer.unwrap_or(options.tracer);
+    if let Some(spp) = args.spp {
+        if spp == 0 {
+            bail!("--spp must be at least 1");
+        }
+        options.spp = spp;
+        options.time_limit = None;
+    } else if let (None, Some(limit)) = (args.time, header.options.time_limit) {
+        let left = limit - header.render_time_s;
+        if left <= 0.0 {
+            bail!(
+                "{}: its --time {limit} s is spent ({:.1} s rendered): continue it with \
+                 --time SECONDS or --spp N",
+                path.display(),
+                header.render_time_s
+            );
+        }
+        options.time_limit = Some(left);
+    }
+    Ok(options)
+}
+
+fn progress_bar(options: &RenderOptions, label: &str) -> ProgressBar {
     let bar = match options.time_limit {
         // Timed: the bar runs over seconds; the message carries passes and samples/s.
         Some(t) => {
@@ -186,44 +421,36 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             bar
         }
     };
-    let pixels = options.width as f64 * options.height as f64;
-    let timed = options.time_limit.is_some();
-    bar.set_message(format!(
-        "{} {}x{}",
-        scene.name, options.width, options.height
-    ));
-    let label = format!("{} {}x{}", scene.name, options.width, options.height);
-    let result = render(&gpu, &scene, &options, &mut |p| {
-        let rate = p.spp as f64 * pixels / p.elapsed_s.max(1e-9);
-        let mse = p
-            .relative_mse
-            .map(|m| format!(", relMSE {m:.4e}"))
-            .unwrap_or_default();
-        bar.set_message(format!(
-            "{label} {} spp, {:.3} Msamples/s{mse}",
-            p.spp,
-            rate * 1e-6
-        ));
-        if timed {
-            bar.set_position((p.elapsed_s * 10.0) as u64);
-        } else {
-            bar.set_position(p.spp);
-        }
-    });
-    bar.finish_and_clear();
-    let result = result?;
+    bar.set_message(label.to_string());
+    bar
+}
 
-    let messages = gpu.validation_messages();
-    if !messages.is_empty() {
-        bail!(
-            "{} validation message(s) (see the log above); nothing was written",
-            messages.len()
-        );
+fn show_progress(
+    bar: &ProgressBar,
+    label: &str,
+    p: &Progress,
+    pixels: f64,
+    time_limit: Option<f64>,
+) {
+    let rate = p.spp as f64 * pixels / p.elapsed_s.max(1e-9);
+    let mse = p
+        .relative_mse
+        .map(|m| format!(", relMSE {m:.4e}"))
+        .unwrap_or_default();
+    bar.set_message(format!(
+        "{label} {} spp, {:.3} Msamples/s{mse}",
+        p.spp,
+        rate * 1e-6
+    ));
+    if time_limit.is_some() {
+        bar.set_position((p.elapsed_s * 10.0) as u64);
+    } else {
+        bar.set_length(p.target_spp);
+        bar.set_position(p.spp);
     }
-    let written = {
-        let _span = tracing::info_span!("write outputs").entered();
-        write_outputs(&output, &result.film, &result.metadata)?
-    };
+}
+
+fn print_summary(result: &RenderOutput, profile: bool) {
     let s = &result.stats;
     println!(
         "{}: {}x{} {} spp, {} + {} on {} in {:.3} s: {} rays, {:.2} Mrays/s, peak GPU memory {:.1} MiB",
@@ -239,26 +466,12 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         s.rays_per_second * 1e-6,
         s.peak_gpu_bytes as f64 / (1 << 20) as f64
     );
-    println!(
-        "wrote {} and {}",
-        written.exr.display(),
-        written.png.display()
-    );
     if let Some(mse) = s.relative_mse {
         println!("relative MSE against the reference: {mse:.6e}");
     }
-    if args.profile {
+    if profile {
         print!("{}", s.profile.table());
     }
-    if let Some(path) = &args.stats {
-        let json = serde_json::to_vec_pretty(s)?;
-        splitray::film::atomic::write_bytes_atomically(path, &json)
-            .with_context(|| format!("cannot write {}", path.display()))?;
-    }
-    if let Some(t) = timeline {
-        t.finish(&super::timeline::command_line())?;
-    }
-    Ok(())
 }
 
 /// The reference image's mean RGB, refused unless it has this render's film size.

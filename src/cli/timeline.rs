@@ -1,11 +1,13 @@
 //! `--timeline FILE.json` on `render` and `bench`, and `splitray timeline` (a trace
 //! drawn as SVG or PNG).
 
+use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context};
 use clap::Args;
 use splitray::film::atomic::write_bytes_atomically;
+use splitray::film::AtomicFile;
 use splitray::timeline::{self, draw::DrawOptions, Capture, ClockAlignment};
 use splitray::vk::Gpu;
 
@@ -48,7 +50,9 @@ fn check_output(path: &Path, extensions: &[&str]) -> anyhow::Result<String> {
 
 /// A timeline being recorded for `--timeline FILE.json`.
 pub struct TimelineOutput {
-    path: PathBuf,
+    /// Created when recording starts, so a path that cannot be written fails before the
+    /// work; removed if the command fails.
+    file: AtomicFile,
     capture: Capture,
 }
 
@@ -60,7 +64,7 @@ impl TimelineOutput {
         };
         check_output(path, &["json"])?;
         Ok(Some(Self {
-            path: path.to_path_buf(),
+            file: AtomicFile::create(path)?,
             capture: Capture::start()?,
         }))
     }
@@ -76,11 +80,15 @@ impl TimelineOutput {
         trace
             .metadata
             .insert("command".into(), serde_json::Value::String(command.into()));
-        write_bytes_atomically(&self.path, timeline::json::to_json(&trace).as_bytes())
-            .with_context(|| format!("cannot write {}", self.path.display()))?;
+        let mut file = self.file;
+        let path = file.target().to_path_buf();
+        file.writer()
+            .write_all(timeline::json::to_json(&trace).as_bytes())
+            .with_context(|| format!("{}: cannot write", path.display()))?;
+        file.commit()?;
         println!(
             "wrote {} ({} tracks; open it in ui.perfetto.dev or chrome://tracing)",
-            self.path.display(),
+            path.display(),
             trace.tracks.len()
         );
         Ok(())

@@ -1,0 +1,66 @@
+//! `splitray merge`: parts of one image (`render --shard I/N`) into one EXR, weighted by
+//! their samples, with the merged standard error.
+
+use std::path::PathBuf;
+
+use anyhow::bail;
+use clap::Args;
+use splitray::film::ImageFiles;
+use splitray::render::merge::merge_parts;
+
+#[derive(Debug, Args)]
+pub struct MergeArgs {
+    /// The parts: EXRs written by `splitray render --shard I/N` (or by merge itself).
+    #[arg(required = true, value_name = "PART.exr")]
+    parts: Vec<PathBuf>,
+    /// The merged EXR (mean and standard error); its PNG preview goes beside it.
+    #[arg(short, long, value_name = "OUT.exr")]
+    output: PathBuf,
+}
+
+pub fn run(args: &MergeArgs) -> anyhow::Result<()> {
+    let output = &args.output;
+    if output.extension().and_then(|e| e.to_str()) != Some("exr") {
+        bail!("{}: the output must be an .exr file", output.display());
+    }
+    if args.parts.contains(output) {
+        bail!("{}: the output is one of the parts", output.display());
+    }
+    // Created before the parts are read: an output that cannot be written fails first.
+    let files = ImageFiles::create(output)?;
+    let merged = merge_parts(&args.parts)?;
+    let written = files.write(&merged.film, &merged.metadata)?;
+    let film = &merged.film;
+    println!(
+        "merged {} parts: {}x{} {} spp (passes {}), {} on {}",
+        args.parts.len(),
+        film.width(),
+        film.height(),
+        merged.sums.spp(),
+        merged.record.passes,
+        merged.metadata.integrator,
+        merged.metadata.device
+    );
+    if let Some(stderr) = &film.stderr {
+        let mean_stderr = stderr.iter().flatten().map(|&v| v as f64).sum::<f64>()
+            / (3 * stderr.len()).max(1) as f64;
+        println!("standard error: {mean_stderr:.4e} on average over pixels and channels");
+    }
+    if !merged.missing_shards.is_empty() {
+        let names: Vec<String> = merged
+            .missing_shards
+            .iter()
+            .map(|s| s.to_string())
+            .collect();
+        eprintln!(
+            "warning: no part is shard {}: the image holds fewer samples than its render asked for",
+            names.join(", ")
+        );
+    }
+    println!(
+        "wrote {} and {}",
+        written.exr.display(),
+        written.png.display()
+    );
+    Ok(())
+}

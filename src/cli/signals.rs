@@ -1,0 +1,88 @@
+//! SIGINT and SIGTERM during a render (through `signal-hook`).
+//!
+//! The first one asks the render to stop: the pass loop asks before every batch of
+//! passes, so the work in flight finishes, and the image (with the samples it reached),
+//! its stats and its checkpoint are written; the process then exits with 128 + the
+//! signal's number (130 for SIGINT, 143 for SIGTERM), as a shell reports a process that
+//! a signal ended. A second one exits at once: it removes every temporary output file
+//! ([`splitray::film::discard_all_temporaries`], which also keeps the writers from
+//! creating or renaming another) and calls `_exit`. That skips the Vulkan teardown on
+//! purpose: waiting for a submission in flight, or a driver's exit handlers, is exactly
+//! what "at once" rules out; the kernel reclaims the device's memory with the process.
+//! Outputs already renamed into place are complete; none is ever left half-written.
+
+use std::sync::atomic::{AtomicI32, Ordering};
+use std::sync::Arc;
+
+use anyhow::Context;
+use signal_hook::consts::{SIGINT, SIGTERM};
+use signal_hook::iterator::Signals;
+
+/// The first stop signal received, if any.
+#[derive(Clone)]
+pub struct StopSignals {
+    received: Arc<AtomicI32>,
+}
+
+impl StopSignals {
+    /// Handles SIGINT and SIGTERM from here on, on a thread of its own.
+    pub fn install() -> anyhow::Result<Self> {
+        let received = Arc::new(AtomicI32::new(0));
+        let mut signals =
+            Signals::new([SIGINT, SIGTERM]).context("cannot install the signal handlers")?;
+        let first = received.clone();
+        std::thread::Builder::new()
+            .name("signals".into())
+            .spawn(move || {
+                for signal in signals.forever() {
+                    if first
+                        .compare_exchange(0, signal, Ordering::SeqCst, Ordering::SeqCst)
+                        .is_ok()
+                    {
+                        eprintln!(
+                            "\n{}: stopping after the passes in flight; the image is written \
+                             with the samples reached (send it again to exit at once, \
+                             writing nothing)",
+                            name(signal)
+                        );
+                    } else {
+                        exit_at_once(signal);
+                    }
+                }
+            })
+            .context("cannot start the signal thread")?;
+        Ok(Self { received })
+    }
+
+    /// The first signal received (its number), if one was.
+    pub fn received(&self) -> Option<i32> {
+        match self.received.load(Ordering::SeqCst) {
+            0 => None,
+            s => Some(s),
+        }
+    }
+}
+
+/// The exit status of a process ended by `signal`, as shells report it.
+pub fn exit_status(signal: i32) -> u8 {
+    (128 + signal).clamp(0, 255) as u8
+}
+
+pub fn name(signal: i32) -> &'static str {
+    match signal {
+        SIGINT => "SIGINT",
+        SIGTERM => "SIGTERM",
+        _ => "signal",
+    }
+}
+
+fn exit_at_once(signal: i32) -> ! {
+    let discarded = splitray::film::discard_all_temporaries();
+    eprintln!(
+        "{} again: exiting at once; {} unfinished output file(s) removed",
+        name(signal),
+        discarded.removed.len()
+    );
+    // `discarded` stays alive: no writer can create or commit a file until the exit.
+    signal_hook::low_level::exit(exit_status(signal) as i32)
+}

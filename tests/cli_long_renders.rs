@@ -1,0 +1,448 @@
+//! Long renders on the command line: outputs that cannot be written fail before any
+//! work; SIGINT/SIGTERM stop a render at a pass boundary and write what it reached (exit
+//! 130/143), a second signal exits at once leaving no partial file; a stopped render
+//! resumes bit-identically; shards rendered apart merge into one image; bad checkpoints
+//! and parts fail naming the file.
+
+use std::io::{BufRead, BufReader};
+use std::path::Path;
+use std::process::{Child, Command, Output, Stdio};
+use std::sync::mpsc;
+use std::time::{Duration, Instant};
+
+use splitray::film::read_exr;
+use splitray::render::Checkpoint;
+
+fn command(args: &[&str], cwd: &Path) -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_splitray"));
+    c.args(args).current_dir(cwd).env("RUST_LOG", "warn");
+    c
+}
+
+fn splitray(args: &[&str], cwd: &Path) -> Output {
+    command(args, cwd).output().expect("run splitray")
+}
+
+fn text(o: &Output) -> String {
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    )
+}
+
+/// Names in `dir` that are outputs or temporary files.
+fn outputs(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| {
+            [".exr", ".png", ".json", ".ckpt"]
+                .iter()
+                .any(|e| n.ends_with(e))
+                || n.contains(".tmp-")
+        })
+        .collect();
+    names.sort();
+    names
+}
+
+fn temporaries(dir: &Path) -> Vec<String> {
+    outputs(dir)
+        .into_iter()
+        .filter(|n| n.contains(".tmp-"))
+        .collect()
+}
+
+/// A render running in the background, its stderr lines sent to `lines`.
+struct Running {
+    child: Child,
+    lines: mpsc::Receiver<String>,
+    stderr: Vec<String>,
+}
+
+impl Running {
+    fn start(args: &[&str], cwd: &Path) -> Self {
+        let mut child = command(args, cwd)
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("start splitray");
+        let stderr = child.stderr.take().unwrap();
+        let (tx, lines) = mpsc::channel();
+        std::thread::spawn(move || {
+            for line in BufReader::new(stderr).lines().map_while(Result::ok) {
+                let _ = tx.send(line);
+            }
+        });
+        Self {
+            child,
+            lines,
+            stderr: Vec::new(),
+        }
+    }
+
+    fn signal(&self, name: &str) {
+        let status = Command::new("kill")
+            .args([&format!("-{name}"), &self.child.id().to_string()])
+            .status()
+            .unwrap();
+        assert!(status.success());
+    }
+
+    /// Waits for a stderr line containing `needle`.
+    fn wait_for_line(&mut self, needle: &str) {
+        let deadline = Instant::now() + Duration::from_secs(60);
+        while !self.stderr.iter().any(|l| l.contains(needle)) {
+            let left = deadline.saturating_duration_since(Instant::now());
+            match self.lines.recv_timeout(left) {
+                Ok(line) => self.stderr.push(line),
+                Err(_) => panic!("no {needle:?} on stderr: {:?}", self.stderr),
+            }
+        }
+    }
+
+    /// Waits for the process to end; its exit code and whole stderr.
+    fn finish(mut self) -> (Option<i32>, String) {
+        let deadline = Instant::now() + Duration::from_secs(120);
+        let status = loop {
+            if let Some(status) = self.child.try_wait().unwrap() {
+                break status;
+            }
+            if Instant::now() > deadline {
+                let _ = self.child.kill();
+                panic!("splitray did not exit: {:?}", self.stderr);
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        };
+        // The reader thread ends with the pipe; collect what it sent.
+        while let Ok(line) = self.lines.recv_timeout(Duration::from_secs(5)) {
+            self.stderr.push(line);
+        }
+        (status.code(), self.stderr.join("\n"))
+    }
+}
+
+/// Waits until `path` exists (a render's first checkpoint: passes are being rendered).
+fn wait_for_file(path: &Path) {
+    let deadline = Instant::now() + Duration::from_secs(120);
+    while !path.exists() {
+        assert!(
+            Instant::now() < deadline,
+            "{} never appeared",
+            path.display()
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+fn rgb_bits(path: &Path) -> Vec<[u32; 3]> {
+    let (film, _) = read_exr(path).unwrap();
+    film.mean_rgb_buffer()
+        .iter()
+        .map(|p| p.map(f32::to_bits))
+        .collect()
+}
+
+#[test]
+fn outputs_that_cannot_be_written_fail_before_any_work() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // --device names no device: an error about the path shows that it came first.
+    let base = [
+        "render",
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "--device",
+        "no-such-gpu",
+    ];
+    for (extra, path) in [
+        (["-o", "/proc/x.exr"], "/proc/x.exr"),
+        (["--stats", "/proc/x.json"], "/proc/x.json"),
+        (["--checkpoint", "/proc/x.ckpt"], "/proc/x.ckpt"),
+        (["--timeline", "/proc/t.json"], "/proc/t.json"),
+    ] {
+        let mut args: Vec<&str> = base.to_vec();
+        args.extend(extra);
+        if extra[0] != "-o" {
+            args.extend(["-o", "img.exr"]);
+        }
+        let out = splitray(&args, d);
+        let t = text(&out);
+        assert_eq!(out.status.code(), Some(1), "{t}");
+        assert_eq!(t.matches(path).count(), 1, "the path named once:\n{t}");
+        assert!(!t.contains("no-such-gpu") && !t.contains("panicked"), "{t}");
+        assert!(outputs(d).is_empty(), "{args:?} left {:?}", outputs(d));
+    }
+    // merge checks its output before it reads a part.
+    let out = splitray(&["merge", "missing.exr", "-o", "/proc/m.exr"], d);
+    let t = text(&out);
+    assert!(!out.status.success() && t.contains("/proc/m.exr"), "{t}");
+    assert!(!t.contains("missing.exr"), "{t}");
+}
+
+#[test]
+fn sigint_writes_the_samples_reached_and_the_render_resumes_bit_identically() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let scene = ["--integrator", "pt", "--width", "32", "--height", "24"];
+    let mut args = vec![
+        "render", "-o", "img.exr", "--time", "60", "--stats", "st.json",
+    ];
+    args.extend(scene);
+    args.extend(["--checkpoint", "run.ckpt", "--checkpoint-every", "0"]);
+    let mut render = Running::start(&args, d);
+    wait_for_file(&d.join("run.ckpt"));
+    render.signal("INT");
+    render.wait_for_line("SIGINT: stopping after the passes in flight");
+    let (code, stderr) = render.finish();
+    assert_eq!(code, Some(130), "{stderr}");
+    assert!(stderr.contains("SIGINT: the render stopped at"), "{stderr}");
+    assert!(temporaries(d).is_empty(), "{:?}", temporaries(d));
+
+    let (_, meta) = read_exr(d.join("img.exr")).unwrap();
+    let checkpoint = Checkpoint::read(d.join("run.ckpt")).unwrap();
+    let reached = checkpoint.header.passes;
+    assert!(
+        reached > 0 && meta.spp == reached,
+        "{} vs {reached}",
+        meta.spp
+    );
+    assert!(meta
+        .extra
+        .contains(&("stopped_early".to_string(), "true".to_string())));
+    let stats: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(d.join("st.json")).unwrap()).unwrap();
+    assert_eq!(stats["stopped_early"], true);
+    assert_eq!(stats["spp"], reached);
+
+    // Resumed to more samples, it equals an uninterrupted render of as many, bit for bit.
+    let target = (reached + 3).to_string();
+    let out = splitray(
+        &[
+            "render",
+            "--resume",
+            "run.ckpt",
+            "--spp",
+            &target,
+            "-o",
+            "resumed.exr",
+        ],
+        d,
+    );
+    assert!(out.status.success(), "{}", text(&out));
+    let mut direct = vec!["render", "-o", "direct.exr", "--spp", &target];
+    direct.extend(scene);
+    let out = splitray(&direct, d);
+    assert!(out.status.success(), "{}", text(&out));
+    assert!(rgb_bits(&d.join("resumed.exr")) == rgb_bits(&d.join("direct.exr")));
+    let (resumed, _) = read_exr(d.join("resumed.exr")).unwrap();
+    let (uninterrupted, _) = read_exr(d.join("direct.exr")).unwrap();
+    assert!(resumed.stderr.is_some() && resumed.stderr == uninterrupted.stderr);
+
+    // A changed setting is refused, naming the checkpoint, and writes nothing.
+    let out = splitray(
+        &[
+            "render",
+            "--resume",
+            "run.ckpt",
+            "--seed",
+            "9",
+            "-o",
+            "other.exr",
+        ],
+        d,
+    );
+    let t = text(&out);
+    assert_eq!(out.status.code(), Some(1), "{t}");
+    assert!(
+        t.contains("run.ckpt") && t.contains("seed 0 in the checkpoint, 9"),
+        "{t}"
+    );
+    assert!(!d.join("other.exr").exists() && temporaries(d).is_empty());
+}
+
+#[test]
+fn sigterm_writes_the_samples_reached_and_exits_143() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let args = [
+        "render",
+        "-o",
+        "img.exr",
+        "--time",
+        "60",
+        "--integrator",
+        "ao",
+        "--width",
+        "32",
+        "--height",
+        "24",
+        "--checkpoint",
+        "run.ckpt",
+        "--checkpoint-every",
+        "0",
+    ];
+    let mut render = Running::start(&args, d);
+    wait_for_file(&d.join("run.ckpt"));
+    render.signal("TERM");
+    render.wait_for_line("SIGTERM: stopping");
+    let (code, stderr) = render.finish();
+    assert_eq!(code, Some(143), "{stderr}");
+    let (_, meta) = read_exr(d.join("img.exr")).unwrap();
+    assert_eq!(
+        meta.spp,
+        Checkpoint::read(d.join("run.ckpt")).unwrap().header.passes
+    );
+    assert!(meta.spp > 0);
+    assert!(temporaries(d).is_empty(), "{:?}", temporaries(d));
+}
+
+#[test]
+fn a_second_signal_exits_at_once_leaving_no_partial_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // Passes of a 512×512 path-traced film last long enough on a CPU device that the
+    // second signal lands while the first waits for the passes in flight.
+    let args = [
+        "render",
+        "-o",
+        "img.exr",
+        "--time",
+        "60",
+        "--integrator",
+        "pt",
+        "--width",
+        "512",
+        "--height",
+        "512",
+        "--stats",
+        "st.json",
+        "--checkpoint",
+        "run.ckpt",
+        "--checkpoint-every",
+        "0",
+    ];
+    let mut render = Running::start(&args, d);
+    wait_for_file(&d.join("run.ckpt"));
+    render.signal("INT");
+    render.wait_for_line("SIGINT: stopping");
+    render.signal("INT");
+    let (code, stderr) = render.finish();
+    assert_eq!(code, Some(130), "{stderr}");
+    assert!(stderr.contains("SIGINT again: exiting at once"), "{stderr}");
+    // Only the checkpoint saved before the signals is left, and it is whole.
+    assert_eq!(outputs(d), ["run.ckpt"], "{stderr}");
+    assert!(Checkpoint::read(d.join("run.ckpt")).is_ok());
+}
+
+#[test]
+fn shards_rendered_apart_merge_into_one_image() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let common = [
+        "--integrator",
+        "ao",
+        "--width",
+        "24",
+        "--height",
+        "16",
+        "--spp",
+        "4",
+    ];
+    let run = |extra: &[&str], env: &[(&str, &str)]| {
+        let mut args = vec!["render"];
+        args.extend(common);
+        args.extend(extra);
+        let out = command(&args, d)
+            .envs(env.iter().copied())
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{args:?}: {}", text(&out));
+    };
+    run(&["--shard", "0/2", "-o", "part0.exr"], &[]);
+    // As a Slurm array task would: --array=5-6 runs tasks 5 and 6.
+    let slurm = [
+        ("SLURM_ARRAY_TASK_ID", "6"),
+        ("SLURM_ARRAY_TASK_MIN", "5"),
+        ("SLURM_ARRAY_TASK_COUNT", "2"),
+    ];
+    run(&["--shard", "auto", "-o", "part1.exr"], &slurm);
+    run(&["-o", "whole.exr"], &[]);
+    let out = splitray(&["merge", "part0.exr", "part1.exr", "-o", "merged.exr"], d);
+    assert!(out.status.success(), "{}", text(&out));
+    assert!(
+        text(&out).contains("merged 2 parts: 24x16 4 spp (passes 0..4)"),
+        "{}",
+        text(&out)
+    );
+    let (merged, meta) = read_exr(d.join("merged.exr")).unwrap();
+    let (whole, _) = read_exr(d.join("whole.exr")).unwrap();
+    assert_eq!(meta.spp, 4);
+    // The same samples: equal up to the rounding of f32 sums of 4 passes (8·u relative).
+    let u = 1.0 / (1u64 << 24) as f32;
+    for (a, b) in merged.mean_rgb_buffer().iter().zip(whole.mean_rgb_buffer()) {
+        for c in 0..3 {
+            assert!((a[c] - b[c]).abs() <= 8.0 * u * a[c].abs().max(b[c].abs()));
+        }
+    }
+
+    let out = splitray(&["merge", "part0.exr", "part0.exr", "-o", "twice.exr"], d);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(
+        text(&out).contains("the same shard twice"),
+        "{}",
+        text(&out)
+    );
+    assert!(!d.join("twice.exr").exists() && temporaries(d).is_empty());
+}
+
+#[test]
+fn bad_checkpoints_and_parts_fail_naming_the_file_and_write_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("short.ckpt"), b"\x89splitray-ck").unwrap();
+    std::fs::write(d.join("notes.txt"), "not a checkpoint, not an image").unwrap();
+    let film = splitray::film::Film::from_mean_rgb(2, 2, &[[1.0; 3]; 4]).unwrap();
+    splitray::film::write_exr(d.join("plain.exr"), &film, &Default::default()).unwrap();
+    let cases: [(&[&str], &str, &str); 6] = [
+        (
+            &["render", "--resume", "gone.ckpt"],
+            "gone.ckpt",
+            "No such file",
+        ),
+        (
+            &["render", "--resume", "short.ckpt"],
+            "short.ckpt",
+            "truncated",
+        ),
+        (
+            &["render", "--resume", "plain.exr"],
+            "plain.exr",
+            "is an EXR image",
+        ),
+        (
+            &["merge", "gone.exr", "plain.exr"],
+            "gone.exr",
+            "No such file",
+        ),
+        (
+            &["merge", "plain.exr"],
+            "plain.exr",
+            "not a part of a splitray render",
+        ),
+        (&["merge", "notes.txt"], "notes.txt", "EXR"),
+    ];
+    for (args, file, why) in cases {
+        let mut args = args.to_vec();
+        args.extend(["-o", "out.exr"]);
+        let out = splitray(&args, d);
+        let t = text(&out);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {t}");
+        assert!(t.contains(file) && t.contains(why), "{args:?}: {t}");
+        assert!(!t.contains("panicked"), "{t}");
+        assert_eq!(outputs(d), ["plain.exr", "short.ckpt"], "{args:?}");
+    }
+}
