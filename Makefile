@@ -4,7 +4,7 @@
 CARGO ?= cargo
 SCENE ?= cornell-box
 
-.PHONY: deps build render test lint bench clean
+.PHONY: deps build render test slurm-test lint bench clean
 
 deps:
 	@command -v $(CARGO) >/dev/null || { echo "make: cargo not found: install a Rust toolchain (rustup) first" >&2; exit 1; }
@@ -23,6 +23,14 @@ render: build
 # with debug assertions: the light-transport tests sample millions of paths.
 test: deps
 	SPLITRAY_VALIDATION=1 $(CARGO) test --profile ci --locked --all-targets
+
+# A real one-node Slurm cluster on localhost (munged, slurmctld, slurmd) renders one
+# image as a 4-task job array with a dependent merge job, checked against a one-process
+# render (tools/slurm/test-local-cluster.sh: installs slurm-wlm and munge, runs as root,
+# stops the daemons it started).
+slurm-test: deps
+	$(CARGO) build --profile ci --locked --bin splitray
+	bash tools/slurm/test-local-cluster.sh target/ci/splitray
 
 lint:
 	$(CARGO) fmt --all -- --check
