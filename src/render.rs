@@ -7,9 +7,10 @@ pub mod checkpoint;
 pub mod fingerprint;
 pub mod merge;
 pub mod part;
+mod plan;
 pub mod shard;
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 use serde::Serialize;
@@ -25,6 +26,8 @@ use crate::vk::{self, Gpu, KernelTime, ProfileTree};
 pub use checkpoint::Checkpoint;
 pub use fingerprint::Fingerprint;
 pub use part::PartRecord;
+use plan::start_film;
+pub use plan::{CheckpointHook, FilmSnapshot, RenderPlan, Resume};
 pub use shard::{PassRanges, Shard};
 
 #[derive(Debug, thiserror::Error)]
@@ -198,43 +201,6 @@ pub struct Progress {
     pub time_limit: Option<f64>,
     /// Relative MSE against the reference, when one was given.
     pub relative_mse: Option<f64>,
-}
-
-/// Where a render starts, which of the image's passes it takes and when it saves its
-/// film. The default is a whole render from pass 0 that saves nothing.
-#[derive(Default)]
-pub struct RenderPlan<'a> {
-    /// The part of the image's passes to take ([`Shard::WHOLE`] by default).
-    pub shard: Shard,
-    /// A checkpoint to continue: the render restores its film and goes on after its
-    /// passes, and refuses it when the scene or settings changed.
-    pub resume: Option<Resume<'a>>,
-    /// Saves the film every so many seconds, at a pass boundary.
-    pub checkpoint: Option<CheckpointHook<'a>>,
-}
-
-/// A checkpoint to continue, and the file it came from (errors name it).
-pub struct Resume<'a> {
-    pub checkpoint: &'a Checkpoint,
-    pub path: &'a Path,
-}
-
-/// Called with the film every `every_s` seconds of rendering, at a pass boundary (not
-/// after the last pass: the caller has the finished film then).
-pub struct CheckpointHook<'a> {
-    pub every_s: f64,
-    pub save: &'a mut dyn FnMut(&FilmSnapshot<'_>) -> Result<(), RenderError>,
-}
-
-/// A render's film at a pass boundary, with what continuing it needs.
-pub struct FilmSnapshot<'s> {
-    pub sums: &'s FilmSums,
-    pub fingerprint: &'s Fingerprint,
-    pub shard: Shard,
-    /// Global index of the film's first pass.
-    pub first_pass: u32,
-    /// Seconds spent rendering the film, resumed runs included.
-    pub render_time_s: f64,
 }
 
 impl RenderOutput {
@@ -505,54 +471,6 @@ fn integrator_on(
             )?)
         }
     })
-}
-
-/// Restores the film of the checkpoint `plan` continues, after checking that it was
-/// saved from this scene, these settings and this shard; returns the global index of the
-/// film's first pass and the passes it holds already.
-fn start_film(
-    integrator: &mut dyn Integrator,
-    options: &RenderOptions,
-    plan: &RenderPlan<'_>,
-    fingerprint: &Fingerprint,
-) -> Result<(u32, u32), RenderError> {
-    let per_pass = integrator.samples_per_pass().max(1);
-    let block = plan.shard.passes(options.spp.div_ceil(per_pass));
-    let Some(resume) = &plan.resume else {
-        return Ok((block.start, 0));
-    };
-    let header = &resume.checkpoint.header;
-    let refuse = |message: String| RenderError::BadFile {
-        path: resume.path.to_path_buf(),
-        message,
-    };
-    if header.fingerprint != *fingerprint {
-        let differences =
-            header
-                .fingerprint
-                .differences(fingerprint, "in the checkpoint", "in this render");
-        return Err(refuse(format!(
-            "was saved from another scene or settings: {}",
-            differences.join("; ")
-        )));
-    }
-    if header.shard != plan.shard {
-        return Err(refuse(format!(
-            "was saved as shard {}, not {}",
-            header.shard, plan.shard
-        )));
-    }
-    if header.first_pass != block.start {
-        return Err(refuse(format!(
-            "its passes start at index {}, where shard {} of {} samples per pixel starts \
-             at {}: continue it with the samples per pixel (or --time) it was started with",
-            header.first_pass, plan.shard, options.spp, block.start
-        )));
-    }
-    integrator
-        .restore(&resume.checkpoint.sums)
-        .map_err(|e| refuse(e.to_string()))?;
-    Ok((block.start, resume.checkpoint.sums.passes))
 }
 
 /// What the pass loop continues from and hands its film to.

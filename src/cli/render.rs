@@ -8,7 +8,7 @@
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use anyhow::{anyhow, bail, Context};
+use anyhow::{bail, Context};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use splitray::integrator::IntegratorKind;
@@ -16,12 +16,14 @@ use splitray::render::{
     render_from, Checkpoint, CheckpointHook, FilmSnapshot, Progress, RenderControl, RenderError,
     RenderOptions, RenderOutput, RenderPlan, Resume, Shard,
 };
-use splitray::scene::Scene;
 use splitray::trace::TracerKind;
 use splitray::vk::{Gpu, GpuDesc, InstanceDesc};
 
 use super::render_files::{write_stats, RenderFiles};
 use super::signals::{self, StopSignals};
+use options::{parse_shard, render_options};
+
+mod options;
 
 /// The scene rendered when none is named.
 const DEFAULT_SCENE: &str = "cornell-box";
@@ -256,8 +258,13 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<ExitCode> {
     }
     let stopped_by = signals.received();
     if result.sums.passes == 0 {
-        let name = stopped_by.map_or("a stop", signals::name);
-        eprintln!("{name}: stopped before the first pass; nothing written");
+        let Some(signal) = stopped_by else {
+            bail!("the render holds no passes; nothing was written");
+        };
+        eprintln!(
+            "{}: stopped before the first pass; nothing written",
+            signals::name(signal)
+        );
         return Ok(exit_code(stopped_by));
     }
     let written = {
@@ -301,100 +308,6 @@ fn exit_code(stopped_by: Option<i32>) -> ExitCode {
         Some(signal) => ExitCode::from(signals::exit_status(signal)),
         None => ExitCode::SUCCESS,
     }
-}
-
-fn parse_shard(spec: &str) -> anyhow::Result<Shard> {
-    let shard = if spec == "auto" {
-        Shard::from_environment(|name| std::env::var(name).ok())
-    } else {
-        spec.parse()
-    };
-    shard.map_err(|e| anyhow!("--shard: {e}"))
-}
-
-/// The options of this render: the scene's, or the checkpoint's when resuming,
-/// overridden by whatever the command line gives.
-fn render_options(
-    args: &RenderArgs,
-    scene: &Scene,
-    resume: Option<&(Checkpoint, &Path)>,
-) -> anyhow::Result<RenderOptions> {
-    let mut options = match resume {
-        None => RenderOptions::resolve(
-            scene,
-            args.width,
-            args.height,
-            args.spp,
-            args.seed,
-            args.integrator,
-            args.tracer,
-        )?,
-        Some((checkpoint, path)) => resumed_options(args, checkpoint, path)?,
-    };
-    if let Some(t) = args.time {
-        if !t.is_finite() || t <= 0.0 {
-            bail!("--time must be a positive number of seconds");
-        }
-        options.time_limit = Some(t);
-        if args.spp.is_none() && resume.is_none() {
-            options.spp = u32::MAX;
-        }
-    }
-    if let Some(d) = args.max_depth {
-        options.max_depth = d;
-    }
-    if let Some(r) = args.rr_depth {
-        options.rr_depth = r;
-    }
-    if args.no_sort {
-        options.sort_materials = false;
-    }
-    if let Some(s) = args.strategy {
-        options.strategy = s;
-    }
-    if let Some(path) = &args.reference {
-        options.reference = Some(std::sync::Arc::new(read_reference(path, &options)?));
-    }
-    Ok(options)
-}
-
-/// The checkpoint's options with the command line's on top; without --spp or --time,
-/// the render goes on to the checkpoint's own target (its spp, or what is left of its
-/// time).
-fn resumed_options(
-    args: &RenderArgs,
-    checkpoint: &Checkpoint,
-    path: &Path,
-) -> anyhow::Result<RenderOptions> {
-    let header = &checkpoint.header;
-    let mut options = header
-        .options
-        .to_options()
-        .map_err(|e| anyhow!("{}: {e}", path.display()))?;
-    options.width = args.width.unwrap_or(options.width);
-    options.height = args.height.unwrap_or(options.height);
-    options.seed = args.seed.unwrap_or(options.seed);
-    options.integrator = args.integrator.unwrap_or(options.integrator);
-    options.tracer = args.tracer.unwrap_or(options.tracer);
-    if let Some(spp) = args.spp {
-        if spp == 0 {
-            bail!("--spp must be at least 1");
-        }
-        options.spp = spp;
-        options.time_limit = None;
-    } else if let (None, Some(limit)) = (args.time, header.options.time_limit) {
-        let left = limit - header.render_time_s;
-        if left <= 0.0 {
-            bail!(
-                "{}: its --time {limit} s is spent ({:.1} s rendered): continue it with \
-                 --time SECONDS or --spp N",
-                path.display(),
-                header.render_time_s
-            );
-        }
-        options.time_limit = Some(left);
-    }
-    Ok(options)
 }
 
 fn progress_bar(options: &RenderOptions, label: &str) -> ProgressBar {
@@ -472,20 +385,4 @@ fn print_summary(result: &RenderOutput, profile: bool) {
     if profile {
         print!("{}", s.profile.table());
     }
-}
-
-/// The reference image's mean RGB, refused unless it has this render's film size.
-fn read_reference(path: &Path, options: &RenderOptions) -> anyhow::Result<Vec<[f32; 3]>> {
-    let (film, _) = splitray::film::read_exr(path)?;
-    if (film.width(), film.height()) != (options.width, options.height) {
-        bail!(
-            "{}: the reference is {}x{}, the render {}x{}",
-            path.display(),
-            film.width(),
-            film.height(),
-            options.width,
-            options.height
-        );
-    }
-    Ok(film.mean_rgb_buffer())
 }

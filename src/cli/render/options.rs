@@ -1,0 +1,120 @@
+//! The options of `splitray render`: the scene's or a checkpoint's, with the command
+//! line's on top.
+
+use std::path::Path;
+
+use anyhow::{anyhow, bail};
+use splitray::render::{Checkpoint, RenderOptions, Shard};
+use splitray::scene::Scene;
+
+use super::RenderArgs;
+
+pub(super) fn parse_shard(spec: &str) -> anyhow::Result<Shard> {
+    let shard = if spec == "auto" {
+        Shard::from_environment(|name| std::env::var(name).ok())
+    } else {
+        spec.parse()
+    };
+    shard.map_err(|e| anyhow!("--shard: {e}"))
+}
+
+/// The options of this render: the scene's, or the checkpoint's when resuming,
+/// overridden by whatever the command line gives.
+pub(super) fn render_options(
+    args: &RenderArgs,
+    scene: &Scene,
+    resume: Option<&(Checkpoint, &Path)>,
+) -> anyhow::Result<RenderOptions> {
+    let mut options = match resume {
+        None => RenderOptions::resolve(
+            scene,
+            args.width,
+            args.height,
+            args.spp,
+            args.seed,
+            args.integrator,
+            args.tracer,
+        )?,
+        Some((checkpoint, path)) => resumed_options(args, checkpoint, path)?,
+    };
+    if let Some(t) = args.time {
+        if !t.is_finite() || t <= 0.0 {
+            bail!("--time must be a positive number of seconds");
+        }
+        options.time_limit = Some(t);
+        if args.spp.is_none() && resume.is_none() {
+            options.spp = u32::MAX;
+        }
+    }
+    if let Some(d) = args.max_depth {
+        options.max_depth = d;
+    }
+    if let Some(r) = args.rr_depth {
+        options.rr_depth = r;
+    }
+    if args.no_sort {
+        options.sort_materials = false;
+    }
+    if let Some(s) = args.strategy {
+        options.strategy = s;
+    }
+    if let Some(path) = &args.reference {
+        options.reference = Some(std::sync::Arc::new(read_reference(path, &options)?));
+    }
+    Ok(options)
+}
+
+/// The checkpoint's options with the command line's on top; without --spp or --time,
+/// the render goes on to the checkpoint's own target (its spp, or what is left of its
+/// time).
+fn resumed_options(
+    args: &RenderArgs,
+    checkpoint: &Checkpoint,
+    path: &Path,
+) -> anyhow::Result<RenderOptions> {
+    let header = &checkpoint.header;
+    let mut options = header
+        .options
+        .to_options()
+        .map_err(|e| anyhow!("{}: {e}", path.display()))?;
+    options.width = args.width.unwrap_or(options.width);
+    options.height = args.height.unwrap_or(options.height);
+    options.seed = args.seed.unwrap_or(options.seed);
+    options.integrator = args.integrator.unwrap_or(options.integrator);
+    options.tracer = args.tracer.unwrap_or(options.tracer);
+    if let Some(spp) = args.spp {
+        if spp == 0 {
+            bail!("--spp must be at least 1");
+        }
+        options.spp = spp;
+        options.time_limit = None;
+    } else if let (None, Some(limit)) = (args.time, header.options.time_limit) {
+        let left = limit - header.render_time_s;
+        if left <= 0.0 {
+            bail!(
+                "{}: its --time {limit} s is spent ({:.1} s rendered): continue it with \
+                 --time SECONDS or --spp N",
+                path.display(),
+                header.render_time_s
+            );
+        }
+        options.time_limit = Some(left);
+    }
+    Ok(options)
+}
+
+/// The reference image's mean RGB, refused unless it has this render's film size.
+fn read_reference(path: &Path, options: &RenderOptions) -> anyhow::Result<Vec<[f32; 3]>> {
+    let (film, _) = splitray::film::read_exr(path)?;
+    if (film.width(), film.height()) != (options.width, options.height) {
+        bail!(
+            "{}: the reference is {}x{}, the render {}x{}",
+            path.display(),
+            film.width(),
+            film.height(),
+            options.width,
+            options.height
+        );
+    }
+    Ok(film.mean_rgb_buffer())
+}

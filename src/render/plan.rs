@@ -1,0 +1,102 @@
+//! [`RenderPlan`]: where a render starts (a fresh film or a checkpoint's), which of the
+//! image's passes it takes (a [`Shard`]'s block) and when it saves its film.
+
+use std::path::Path;
+
+use super::{Checkpoint, Fingerprint, RenderError, RenderOptions, Shard};
+use crate::film::FilmSums;
+use crate::integrator::Integrator;
+
+/// Where a render starts, which of the image's passes it takes and when it saves its
+/// film. The default is a whole render from pass 0 that saves nothing.
+#[derive(Default)]
+pub struct RenderPlan<'a> {
+    /// The part of the image's passes to take ([`Shard::WHOLE`] by default).
+    pub shard: Shard,
+    /// A checkpoint to continue: the render restores its film and goes on after its
+    /// passes, and refuses it when the scene or settings changed.
+    pub resume: Option<Resume<'a>>,
+    /// Saves the film every so many seconds, at a pass boundary.
+    pub checkpoint: Option<CheckpointHook<'a>>,
+}
+
+/// A checkpoint to continue, and the file it came from (errors name it).
+pub struct Resume<'a> {
+    pub checkpoint: &'a Checkpoint,
+    pub path: &'a Path,
+}
+
+/// Called with the film every `every_s` seconds of rendering, at a pass boundary (not
+/// after the last pass: the caller has the finished film then).
+pub struct CheckpointHook<'a> {
+    pub every_s: f64,
+    pub save: &'a mut dyn FnMut(&FilmSnapshot<'_>) -> Result<(), RenderError>,
+}
+
+/// A render's film at a pass boundary, with what continuing it needs.
+pub struct FilmSnapshot<'s> {
+    pub sums: &'s FilmSums,
+    pub fingerprint: &'s Fingerprint,
+    pub shard: Shard,
+    /// Global index of the film's first pass.
+    pub first_pass: u32,
+    /// Seconds spent rendering the film, resumed runs included.
+    pub render_time_s: f64,
+}
+
+/// Restores the film of the checkpoint `plan` continues, after checking that it was
+/// saved from this scene, these settings and this shard; returns the global index of the
+/// film's first pass and the passes it holds already.
+pub(super) fn start_film(
+    integrator: &mut dyn Integrator,
+    options: &RenderOptions,
+    plan: &RenderPlan<'_>,
+    fingerprint: &Fingerprint,
+) -> Result<(u32, u32), RenderError> {
+    let per_pass = integrator.samples_per_pass().max(1);
+    let total = options.spp.div_ceil(per_pass);
+    let block = plan.shard.passes(total);
+    if block.is_empty() {
+        return Err(RenderError::Options(format!(
+            "shard {} of a render of {total} passes has none: ask for at least {} samples \
+             per pixel",
+            plan.shard,
+            plan.shard.count as u64 * per_pass as u64
+        )));
+    }
+    let Some(resume) = &plan.resume else {
+        return Ok((block.start, 0));
+    };
+    let header = &resume.checkpoint.header;
+    let refuse = |message: String| RenderError::BadFile {
+        path: resume.path.to_path_buf(),
+        message,
+    };
+    if header.fingerprint != *fingerprint {
+        let differences =
+            header
+                .fingerprint
+                .differences(fingerprint, "in the checkpoint", "in this render");
+        return Err(refuse(format!(
+            "was saved from another scene or settings: {}",
+            differences.join("; ")
+        )));
+    }
+    if header.shard != plan.shard {
+        return Err(refuse(format!(
+            "was saved as shard {}, not {}",
+            header.shard, plan.shard
+        )));
+    }
+    if header.first_pass != block.start {
+        return Err(refuse(format!(
+            "its passes start at index {}, where shard {} of {} samples per pixel starts \
+             at {}: continue it with the samples per pixel (or --time) it was started with",
+            header.first_pass, plan.shard, options.spp, block.start
+        )));
+    }
+    integrator
+        .restore(&resume.checkpoint.sums)
+        .map_err(|e| refuse(e.to_string()))?;
+    Ok((block.start, resume.checkpoint.sums.passes))
+}
