@@ -1,9 +1,9 @@
 //! `splitray render`: a render, a shard of one, or the continuation of a checkpoint.
 //!
-//! Order of work: signals are handled first, then the checkpoint to resume, the scene
-//! and the options are read, every output's temporary file is created (so a path that
-//! cannot be written fails before any work), and only then does the scene go to the
-//! GPU.
+//! Order of work: signals are handled first, the timeline (if asked for) starts, then
+//! the checkpoint to resume, the scene and the options are read, every output's
+//! temporary file is created (so a path that cannot be written fails before any work),
+//! and only then does the scene go to the GPU.
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
