@@ -28,8 +28,10 @@ test: deps
 # image as a 4-task job array with a dependent merge job, checked against a one-process
 # render (tools/slurm/test-local-cluster.sh: installs slurm-wlm and munge, runs as root,
 # stops the daemons it started).
+# The binary is built as `make test` builds it (with the test targets' features), so
+# after `make test` this builds nothing.
 slurm-test: deps
-	$(CARGO) build --profile ci --locked --bin splitray
+	$(CARGO) test --profile ci --locked --no-run --test cli_long_renders
 	bash tools/slurm/test-local-cluster.sh target/ci/splitray
 
 lint:
