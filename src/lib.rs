@@ -8,13 +8,15 @@
 //! - [`bsdf`]: BSDFs and layered materials, with GLSL twins in `glsl/common/bsdf.glsl`.
 //! - [`scene`], [`film`]: scene input and image output (CPU only).
 //! - [`trace`]: the `Tracer` interface and its implementations.
-//! - [`integrator`]: what is computed along the rays.
+//! - [`integrator`]: what is computed along the rays; [`bidir`]: the CPU bidirectional
+//!   path tracer's machinery (vertices, walks, connections, MIS and its oracle).
 //! - [`render`]: ties a scene, a tracer and an integrator into a film.
 //! - [`scene_export`]: the resolved scene as JSON, for reference renderers.
 //! - [`bench`](mod@bench): the measurements behind `splitray bench`.
 //! - [`timeline`]: per-stream and per-thread timelines (Chrome trace-event JSON, SVG).
 
 pub mod bench;
+pub mod bidir;
 pub mod bsdf;
 pub mod film;
 pub mod integrator;

@@ -1,0 +1,196 @@
+//! The scene as the CPU bidirectional integrators see it: `pt`'s tables ([`PtScene`]:
+//! triangles, per-triangle materials, BSDF stacks, shading normals, the light table) and
+//! a ray caster that many rayon threads query at once.
+//!
+//! Conventions, all `pt`'s (`glsl/integrator/pt/shade.comp`):
+//! - the geometric normal is normalize(e1 × e2), the front of a triangle; emitters emit
+//!   towards it only;
+//! - the shading normal interpolates the mesh's vertex normals with the hit's
+//!   barycentrics and is flipped to the geometric normal's side (the geometric normal
+//!   where the mesh has none);
+//! - a ray leaving a surface starts 1e-4 × the scene's bounding radius away from it along
+//!   the geometric normal, on the side it leaves towards; a shadow ray towards a point
+//!   ends 1e-4 of its length short of it.
+
+use glam::Vec3;
+
+use super::positive;
+
+use crate::bsdf::BsdfParams;
+use crate::integrator::pt::PtScene;
+use crate::scene::Scene;
+use crate::trace::{GpuTriangle, Hit, Ray};
+
+/// Ray casting over the scene's triangles, shared by threads: brute force over
+/// `trace::cpu` (every triangle per ray), which is fast enough for the small scenes the
+/// bidirectional integrators are checked and measured on.
+#[derive(Clone, Debug)]
+pub struct RayCaster {
+    triangles: Vec<GpuTriangle>,
+}
+
+impl RayCaster {
+    pub fn new(triangles: &[GpuTriangle]) -> Self {
+        Self {
+            triangles: triangles.to_vec(),
+        }
+    }
+
+    pub fn closest_hit(&self, ray: &Ray) -> Hit {
+        crate::trace::cpu::closest_hit(ray, &self.triangles)
+    }
+
+    pub fn occluded(&self, ray: &Ray) -> bool {
+        crate::trace::cpu::occluded(ray, &self.triangles)
+    }
+}
+
+/// Where a ray met a surface.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfaceHit {
+    pub p: Vec3,
+    /// Unit geometric normal (the triangle's front).
+    pub ng: Vec3,
+    /// Unit shading normal, on the side of `ng`.
+    pub ns: Vec3,
+    pub triangle: u32,
+    pub material: u32,
+    /// Distance along the ray.
+    pub t: f32,
+}
+
+/// `pt`'s scene tables and a ray caster.
+pub struct CpuScene {
+    pub tables: PtScene,
+    pub caster: RayCaster,
+    /// Offset of ray origins off surfaces.
+    pub ray_epsilon: f32,
+}
+
+impl CpuScene {
+    pub fn new(scene: &Scene) -> Self {
+        Self::from_tables(PtScene::new(scene))
+    }
+
+    pub fn from_tables(tables: PtScene) -> Self {
+        let ray_epsilon = 1e-4 * tables.scene_radius.max(1e-3);
+        Self {
+            caster: RayCaster::new(&tables.triangles),
+            tables,
+            ray_epsilon,
+        }
+    }
+
+    pub fn bsdf(&self, material: u32) -> &BsdfParams {
+        &self.tables.bsdfs[material as usize]
+    }
+
+    /// Emitted radiance of a material (front side only).
+    pub fn emission(&self, material: u32) -> Vec3 {
+        Vec3::from_slice(&self.tables.materials[material as usize].emission[..3])
+    }
+
+    /// Whether a material has a non-delta lobe that connections can evaluate.
+    pub fn connectible(&self, material: u32) -> bool {
+        self.tables.materials[material as usize].all_delta == 0
+    }
+
+    /// Area of a triangle (as the light table measures it).
+    pub fn triangle_area(&self, triangle: u32) -> f32 {
+        0.5 * self.tables.triangles[triangle as usize].normal().length()
+    }
+
+    /// The closest surface along the unit direction `dir` from `origin`.
+    pub fn intersect(&self, origin: Vec3, dir: Vec3) -> Option<SurfaceHit> {
+        let hit = self
+            .caster
+            .closest_hit(&Ray::new(origin, dir, 0.0, f32::INFINITY));
+        if !hit.is_hit() {
+            return None;
+        }
+        let tri = &self.tables.triangles[hit.triangle as usize];
+        let ng = tri.normal().normalize();
+        Some(SurfaceHit {
+            p: origin + hit.t * dir,
+            ng,
+            ns: self.shading_normal(&hit, ng),
+            triangle: hit.triangle,
+            material: self.tables.triangle_material[hit.triangle as usize],
+            t: hit.t,
+        })
+    }
+
+    /// The interpolated vertex normal at a hit, flipped to `ng`'s side; `ng` where the
+    /// mesh has no normals.
+    fn shading_normal(&self, hit: &Hit, ng: Vec3) -> Vec3 {
+        let normals = &self.tables.normals;
+        let base = 3 * hit.triangle as usize;
+        let Some(n0) = normals.get(base).filter(|n| n[3] != 0.0) else {
+            return ng;
+        };
+        let [n1, n2] = [normals[base + 1], normals[base + 2]];
+        let n = (1.0 - hit.u - hit.v) * Vec3::from_slice(&n0[..3])
+            + hit.u * Vec3::from_slice(&n1[..3])
+            + hit.v * Vec3::from_slice(&n2[..3]);
+        if n.length_squared() <= 0.0 {
+            return ng;
+        }
+        let ns = n.normalize();
+        if ns.dot(ng) < 0.0 {
+            -ns
+        } else {
+            ns
+        }
+    }
+
+    /// `p` moved off its surface (geometric normal `ng`) to the side `dir` points to.
+    pub fn offset(&self, p: Vec3, ng: Vec3, dir: Vec3) -> Vec3 {
+        if ng == Vec3::ZERO {
+            return p;
+        }
+        let eps = if ng.dot(dir) > 0.0 {
+            self.ray_epsilon
+        } else {
+            -self.ray_epsilon
+        };
+        p + ng * eps
+    }
+
+    /// Whether the segment between two points is free. Each end on a surface (its
+    /// geometric normal non-zero) is moved off it towards the other end; a point in space
+    /// (the pinhole, a point light: zero normal) stays where it is.
+    pub fn unoccluded(&self, a: Vec3, a_ng: Vec3, b: Vec3, b_ng: Vec3) -> bool {
+        let dir = b - a;
+        let from = self.offset(a, a_ng, dir);
+        let to = self.offset(b, b_ng, -dir);
+        let d = to - from;
+        let reach = d.length();
+        if !positive(reach) {
+            return false;
+        }
+        let ray = Ray::new(from, d / reach, 0.0, reach * (1.0 - 1e-4));
+        !self.caster.occluded(&ray)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::builtin;
+
+    #[test]
+    fn hits_carry_pt_conventions() {
+        let scene = CpuScene::new(&builtin("cornell-box").unwrap());
+        let cam = builtin("cornell-box").unwrap().camera;
+        let dir = (cam.look_at - cam.position).normalize();
+        let hit = scene.intersect(cam.position, dir).expect("the back wall");
+        assert!(hit.ng.dot(dir) < 0.0, "walls face the camera");
+        assert_eq!(hit.ns, hit.ng, "no vertex normals in the Cornell box");
+        assert!((hit.p - (cam.position + hit.t * dir)).length() < 1e-3);
+        // Two points on either side of the back wall do not see each other; two in the
+        // room do, even when one lies on a wall.
+        let room = cam.position + dir * (hit.t * 0.5);
+        assert!(scene.unoccluded(room, Vec3::ZERO, hit.p, hit.ng));
+        assert!(!scene.unoccluded(room, Vec3::ZERO, hit.p + dir * 10.0, Vec3::ZERO));
+    }
+}
