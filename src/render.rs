@@ -63,10 +63,10 @@ pub struct RenderOptions {
     pub integrator: IntegratorKind,
     pub tracer: TracerKind,
     pub ao_rays: u32,
-    /// `pt`: Mitsuba's max_depth (1 = emitters seen directly, 2 = direct light; < 0
-    /// unbounded). From the scene's `[render] max_depth`, else unbounded.
+    /// `pt`, `bpt`, `light`: Mitsuba's max_depth (1 = emitters seen directly, 2 = direct
+    /// light; < 0 unbounded). From the scene's `[render] max_depth`, else unbounded.
     pub max_depth: i32,
-    /// `pt`: Russian roulette from this depth on (Mitsuba's default 5).
+    /// `pt`, `bpt`, `light`: Russian roulette from this depth on (Mitsuba's default 5).
     pub rr_depth: u32,
     /// `pt`: sort paths by material key before shading.
     pub sort_materials: bool,
@@ -78,6 +78,8 @@ pub struct RenderOptions {
     /// A reference image (mean RGB per pixel, this film's size): the render reports its
     /// relative MSE against it as it goes.
     pub reference: Option<std::sync::Arc<Vec<[f32; 3]>>>,
+    /// `bpt`, `light`: keep one image per technique (s, t) ([`Integrator::extra_images`]).
+    pub bdpt_techniques: bool,
 }
 
 impl RenderOptions {
@@ -120,6 +122,7 @@ impl RenderOptions {
             strategy: Default::default(),
             time_limit: None,
             reference: None,
+            bdpt_techniques: false,
         };
         if options.width == 0
             || options.height == 0
@@ -440,6 +443,26 @@ fn integrator_on(
                 ..Default::default()
             },
         )?),
+        IntegratorKind::Bpt | IntegratorKind::Light => {
+            // The CPU integrators cast their own rays; the tracer is not needed.
+            drop(tracer);
+            let mode = match options.integrator {
+                IntegratorKind::Light => integrator::bpt::BidirMode::Light,
+                _ => integrator::bpt::BidirMode::Bpt,
+            };
+            Box::new(integrator::bpt::BptIntegrator::new(
+                mode,
+                scene,
+                &camera,
+                &integrator::bpt::BptOptions {
+                    seed: options.seed,
+                    max_depth: options.max_depth,
+                    rr_depth: options.rr_depth,
+                    technique_images: options.bdpt_techniques,
+                    ..Default::default()
+                },
+            ))
+        }
         kind => {
             let triangle_material: Vec<u32> = scene.triangles.iter().map(|t| t.material).collect();
             let materials: Vec<GpuMaterial> = scene

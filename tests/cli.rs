@@ -110,6 +110,59 @@ fn tiny_render_writes_exr_png_and_stats_with_validation_on() {
 }
 
 #[test]
+fn bpt_render_writes_technique_images_and_its_counters() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::create_dir(dir.path().join("tech")).unwrap();
+    let out = splitray(
+        &[
+            "render",
+            "cornell-box",
+            "-o",
+            "bpt.exr",
+            "--width",
+            "16",
+            "--height",
+            "12",
+            "--spp",
+            "2",
+            "--integrator",
+            "bpt",
+            "--max-depth",
+            "4",
+            "--bdpt-techniques",
+            "tech",
+            "--stats",
+            "stats.json",
+        ],
+        dir.path(),
+    );
+    assert!(out.status.success(), "{}", text(&out));
+    let (film, meta) = splitray::film::read_exr(dir.path().join("bpt.exr")).unwrap();
+    assert_eq!((film.width(), film.height(), meta.spp), (16, 12, 2));
+    assert_eq!(meta.integrator, "bpt");
+    let (nee, _) = splitray::film::read_exr(dir.path().join("tech/s1_t2.exr")).unwrap();
+    assert_eq!((nee.width(), nee.height()), (16, 12));
+    // Paths of at most 4 segments: no image of a longer technique.
+    assert!(dir.path().join("tech/s2_t3.exr").is_file());
+    assert!(!dir.path().join("tech/s3_t3.exr").exists());
+    let stats: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("stats.json")).unwrap()).unwrap();
+    for counter in [
+        "camera_paths",
+        "light_paths",
+        "connections",
+        "basic_contributions",
+    ] {
+        assert!(
+            stats["counters"][counter].as_u64().unwrap() > 0,
+            "{counter}"
+        );
+    }
+    assert_eq!(stats["counters"]["camera_paths"], 16 * 12 * 2);
+    assert_eq!(stats["counters"]["non_finite_dropped"], 0);
+}
+
+#[test]
 fn default_output_goes_to_out_folder() {
     let dir = tempfile::tempdir().unwrap();
     let out = splitray(
@@ -209,6 +262,24 @@ fn bad_input_gives_a_clear_error_and_no_output() {
         d,
         &["render", "--device", "no-such-gpu", "-o", "a.exr"],
         &["no-such-gpu"],
+    );
+    assert_fails(
+        d,
+        &[
+            "render",
+            "--integrator",
+            "bpt",
+            "--bdpt-techniques",
+            "nodir",
+            "-o",
+            "a.exr",
+        ],
+        &["nodir", "existing folder"],
+    );
+    assert_fails(
+        d,
+        &["render", "--bdpt-techniques", ".", "-o", "a.exr"],
+        &["--bdpt-techniques", "bpt or light"],
     );
     // clap's own usage errors exit with 2; an unknown integrator is one of them.
     let out = splitray(&["render", "--integrator", "bogus"], d);

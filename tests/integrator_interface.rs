@@ -29,7 +29,13 @@ fn integrator(gpu: &Gpu, scene: &Scene, kind: IntegratorKind) -> Box<dyn Integra
 fn grouping_and_restoring_passes_leaves_the_film_bit_identical() {
     let gpu = common::gpu();
     let scene = builtin("cornell-box").unwrap();
-    for kind in [IntegratorKind::Pt, IntegratorKind::Ao, IntegratorKind::Path] {
+    for kind in [
+        IntegratorKind::Pt,
+        IntegratorKind::Ao,
+        IntegratorKind::Path,
+        IntegratorKind::Bpt,
+        IntegratorKind::Light,
+    ] {
         let mut whole = integrator(&gpu, &scene, kind);
         whole.render_passes(0, 6).unwrap();
         let expected = whole.sums().unwrap();

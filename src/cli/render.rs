@@ -50,18 +50,19 @@ pub struct RenderArgs {
     seed: Option<u64>,
     /// What to compute along the rays: primary (eye-light shading), ao (ambient
     /// occlusion), shadow (one point light), reflection (one mirror bounce), path
-    /// (7 diffuse bounces) or pt (physically based path tracing).
+    /// (7 diffuse bounces), pt (physically based path tracing), bpt (bidirectional path
+    /// tracing on the CPU) or light (light tracing on the CPU).
     #[arg(long)]
     integrator: Option<IntegratorKind>,
     /// Render for this many seconds instead (stops after the pass during which the time
     /// ran out; with --spp, at most that many passes).
     #[arg(long, value_name = "SECONDS")]
     time: Option<f64>,
-    /// pt: maximum path depth as in Mitsuba (1 = emitters seen directly, 2 = direct
+    /// pt, bpt, light: maximum path depth as in Mitsuba (1 = emitters seen directly, 2 = direct
     /// light, -1 = unbounded; default: the scene's, else -1).
     #[arg(long, allow_hyphen_values = true)]
     max_depth: Option<i32>,
-    /// pt: Russian roulette from this depth on (default: Mitsuba's 5).
+    /// pt, bpt, light: Russian roulette from this depth on (default: Mitsuba's 5).
     #[arg(long)]
     rr_depth: Option<u32>,
     /// pt: do not sort paths by material before shading (same image, other speed).
@@ -125,6 +126,11 @@ pub struct RenderArgs {
     /// SPLITRAY_SHARD_COUNT set to its completions).
     #[arg(long, value_name = "I/N|auto")]
     shard: Option<String>,
+    /// bpt, light: also write one MIS-weighted EXR per technique (s, t) into this
+    /// (existing) folder, `s{S}_t{T}.exr` (`longer.exr`: paths of more than 8
+    /// segments); they sum to the image.
+    #[arg(long, value_name = "DIR")]
+    bdpt_techniques: Option<PathBuf>,
 }
 
 /// The output path (default `out/<scene>.exr`, `out/<scene>.shard-I-of-N.exr` for a
@@ -271,6 +277,10 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<ExitCode> {
         let _span = tracing::info_span!("write outputs").entered();
         image.write(&result.film, &result.metadata)?
     };
+    if let Some(dir) = &args.bdpt_techniques {
+        let _span = tracing::info_span!("write technique images").entered();
+        write_technique_images(dir, &result.extra_images, &result.metadata)?;
+    }
     print_summary(&result, args.profile);
     println!(
         "wrote {} and {}",
@@ -385,4 +395,44 @@ fn print_summary(result: &RenderOutput, profile: bool) {
     if profile {
         print!("{}", s.profile.table());
     }
+}
+
+/// Refuses `--bdpt-techniques` for other integrators and a folder that is missing or not
+/// writable, before anything is rendered.
+pub(super) fn check_technique_dir(dir: &Path, integrator: IntegratorKind) -> anyhow::Result<()> {
+    if !matches!(integrator, IntegratorKind::Bpt | IntegratorKind::Light) {
+        bail!("--bdpt-techniques needs --integrator bpt or light, not {integrator}");
+    }
+    if !dir.is_dir() {
+        bail!(
+            "{}: --bdpt-techniques needs an existing folder",
+            dir.display()
+        );
+    }
+    let probe = dir.join(format!(".splitray-write-test-{}", std::process::id()));
+    std::fs::write(&probe, b"")
+        .with_context(|| format!("{}: the folder is not writable", dir.display()))?;
+    std::fs::remove_file(&probe).ok();
+    Ok(())
+}
+
+/// Writes each technique image as `DIR/NAME.exr` (atomically, like every output).
+fn write_technique_images(
+    dir: &Path,
+    images: &[splitray::integrator::NamedImage],
+    metadata: &splitray::film::RenderMetadata,
+) -> anyhow::Result<()> {
+    for image in images {
+        let film = splitray::film::Film::from_mean_rgb(image.width, image.height, &image.rgb)?;
+        let mut meta = metadata.clone();
+        meta.extra.push(("technique".into(), image.name.clone()));
+        let path = dir.join(format!("{}.exr", image.name));
+        splitray::film::write_exr(&path, &film, &meta)?;
+    }
+    println!(
+        "wrote {} technique images to {}",
+        images.len(),
+        dir.display()
+    );
+    Ok(())
 }

@@ -14,8 +14,10 @@
 //! id, normal) come from one pass of pixel-centre rays for every integrator ([`aov`]).
 
 pub mod aov;
+pub mod bpt;
 mod eye;
 pub mod gpu_types;
+pub mod light_tracer;
 pub mod pt;
 
 use std::collections::BTreeMap;
@@ -115,6 +117,10 @@ pub enum IntegratorKind {
     Path,
     /// Wavefront path tracing with next-event estimation and MIS ([`pt`]).
     Pt,
+    /// Bidirectional path tracing on the CPU, every technique, balance heuristic ([`bpt`]).
+    Bpt,
+    /// Light tracing on the CPU ([`light_tracer`]).
+    Light,
 }
 
 impl IntegratorKind {
@@ -143,6 +149,14 @@ impl IntegratorKind {
             IntegratorKind::Pt,
             "wavefront path tracing: NEE + MIS, Russian roulette, material sorting",
         ),
+        (
+            IntegratorKind::Bpt,
+            "bidirectional path tracing on the CPU: every (s, t) technique, balance heuristic",
+        ),
+        (
+            IntegratorKind::Light,
+            "light tracing on the CPU: light subpaths splatted to the camera",
+        ),
     ];
 
     pub fn name(self) -> &'static str {
@@ -153,6 +167,8 @@ impl IntegratorKind {
             Self::Reflection => "reflection",
             Self::Path => "path",
             Self::Pt => "pt",
+            Self::Bpt => "bpt",
+            Self::Light => "light",
         }
     }
 }

@@ -61,6 +61,10 @@ pub(super) fn render_options(
     if let Some(path) = &args.reference {
         options.reference = Some(std::sync::Arc::new(read_reference(path, &options)?));
     }
+    if let Some(dir) = &args.bdpt_techniques {
+        super::check_technique_dir(dir, options.integrator)?;
+        options.bdpt_techniques = true;
+    }
     Ok(options)
 }
 
