@@ -1,6 +1,7 @@
 //! Benchmarks behind `splitray bench`: each verifies its results before timing and
 //! compares against references measured in the same run.
 
+pub mod bdpt;
 pub mod host;
 pub mod primitives;
 pub mod pt;

@@ -4,10 +4,12 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use clap::{Args, Subcommand};
+use splitray::bench::bdpt::{self as bdpt_bench, BdptBenchOptions};
 use splitray::bench::primitives::{self, PrimitivesBenchOptions};
 use splitray::bench::pt::{self as pt_bench, PtBenchOptions};
 use splitray::bench::trace::{self, TraceBenchOptions};
 use splitray::bench::workloads::Workload;
+use splitray::integrator::IntegratorKind;
 use splitray::trace::{FlushReduce, LevelSplit, PdacrtParams, TracerKind};
 use splitray::vk::{Gpu, GpuDesc, InstanceDesc};
 
@@ -59,6 +61,36 @@ enum BenchCommand {
         max_depth: i32,
         #[arg(long, default_value = "pdacrt")]
         tracer: TracerKind,
+        /// Also write the report as JSON.
+        #[arg(long, value_name = "OUT.json")]
+        json: Option<PathBuf>,
+    },
+    /// Integrators at equal wall time, taken in turns: samples/s, Mrays/s, basic
+    /// contributions/s (bpt, light) and, with --reference, relative MSE.
+    Bdpt {
+        /// A built-in scene, a scene .toml or an .obj.
+        scene: String,
+        #[arg(long, default_value_t = 160)]
+        width: u32,
+        #[arg(long, default_value_t = 120)]
+        height: u32,
+        /// Comma-separated integrators to compare.
+        #[arg(long, value_delimiter = ',', default_value = "pt,bpt,light")]
+        integrators: Vec<IntegratorKind>,
+        /// Seconds each integrator renders.
+        #[arg(long, default_value_t = 30.0)]
+        time: f64,
+        /// Slices each integrator's time is cut into (taken in turns).
+        #[arg(long, default_value_t = 10)]
+        rounds: u32,
+        /// Mitsuba's max_depth (-1 = unbounded, Russian roulette from depth 5).
+        #[arg(long, default_value_t = -1, allow_hyphen_values = true)]
+        max_depth: i32,
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+        /// A converged image of this film size (EXR): relative MSE of each film.
+        #[arg(long, value_name = "REF.exr")]
+        reference: Option<PathBuf>,
         /// Also write the report as JSON.
         #[arg(long, value_name = "OUT.json")]
         json: Option<PathBuf>,
@@ -160,10 +192,25 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     let mut timeline = super::timeline::TimelineOutput::start(args.timeline.as_deref())?;
     // Load inputs before opening the device, so bad input fails fast.
     let scene = match &args.what {
-        BenchCommand::Trace { scene, .. } | BenchCommand::Pt { scene, .. } => {
-            Some(splitray::scene::load(scene)?)
-        }
+        BenchCommand::Trace { scene, .. }
+        | BenchCommand::Pt { scene, .. }
+        | BenchCommand::Bdpt { scene, .. } => Some(splitray::scene::load(scene)?),
         BenchCommand::Primitives { .. } => None,
+    };
+    let reference = match &args.what {
+        BenchCommand::Bdpt {
+            reference: Some(path),
+            width,
+            height,
+            time,
+            ..
+        } => {
+            if time.is_nan() || *time <= 0.0 {
+                anyhow::bail!("--time must be a positive number of seconds");
+            }
+            Some(read_reference(path, *width, *height)?)
+        }
+        _ => None,
     };
     let gpu = Gpu::new(&GpuDesc {
         instance: InstanceDesc {
@@ -219,6 +266,35 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
                 },
             )
             .map_err(|e| anyhow::anyhow!("{e}"))?;
+            print!("{report}");
+            write_json(json, &report)?;
+        }
+        BenchCommand::Bdpt {
+            width,
+            height,
+            integrators,
+            time,
+            rounds,
+            max_depth,
+            seed,
+            json,
+            ..
+        } => {
+            let scene = scene.expect("loaded above");
+            let report = bdpt_bench::run(
+                &gpu,
+                &scene,
+                &BdptBenchOptions {
+                    width: *width,
+                    height: *height,
+                    integrators: integrators.clone(),
+                    seconds: *time,
+                    rounds: *rounds,
+                    max_depth: *max_depth,
+                    seed: *seed,
+                    reference,
+                },
+            )?;
             print!("{report}");
             write_json(json, &report)?;
         }
@@ -325,4 +401,25 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         t.finish(&super::timeline::command_line())?;
     }
     Ok(())
+}
+
+/// A reference image's mean RGB and its path, refused unless it is `width × height`.
+fn read_reference(
+    path: &std::path::Path,
+    width: u32,
+    height: u32,
+) -> anyhow::Result<(std::sync::Arc<Vec<[f32; 3]>>, String)> {
+    let (film, _) = splitray::film::read_exr(path)?;
+    if (film.width(), film.height()) != (width, height) {
+        anyhow::bail!(
+            "{}: the reference is {}x{}, the benchmark renders {width}x{height}",
+            path.display(),
+            film.width(),
+            film.height()
+        );
+    }
+    Ok((
+        std::sync::Arc::new(film.mean_rgb_buffer()),
+        path.display().to_string(),
+    ))
 }

@@ -1,0 +1,287 @@
+//! `splitray bench bdpt SCENE`: integrators at equal wall time, in one run.
+//!
+//! Every integrator gets the same time, in [`BdptBenchOptions::rounds`] slices taken in
+//! turn (the order rotates every round), so that a change of load on a shared machine
+//! hits them alike. Each slice renders whole passes until its time is up and continues
+//! the integrator's film, so the films at the end are equal-time renders. Reported per
+//! integrator: samples/s, Mrays/s and, for `bpt` and `light`, CBPT's throughput measure
+//! (basic contributions f_{i,j} per second, §6.2) — medians over the slices — and,
+//! given a reference, the relative MSE of the final film and its ratio to `pt`'s.
+
+use std::fmt;
+use std::sync::Arc;
+use std::time::Instant;
+
+use serde::Serialize;
+
+use crate::film::{relative_mse, FilmSums};
+use crate::integrator::{Integrator, IntegratorKind};
+use crate::render::{create_integrator, device_description, RenderError, RenderOptions};
+use crate::scene::Scene;
+use crate::vk::Gpu;
+
+#[derive(Clone, Debug)]
+pub struct BdptBenchOptions {
+    pub width: u32,
+    pub height: u32,
+    pub integrators: Vec<IntegratorKind>,
+    /// Seconds each integrator renders in all.
+    pub seconds: f64,
+    /// Slices per integrator.
+    pub rounds: u32,
+    pub max_depth: i32,
+    pub seed: u64,
+    /// Mean RGB of a reference image of this film size, and where it came from.
+    pub reference: Option<(Arc<Vec<[f32; 3]>>, String)>,
+}
+
+impl Default for BdptBenchOptions {
+    fn default() -> Self {
+        Self {
+            width: 160,
+            height: 120,
+            integrators: vec![
+                IntegratorKind::Pt,
+                IntegratorKind::Bpt,
+                IntegratorKind::Light,
+            ],
+            seconds: 30.0,
+            rounds: 10,
+            max_depth: -1,
+            seed: 0,
+            reference: None,
+        }
+    }
+}
+
+/// One integrator's figures.
+#[derive(Clone, Debug, Serialize)]
+pub struct BdptRow {
+    pub integrator: String,
+    pub seconds: f64,
+    pub passes: u32,
+    /// Median over the slices of pixel samples per second.
+    pub samples_per_second: f64,
+    /// Median over the slices of rays per second, in millions.
+    pub mrays_per_second: f64,
+    /// Median over the slices of basic contributions per second (bpt, light).
+    pub basic_contributions_per_second: Option<f64>,
+    pub relative_mse: Option<f64>,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct BdptBenchReport {
+    pub date: String,
+    pub device: String,
+    pub cpu: String,
+    pub threads: usize,
+    pub scene: String,
+    pub triangles: usize,
+    pub width: u32,
+    pub height: u32,
+    pub max_depth: i32,
+    pub seconds_each: f64,
+    pub rounds: u32,
+    pub reference: Option<String>,
+    pub rows: Vec<BdptRow>,
+}
+
+impl BdptBenchReport {
+    /// relative MSE of `kind` over `pt`'s, when both were measured against a reference.
+    pub fn mse_ratio_to_pt(&self, kind: &str) -> Option<f64> {
+        let mse = |k: &str| self.rows.iter().find(|r| r.integrator == k)?.relative_mse;
+        Some(mse(kind)? / mse("pt")?)
+    }
+}
+
+impl fmt::Display for BdptBenchReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(
+            f,
+            "bench bdpt {} ({} triangles) {}x{} max_depth {}, {:.1} s each in {} slices, on {} \
+             and {} ({} threads), {}",
+            self.scene,
+            self.triangles,
+            self.width,
+            self.height,
+            self.max_depth,
+            self.seconds_each,
+            self.rounds,
+            self.device,
+            self.cpu,
+            self.threads,
+            self.date
+        )?;
+        if let Some(r) = &self.reference {
+            writeln!(f, "reference: {r}")?;
+        }
+        writeln!(
+            f,
+            "{:<8} {:>8} {:>7} {:>12} {:>9} {:>16} {:>12}",
+            "", "seconds", "passes", "samples/s", "Mrays/s", "basic contrib/s", "rel. MSE"
+        )?;
+        for r in &self.rows {
+            let basic = r
+                .basic_contributions_per_second
+                .map_or("-".to_string(), |b| format!("{b:.4e}"));
+            let mse = r
+                .relative_mse
+                .map_or("-".to_string(), |m| format!("{m:.4e}"));
+            writeln!(
+                f,
+                "{:<8} {:>8.2} {:>7} {:>12.0} {:>9.3} {:>16} {:>12}",
+                r.integrator,
+                r.seconds,
+                r.passes,
+                r.samples_per_second,
+                r.mrays_per_second,
+                basic,
+                mse
+            )?;
+        }
+        for r in &self.rows {
+            if r.integrator != "pt" {
+                if let Some(ratio) = self.mse_ratio_to_pt(&r.integrator) {
+                    writeln!(f, "relative MSE {} / pt: {ratio:.3}", r.integrator)?;
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// One integrator under measurement.
+struct Contestant {
+    kind: IntegratorKind,
+    integrator: Box<dyn Integrator>,
+    next_pass: u32,
+    seconds: f64,
+    passes: u32,
+    samples: Vec<f64>,
+    rays: Vec<f64>,
+    basic: Vec<f64>,
+}
+
+fn counter(i: &dyn Integrator, name: &str) -> u64 {
+    i.stats().counters.get(name).copied().unwrap_or(0)
+}
+
+impl Contestant {
+    fn new(gpu: &Gpu, scene: &Scene, options: &RenderOptions) -> Result<Self, RenderError> {
+        let mut integrator = create_integrator(gpu, scene, options)?;
+        // Warm-up (lavapipe compiles each kernel at its first dispatch), then an empty
+        // film: the measured passes continue from pass 1.
+        integrator.render_passes(0, 1)?;
+        let empty = FilmSums::new(options.width, options.height, 1, true);
+        integrator.restore(&empty)?;
+        Ok(Self {
+            kind: options.integrator,
+            integrator,
+            next_pass: 1,
+            seconds: 0.0,
+            passes: 0,
+            samples: Vec::new(),
+            rays: Vec::new(),
+            basic: Vec::new(),
+        })
+    }
+
+    /// Renders passes for `slice` seconds (at least one) and records the slice's rates.
+    fn run_slice(&mut self, slice: f64, pixels: f64) -> Result<(), RenderError> {
+        let rays0 = self.integrator.stats().rays_traced;
+        let basic0 = counter(self.integrator.as_ref(), "basic_contributions");
+        let start = Instant::now();
+        let mut passes = 0u32;
+        while passes == 0 || start.elapsed().as_secs_f64() < slice {
+            self.integrator.render_passes(self.next_pass, 1)?;
+            self.next_pass += 1;
+            passes += 1;
+        }
+        let t = start.elapsed().as_secs_f64().max(1e-9);
+        self.seconds += t;
+        self.passes += passes;
+        self.samples.push(passes as f64 * pixels / t);
+        self.rays
+            .push((self.integrator.stats().rays_traced - rays0) as f64 / t);
+        let basic = counter(self.integrator.as_ref(), "basic_contributions") - basic0;
+        self.basic.push(basic as f64 / t);
+        Ok(())
+    }
+}
+
+fn median(v: &[f64]) -> f64 {
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    if s.is_empty() {
+        return 0.0;
+    }
+    let n = s.len();
+    if n % 2 == 1 {
+        s[n / 2]
+    } else {
+        0.5 * (s[n / 2 - 1] + s[n / 2])
+    }
+}
+
+/// Runs the benchmark (see the module docs).
+pub fn run(
+    gpu: &Gpu,
+    scene: &Scene,
+    options: &BdptBenchOptions,
+) -> Result<BdptBenchReport, RenderError> {
+    let rounds = options.rounds.max(1);
+    let mut contestants = Vec::new();
+    for &kind in &options.integrators {
+        let mut o = RenderOptions::resolve(
+            scene,
+            Some(options.width),
+            Some(options.height),
+            Some(u32::MAX),
+            Some(options.seed),
+            Some(kind),
+            None,
+        )?;
+        o.max_depth = options.max_depth;
+        contestants.push(Contestant::new(gpu, scene, &o)?);
+    }
+    let slice = options.seconds / rounds as f64;
+    let pixels = options.width as f64 * options.height as f64;
+    let n = contestants.len();
+    for round in 0..rounds as usize {
+        for k in 0..n {
+            contestants[(round + k) % n].run_slice(slice, pixels)?;
+        }
+    }
+    let mut rows = Vec::new();
+    for c in &mut contestants {
+        let mean = c.integrator.sums()?.mean();
+        let bidirectional = matches!(c.kind, IntegratorKind::Bpt | IntegratorKind::Light);
+        rows.push(BdptRow {
+            integrator: c.kind.name().to_string(),
+            seconds: c.seconds,
+            passes: c.passes,
+            samples_per_second: median(&c.samples),
+            mrays_per_second: median(&c.rays) * 1e-6,
+            basic_contributions_per_second: bidirectional.then(|| median(&c.basic)),
+            relative_mse: options
+                .reference
+                .as_ref()
+                .and_then(|(r, _)| relative_mse(&mean, r)),
+        });
+    }
+    Ok(BdptBenchReport {
+        date: super::today(),
+        device: device_description(gpu),
+        cpu: super::host::cpu_model(),
+        threads: rayon::current_num_threads(),
+        scene: scene.name.clone(),
+        triangles: scene.triangles.len(),
+        width: options.width,
+        height: options.height,
+        max_depth: options.max_depth,
+        seconds_each: options.seconds,
+        rounds,
+        reference: options.reference.as_ref().map(|(_, name)| name.clone()),
+        rows,
+    })
+}
