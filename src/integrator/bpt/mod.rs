@@ -126,6 +126,7 @@ impl BptIntegrator {
     }
 
     fn render_pass(&mut self, pass: u32) {
+        let _span = tracing::info_span!("bidir pass", pass).entered();
         let inputs = PassInputs {
             connector: Connector {
                 scene: &self.scene,

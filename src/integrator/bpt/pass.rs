@@ -62,6 +62,7 @@ pub fn render_chunks(inputs: &PassInputs, pass: u32) -> Vec<ChunkOutput> {
 }
 
 fn render_chunk(inputs: &PassInputs, pass: u32, start: usize, end: usize) -> ChunkOutput {
+    let _span = tracing::info_span!("bidir chunk", pixels = (end - start) as u64).entered();
     let mut out = ChunkOutput {
         start,
         camera: vec![[0.0; 3]; end - start],
