@@ -1,7 +1,7 @@
 //! Bidirectional path tracing on the CPU: the machinery every bidirectional method of
 //! splitray shares and is checked against (the integrators are `integrator::bpt`).
 //!
-//! - [`scene`]: `pt`'s scene tables and a ray caster, with `pt`'s conventions (one-sided
+//! - [`scene`]: `pt`'s scene tables and the CPU BVH, with `pt`'s conventions (one-sided
 //!   emitters, shading normals flipped to the geometric side, ray offsets);
 //! - [`camera`]: the pinhole as a vertex — importance W_e, direction density, projection;
 //! - [`lights`]: light sampling with the light table's semantics (by power, then area);

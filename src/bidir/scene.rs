@@ -1,6 +1,6 @@
 //! The scene as the CPU bidirectional integrators see it: `pt`'s tables ([`PtScene`]:
 //! triangles, per-triangle materials, BSDF stacks, shading normals, the light table) and
-//! a ray caster that many rayon threads query at once.
+//! the CPU BVH ([`CpuBvh`]), which many rayon threads query at once.
 //!
 //! Conventions, all `pt`'s (`glsl/integrator/pt/shade.comp`):
 //! - the geometric normal is normalize(e1 × e2), the front of a triangle; emitters emit
@@ -19,31 +19,7 @@ use super::positive;
 use crate::bsdf::BsdfParams;
 use crate::integrator::pt::PtScene;
 use crate::scene::Scene;
-use crate::trace::{GpuTriangle, Hit, Ray};
-
-/// Ray casting over the scene's triangles, shared by threads: brute force over
-/// `trace::cpu` (every triangle per ray), which is fast enough for the small scenes the
-/// bidirectional integrators are checked and measured on.
-#[derive(Clone, Debug)]
-pub struct RayCaster {
-    triangles: Vec<GpuTriangle>,
-}
-
-impl RayCaster {
-    pub fn new(triangles: &[GpuTriangle]) -> Self {
-        Self {
-            triangles: triangles.to_vec(),
-        }
-    }
-
-    pub fn closest_hit(&self, ray: &Ray) -> Hit {
-        crate::trace::cpu::closest_hit(ray, &self.triangles)
-    }
-
-    pub fn occluded(&self, ray: &Ray) -> bool {
-        crate::trace::cpu::occluded(ray, &self.triangles)
-    }
-}
+use crate::trace::{CpuBvh, Hit, Ray};
 
 /// Where a ray met a surface.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -59,10 +35,10 @@ pub struct SurfaceHit {
     pub t: f32,
 }
 
-/// `pt`'s scene tables and a ray caster.
+/// `pt`'s scene tables and a BVH over its triangles.
 pub struct CpuScene {
     pub tables: PtScene,
-    pub caster: RayCaster,
+    pub bvh: CpuBvh,
     /// Offset of ray origins off surfaces.
     pub ray_epsilon: f32,
 }
@@ -75,7 +51,7 @@ impl CpuScene {
     pub fn from_tables(tables: PtScene) -> Self {
         let ray_epsilon = 1e-4 * tables.scene_radius.max(1e-3);
         Self {
-            caster: RayCaster::new(&tables.triangles),
+            bvh: CpuBvh::new(&tables.triangles),
             tables,
             ray_epsilon,
         }
@@ -103,7 +79,7 @@ impl CpuScene {
     /// The closest surface along the unit direction `dir` from `origin`.
     pub fn intersect(&self, origin: Vec3, dir: Vec3) -> Option<SurfaceHit> {
         let hit = self
-            .caster
+            .bvh
             .closest_hit(&Ray::new(origin, dir, 0.0, f32::INFINITY));
         if !hit.is_hit() {
             return None;
@@ -169,7 +145,7 @@ impl CpuScene {
             return false;
         }
         let ray = Ray::new(from, d / reach, 0.0, reach * (1.0 - 1e-4));
-        !self.caster.occluded(&ray)
+        !self.bvh.occluded(&ray)
     }
 }
 
