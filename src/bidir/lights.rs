@@ -100,7 +100,7 @@ impl<'a> Lights<'a> {
     /// shade.comp, the same binary search).
     pub fn pick(&self, u: f32) -> usize {
         let cdf = &self.table.cdf;
-        let (mut lo, mut hi) = (0usize, cdf.len() - 1);
+        let (mut lo, mut hi) = (0usize, cdf.len().saturating_sub(1));
         while lo < hi {
             let mid = (lo + hi) / 2;
             if u < cdf[mid] {
