@@ -358,6 +358,8 @@ fn weights_of_traced_paths_equal_the_oracle() {
         let (mut light, mut cam) = (Vec::new(), Vec::new());
         let mut counters = Counters::default();
         let mut checked = [0usize; 4];
+        // Checked paths through a mirror (an interior delta vertex) and from the point light.
+        let (through_mirror, from_point) = (std::cell::Cell::new(0), std::cell::Cell::new(0));
         for pass in 0..12u32 {
             for pixel in 0..144u32 {
                 let sampler = PathSampler::new(pixel, pass, 3);
@@ -388,6 +390,9 @@ fn weights_of_traced_paths_equal_the_oracle() {
                         sample.weight
                     );
                     *family += 1;
+                    let k = d.segments();
+                    through_mirror.set(through_mirror.get() + d.delta[1..k].contains(&true) as u32);
+                    from_point.set(from_point.get() + d.delta[0] as u32);
                 };
                 for i in 0..light.len() {
                     if let Some(smp) = connector.light_trace(&light, i, &mut counters) {
@@ -424,7 +429,12 @@ fn weights_of_traced_paths_equal_the_oracle() {
                 }
             }
         }
-        eprintln!("{counts:?}: checked light tracing / hits / NEE / connections {checked:?}");
+        let (mirror, point) = (through_mirror.get(), from_point.get());
+        eprintln!(
+            "{counts:?}: checked light tracing / hits / NEE / connections {checked:?}, \
+             {mirror} through a mirror, {point} from the point light"
+        );
         assert!(checked.iter().all(|&n| n > 20), "{checked:?}"); // hits are the rarest: ~40
+        assert!(mirror > 100 && point > 100);
     }
 }
