@@ -1,9 +1,9 @@
-//! `bpt`, `light` and `pt` agree: with Mitsuba 3's reference of the Cornell box
-//! (tests/data/reference/cornell_pt_64_*, the `path` integrator: see tests/pt_mitsuba.rs)
-//! and with each other on a scene of a glossy conductor and a point light. The
-//! comparison is pt_mitsuba's: the image mean within 1%, under 2% of the pixel channels
-//! beyond 3 σ of the combined standard error, every 8×8 block within 4.5 σ. Also: the
-//! image does not depend on the number of threads, and the technique images sum to it.
+//! `bpt` and `pt` agree on a scene of a glossy conductor and a point light (which no
+//! Mitsuba reference has; tests/bpt_mitsuba.rs compares `bpt` and `light` with every
+//! reference), with the comparison of `tests/common/reference.rs`: the image mean within
+//! 1%, under 2% of the pixel channels beyond 3 σ of the combined standard error, every
+//! 8×8 block within 4.5 σ. Also: the image does not depend on the number of threads, and
+//! the technique images sum to it.
 //!
 //! Not compared with `pt`: a point light seen through a mirror. `pt` cannot sample a
 //! point light's caustics (light → mirror → diffuse surface → camera: no BSDF sample hits
@@ -14,8 +14,6 @@
 //! is too heavy-tailed for a test of seconds.
 mod common;
 
-use std::path::Path;
-
 use glam::Vec3;
 use splitray::integrator::bpt::{BidirMode, BptIntegrator, BptOptions};
 use splitray::integrator::pt::{render_pt, PtOptions, PtScene};
@@ -24,13 +22,6 @@ use splitray::scene::{
     builtin, BsdfKind, MaterialBsdf, MaterialLayer, MicrofacetModel, PointLight, Scene,
 };
 use splitray::trace::TracerKind;
-
-/// An RGB EXR as rows of [r, g, b], top row first.
-fn read_rgb(path: &Path, size: u32) -> Vec<[f32; 3]> {
-    let (film, _) = splitray::film::read_exr(path).unwrap_or_else(|e| panic!("{e}"));
-    assert_eq!((film.width(), film.height()), (size, size));
-    film.mean_rgb_buffer()
-}
 
 /// Mean and per-pixel standard error of a bidirectional render of `passes` passes.
 fn render(
@@ -48,85 +39,12 @@ fn render(
     (sums.mean(), sums.stderr().unwrap())
 }
 
-/// The three-part comparison of tests/pt_mitsuba.rs; asserts and returns
-/// (relative mean difference, fraction of channels beyond 3 σ, largest block |z|).
-fn compare(what: &str, size: u32, a: (&[[f32; 3]], &[[f32; 3]]), b: (&[[f32; 3]], &[[f32; 3]])) {
-    let (mean, se) = a;
-    let (ref_mean, ref_se) = b;
-    let avg = |img: &[[f32; 3]]| -> f64 {
-        img.iter().flatten().map(|&v| v as f64).sum::<f64>() / (3 * img.len()) as f64
-    };
-    let diff = (avg(mean) - avg(ref_mean)) / avg(ref_mean);
-    let mut beyond = 0usize;
-    for p in 0..mean.len() {
-        for c in 0..3 {
-            let d = mean[p][c] as f64 - ref_mean[p][c] as f64;
-            let s = ((se[p][c] as f64).powi(2) + (ref_se[p][c] as f64).powi(2)).sqrt();
-            if (s > 0.0 && d.abs() > 3.0 * s) || (s == 0.0 && d != 0.0) {
-                beyond += 1;
-            }
-        }
-    }
-    let fraction = beyond as f64 / (3 * mean.len()) as f64;
-    let size = size as usize;
-    let mut block_z = 0.0f64;
-    for by in 0..size / 8 {
-        for bx in 0..size / 8 {
-            for c in 0..3 {
-                let (mut d, mut v) = (0.0f64, 0.0f64);
-                for y in by * 8..by * 8 + 8 {
-                    for x in bx * 8..bx * 8 + 8 {
-                        let p = y * size + x;
-                        d += mean[p][c] as f64 - ref_mean[p][c] as f64;
-                        v += (se[p][c] as f64).powi(2) + (ref_se[p][c] as f64).powi(2);
-                    }
-                }
-                block_z = block_z.max(d.abs() / v.sqrt().max(1e-12));
-            }
-        }
-    }
-    eprintln!(
-        "{what}: image mean {:+.3}%, {:.2}% of pixel channels beyond 3 sigma, 8x8 blocks max |z| {block_z:.2}",
-        diff * 100.0,
-        fraction * 100.0
-    );
-    assert!(
-        diff.abs() < 0.01,
-        "{what}: image mean differs by {:.3}%",
-        diff * 100.0
-    );
-    assert!(
-        fraction < 0.02,
-        "{what}: {:.2}% beyond 3 sigma",
-        fraction * 100.0
-    );
-    assert!(
-        block_z < 4.5,
-        "{what}: an 8x8 block differs by {block_z:.2} sigma"
-    );
-}
-
 fn options(seed: u64) -> BptOptions {
     BptOptions {
         seed,
         max_depth: -1,
         rr_depth: 5,
         ..Default::default()
-    }
-}
-
-#[test]
-fn bpt_and_light_match_mitsuba_on_the_cornell_box() {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/reference");
-    let ref_mean = read_rgb(&dir.join("cornell_pt_64_mean.exr"), 64);
-    let ref_se = read_rgb(&dir.join("cornell_pt_64_stderr.exr"), 64);
-    let scene = builtin("cornell-box").unwrap();
-    for (mode, passes, what) in [
-        (BidirMode::Bpt, 128, "bpt vs Mitsuba"),
-        (BidirMode::Light, 256, "light vs Mitsuba"),
-    ] {
-        let (mean, se) = render(&scene, mode, 64, passes, options(1));
-        compare(what, 64, (&mean, &se), (&ref_mean, &ref_se));
     }
 }
 
@@ -198,7 +116,13 @@ fn bpt_agrees_with_pt_on_a_glossy_conductor_and_a_point_light() {
     common::assert_clean(&gpu);
     let (pt_mean, pt_se) = out.mean_and_stderr();
     let (mean, se) = render(&scene, BidirMode::Bpt, SIZE, 128, options(3));
-    compare("bpt vs pt", SIZE, (&mean, &se), (&pt_mean, &pt_se));
+    common::reference::compare_images(
+        "pt 512 spp",
+        SIZE as usize,
+        (&mean, &se),
+        (&pt_mean, &pt_se),
+    )
+    .assert_agrees("bpt 128 passes");
 }
 
 #[test]
