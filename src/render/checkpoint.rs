@@ -93,6 +93,9 @@ impl SavedOptions {
             strategy: self.strategy.parse()?,
             time_limit: self.time_limit,
             reference: None,
+            // Technique images are not saved in a checkpoint: a resumed render cannot
+            // write them (the command line refuses the combination).
+            bdpt_techniques: false,
         })
     }
 }

@@ -62,6 +62,9 @@ pub(super) fn render_options(
         options.reference = Some(std::sync::Arc::new(read_reference(path, &options)?));
     }
     if let Some(dir) = &args.bdpt_techniques {
+        if resume.is_some() {
+            bail!("--bdpt-techniques cannot be used with --resume: a checkpoint keeps the image's sums, not the technique images'");
+        }
         super::check_technique_dir(dir, options.integrator)?;
         options.bdpt_techniques = true;
     }
