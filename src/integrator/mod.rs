@@ -15,6 +15,7 @@
 
 pub mod aov;
 pub mod bpt;
+pub mod cbpt;
 mod eye;
 pub mod gpu_types;
 pub mod light_tracer;

@@ -3,6 +3,7 @@
 #![allow(dead_code)]
 
 pub mod reference;
+pub mod scenes;
 
 use splitray::vk::{Gpu, GpuDesc, InstanceDesc, StreamPlacement};
 
