@@ -22,7 +22,9 @@ use splitray::integrator::cbpt::cpu_kernels::evaluate;
 use splitray::integrator::cbpt::layout::{Kinds, Tables};
 use splitray::integrator::cbpt::population::Population;
 use splitray::integrator::cbpt::steps::ImagePositions;
-use splitray::integrator::cbpt::{CameraPaths, CbptIntegrator, CbptOptions, CbptSettings, Setup};
+use splitray::integrator::cbpt::{
+    CameraPaths, CbptIntegrator, CbptOptions, CbptSettings, Combination, Setup,
+};
 use splitray::integrator::Integrator;
 use splitray::scene::Scene;
 
@@ -39,6 +41,8 @@ fn options(camera_paths: u32, light_paths: u32, light_traced: u32, seed: u64) ->
             camera_paths: CameraPaths::Fixed(camera_paths),
             light_paths,
             light_traced,
+            combination: Combination::Cpu,
+            ..Default::default()
         },
         pipelined: true,
     }
@@ -208,7 +212,7 @@ fn one_camera_and_one_light_path_agree_with_bpt() {
     let mut o = options(1, 1, 1, 7);
     o.max_depth = -1;
     o.rr_depth = 5;
-    let mut cbpt = CbptIntegrator::new(&scene, &frame, &o).unwrap();
+    let mut cbpt = CbptIntegrator::new(&scene, &frame, &o, None).unwrap();
     cbpt.render_passes(0, 64).unwrap();
     assert_eq!(cbpt.counters().non_finite, 0);
     let bpt_options = BptOptions {

@@ -122,6 +122,8 @@ pub enum IntegratorKind {
     Bpt,
     /// Light tracing on the CPU ([`light_tracer`]).
     Light,
+    /// Combinatorial BPT: CPU populations, GPU combination ([`cbpt`]).
+    Cbpt,
 }
 
 impl IntegratorKind {
@@ -158,6 +160,11 @@ impl IntegratorKind {
             IntegratorKind::Light,
             "light tracing on the CPU: light subpaths splatted to the camera",
         ),
+        (
+            IntegratorKind::Cbpt,
+            "combinatorial BPT: path populations sampled on the CPU, every camera path \
+             linked to every light path on the GPU in double-buffered batches",
+        ),
     ];
 
     pub fn name(self) -> &'static str {
@@ -170,6 +177,7 @@ impl IntegratorKind {
             Self::Pt => "pt",
             Self::Bpt => "bpt",
             Self::Light => "light",
+            Self::Cbpt => "cbpt",
         }
     }
 }

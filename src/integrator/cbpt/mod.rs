@@ -12,8 +12,9 @@
 //! positions of §3.2 ([`steps`]); a pass uses them all once: 4 samples per pixel.
 //! The steps run with two population couples in flight ([`pipeline`], Algorithm 2).
 //!
-//! The combination data come from [`cpu_kernels::evaluate`], the CPU twins of the
-//! combination kernels, on every core.
+//! The combination data come from the GPU ([`gpu`]: three kernels in double-buffered
+//! batches, visibility through any [`Tracer`]) or from their CPU twins on every core
+//! ([`cpu_kernels::evaluate`]; `--cbpt-combine cpu`).
 //!
 //! Conventions (scene, depth, roulette, shading normals, the pinhole) are `bpt`'s; the
 //! same seed gives the same image whatever the thread count.
@@ -21,6 +22,7 @@
 pub mod calibrate;
 pub mod combine;
 pub mod cpu_kernels;
+pub mod gpu;
 pub mod layout;
 pub mod light_tracing;
 pub mod options;
@@ -31,7 +33,8 @@ pub mod steps;
 use std::sync::Arc;
 use std::time::Instant;
 
-pub use self::options::{CameraPaths, CbptOptions, CbptSettings};
+pub use self::gpu::GpuCombiner;
+pub use self::options::{CameraPaths, CbptOptions, CbptSettings, Combination};
 
 use self::calibrate::Equation4;
 use self::combine::Linking;
@@ -45,6 +48,8 @@ use crate::bidir::combinatorial::CombinatorialCounts;
 use crate::bidir::{Connector, Counters, CpuScene, PinholeCamera, WalkSettings};
 use crate::film::FilmSums;
 use crate::scene::{CameraFrame, Scene};
+use crate::trace::Tracer;
+use crate::vk::Gpu;
 
 /// The combination on every core: [`cpu_kernels::evaluate`].
 pub struct CpuEvaluator<'a> {
@@ -60,6 +65,55 @@ impl Evaluator for CpuEvaluator<'_> {
 
     fn finish(&mut self, data: CombinationData) -> Result<CombinationData, IntegratorError> {
         Ok(data)
+    }
+}
+
+/// Where the combination runs.
+pub enum Backend {
+    Cpu,
+    Gpu(Box<GpuCombiner>),
+}
+
+impl Backend {
+    /// The backend `settings` ask for; the GPU one takes `device`'s tracer over.
+    pub fn new(
+        settings: &CbptSettings,
+        scene: &CpuScene,
+        device: Option<(&Gpu, Box<dyn Tracer>)>,
+    ) -> Result<Self, IntegratorError> {
+        Ok(match (settings.combination, device) {
+            (Combination::Cpu, _) => Self::Cpu,
+            (Combination::Gpu, Some((gpu, tracer))) => Self::Gpu(Box::new(GpuCombiner::new(
+                gpu,
+                tracer,
+                scene,
+                settings.batch,
+            )?)),
+            (Combination::Gpu, None) => {
+                return Err(IntegratorError::Usage(
+                    "cbpt: the GPU combination needs a device (or --cbpt-combine cpu)".into(),
+                ))
+            }
+        })
+    }
+
+    /// Runs `steps` on this backend.
+    pub fn run(
+        &mut self,
+        setup: &Setup,
+        steps: Vec<StepId>,
+        pipelined: bool,
+    ) -> Result<pipeline::StepsOutput, IntegratorError> {
+        let cpu = setup.cpu_side();
+        match self {
+            Self::Cpu => {
+                let mut evaluator = CpuEvaluator {
+                    scene: &setup.scene,
+                };
+                run_steps(&cpu, &mut evaluator, steps, pipelined)
+            }
+            Self::Gpu(g) => run_steps(&cpu, g.as_mut(), steps, pipelined),
+        }
     }
 }
 
@@ -175,6 +229,7 @@ impl Setup {
 /// The CBPT integrator.
 pub struct CbptIntegrator {
     setup: Setup,
+    backend: Backend,
     options: CbptOptions,
     equation4: Option<Equation4>,
     sums: FilmSums,
@@ -183,22 +238,25 @@ pub struct CbptIntegrator {
 }
 
 impl CbptIntegrator {
-    /// CBPT with the combination on every core.
+    /// CBPT on `scene` through `camera`; `device` (a GPU and the tracer of its
+    /// visibility tests) serves the GPU combination and is not needed for the CPU one.
     pub fn new(
         scene: &Scene,
         camera: &CameraFrame,
         options: &CbptOptions,
+        device: Option<(&Gpu, Box<dyn Tracer>)>,
     ) -> Result<Self, IntegratorError> {
         options
             .settings
             .check()
             .map_err(|e| IntegratorError::Usage(format!("cbpt: {e}")))?;
         let cpu = CpuScene::new(scene);
+        let mut backend = Backend::new(&options.settings, &cpu, device)?;
         let light_paths = options.settings.light_paths;
         let (setup, equation4) = match options.settings.camera_paths {
             CameraPaths::Fixed(n) => (Setup::new(cpu, camera, options, n, light_paths)?, None),
             CameraPaths::Equation4 => {
-                let e = equation_4(scene, camera, options)?;
+                let e = equation_4(scene, camera, options, &mut backend)?;
                 log::info!("cbpt: {e}");
                 let setup = Setup::new(cpu, camera, options, e.camera_paths, e.light_paths)?;
                 (setup, Some(e))
@@ -207,12 +265,18 @@ impl CbptIntegrator {
         let (w, h) = (setup.camera.width(), setup.camera.height());
         Ok(Self {
             setup,
+            backend,
             options: *options,
             equation4,
             sums: FilmSums::new(w, h, SAMPLES_PER_PIXEL, true),
             counters: Counters::default(),
             times: StepTimes::default(),
         })
+    }
+
+    /// The backend, to run steps outside passes (benchmarks).
+    pub fn backend_mut(&mut self) -> (&Setup, &mut Backend) {
+        (&self.setup, &mut self.backend)
     }
 
     pub fn setup(&self) -> &Setup {
@@ -242,6 +306,7 @@ fn equation_4(
     scene: &Scene,
     camera: &CameraFrame,
     options: &CbptOptions,
+    backend: &mut Backend,
 ) -> Result<Equation4, IntegratorError> {
     let _span = tracing::info_span!("cbpt equation 4").entered();
     let small = CameraFrame {
@@ -269,16 +334,12 @@ fn equation_4(
         camera_paths,
         light_paths,
     )?;
-    let cpu = setup.cpu_side();
-    let mut evaluator = CpuEvaluator {
-        scene: &setup.scene,
-    };
     let steps = setup.steps(0..1);
     let timed = steps.len().min(4) - 1;
-    run_steps(&cpu, &mut evaluator, steps[..1].to_vec(), false)?;
+    backend.run(&setup, steps[..1].to_vec(), false)?;
     let t = Instant::now();
     if timed > 0 {
-        run_steps(&cpu, &mut evaluator, steps[1..=timed].to_vec(), true)?;
+        backend.run(&setup, steps[1..=timed].to_vec(), true)?;
     }
     let step_seconds = t.elapsed().as_secs_f64() / timed.max(1) as f64;
     let pairs = camera_paths as u64 * light_paths as u64;
@@ -301,12 +362,10 @@ impl Integrator for CbptIntegrator {
 
     fn render_passes(&mut self, first: u32, count: u32) -> Result<(), IntegratorError> {
         let _span = tracing::info_span!("cbpt passes", first, count).entered();
-        let cpu = self.setup.cpu_side();
-        let mut evaluator = CpuEvaluator {
-            scene: &self.setup.scene,
-        };
         let steps = self.setup.steps(first..first + count);
-        let out = run_steps(&cpu, &mut evaluator, steps, self.options.pipelined)?;
+        let out = self
+            .backend
+            .run(&self.setup, steps, self.options.pipelined)?;
         for (_, estimate) in &out.passes {
             self.sums.add_pass(estimate);
         }
@@ -355,6 +414,10 @@ impl Integrator for CbptIntegrator {
             ("cbpt_light_paths".into(), s.light_paths.to_string()),
             ("cbpt_light_traced".into(), s.light_traced.to_string()),
             ("cbpt_steps_per_pass".into(), s.plan.steps.to_string()),
+            (
+                "cbpt_combination".into(),
+                self.options.settings.combination.to_string(),
+            ),
         ]
     }
 }

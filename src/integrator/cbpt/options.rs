@@ -1,4 +1,5 @@
-//! CBPT's parameters: the population sizes N_C, N_L and N_T (§3, defaults of §6).
+//! CBPT's parameters: the population sizes N_C, N_L and N_T (§3, defaults of §6), the
+//! batch size of the GPU combination (§4) and where the combination runs.
 
 use std::fmt;
 use std::str::FromStr;
@@ -11,6 +12,10 @@ pub const DEFAULT_CAMERA_PATHS: u32 = 2000;
 pub const DEFAULT_LIGHT_PATHS: u32 = 15;
 /// N_T of the paper's tests.
 pub const DEFAULT_LIGHT_TRACED: u32 = 1500;
+/// Linking segments per GPU batch (a multiple of 32: visibility is packed by words).
+pub const DEFAULT_BATCH: u32 = 1 << 17;
+/// The largest batch: its rays, hits and results stay well inside a 128 MiB binding.
+pub const MAX_BATCH: u32 = 1 << 22;
 
 /// N_C: camera paths per step, given or from Equation 4.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -65,6 +70,38 @@ impl TryFrom<String> for CameraPaths {
     }
 }
 
+/// Where the linking segments' visibility and shading are computed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Combination {
+    /// The GPU kernels of §4, in double-buffered batches (visibility through the tracer).
+    #[default]
+    Gpu,
+    /// Their CPU twins on every core (the CPU BVH for visibility): the all-CPU baseline
+    /// of Table 1, and CBPT without a device.
+    Cpu,
+}
+
+impl FromStr for Combination {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "gpu" => Ok(Self::Gpu),
+            "cpu" => Ok(Self::Cpu),
+            _ => Err(format!("unknown combination '{s}' (choose gpu or cpu)")),
+        }
+    }
+}
+
+impl fmt::Display for Combination {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Self::Gpu => "gpu",
+            Self::Cpu => "cpu",
+        })
+    }
+}
+
 /// The user's CBPT settings (`--cbpt-*`), kept in render options and checkpoints.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(default)]
@@ -75,6 +112,9 @@ pub struct CbptSettings {
     pub light_paths: u32,
     /// N_T: light paths light-traced per step (0: none).
     pub light_traced: u32,
+    /// Linking segments per GPU batch.
+    pub batch: u32,
+    pub combination: Combination,
 }
 
 impl Default for CbptSettings {
@@ -83,6 +123,8 @@ impl Default for CbptSettings {
             camera_paths: CameraPaths::default(),
             light_paths: DEFAULT_LIGHT_PATHS,
             light_traced: DEFAULT_LIGHT_TRACED,
+            batch: DEFAULT_BATCH,
+            combination: Combination::Gpu,
         }
     }
 }
@@ -92,6 +134,12 @@ impl CbptSettings {
     pub fn check(&self) -> Result<(), String> {
         if self.light_paths == 0 {
             return Err("--cbpt-nl must be at least 1".into());
+        }
+        if self.batch < 32 || self.batch > MAX_BATCH || self.batch % 32 != 0 {
+            return Err(format!(
+                "--cbpt-batch {} must be a multiple of 32 between 32 and {MAX_BATCH}",
+                self.batch
+            ));
         }
         Ok(())
     }
@@ -144,10 +192,19 @@ mod tests {
     fn bad_settings_are_refused() {
         let ok = CbptSettings::default();
         assert!(ok.check().is_ok());
-        let bad = CbptSettings {
-            light_paths: 0,
-            ..ok
-        };
-        assert!(bad.check().is_err(), "{bad:?}");
+        for bad in [
+            CbptSettings {
+                light_paths: 0,
+                ..ok
+            },
+            CbptSettings { batch: 48, ..ok },
+            CbptSettings { batch: 0, ..ok },
+            CbptSettings {
+                batch: MAX_BATCH * 2,
+                ..ok
+            },
+        ] {
+            assert!(bad.check().is_err(), "{bad:?}");
+        }
     }
 }
