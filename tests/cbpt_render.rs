@@ -233,3 +233,42 @@ fn render_command_writes_a_cbpt_image() {
     assert!(err.contains("--cbpt-batch 100"), "{err}");
     assert!(!dir.path().join("bad.exr").exists());
 }
+
+/// `bench cbpt` checks the GPU's combination data against the CPU's before timing and
+/// reports every table.
+#[test]
+fn bench_cbpt_checks_and_reports() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("bench.json");
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_splitray"))
+        .args([
+            "bench",
+            "cbpt",
+            "cornell-box",
+            "--width",
+            "24",
+            "--height",
+            "16",
+        ])
+        .args(["--tracers", "brute-force", "--steps", "1", "--rounds", "1"])
+        .args(["--batches", "4096", "--validation", "--json"])
+        .arg(&json)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    assert!(
+        run.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let r: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    assert_eq!(r["visibility_mismatches"], 0, "{stdout}");
+    assert_eq!(r["shading_mismatches"], 0, "{stdout}");
+    assert_eq!(r["throughput"].as_array().unwrap().len(), 3);
+    assert_eq!(r["contributions"].as_array().unwrap().len(), 4);
+    assert_eq!(r["steps"].as_array().unwrap().len(), 2);
+    for row in r["contributions"].as_array().unwrap() {
+        assert!(row["per_second"].as_f64().unwrap() > 0.0, "{row}");
+    }
+    assert!(stdout.contains("pipelining:"), "{stdout}");
+}

@@ -33,6 +33,8 @@ pub struct BdptBenchOptions {
     pub seed: u64,
     /// Mean RGB of a reference image of this film size, and where it came from.
     pub reference: Option<(Arc<Vec<[f32; 3]>>, String)>,
+    /// The tracer of the GPU integrators (`None`: the scene's, else the default).
+    pub tracer: Option<crate::trace::TracerKind>,
 }
 
 impl Default for BdptBenchOptions {
@@ -50,6 +52,7 @@ impl Default for BdptBenchOptions {
             max_depth: -1,
             seed: 0,
             reference: None,
+            tracer: None,
         }
     }
 }
@@ -239,7 +242,7 @@ pub fn run(
             Some(u32::MAX),
             Some(options.seed),
             Some(kind),
-            None,
+            options.tracer,
         )?;
         o.max_depth = options.max_depth;
         contestants.push(Contestant::new(gpu, scene, &o)?);
@@ -255,7 +258,10 @@ pub fn run(
     let mut rows = Vec::new();
     for c in &mut contestants {
         let mean = c.integrator.sums()?.mean();
-        let bidirectional = matches!(c.kind, IntegratorKind::Bpt | IntegratorKind::Light);
+        let bidirectional = matches!(
+            c.kind,
+            IntegratorKind::Bpt | IntegratorKind::Light | IntegratorKind::Cbpt
+        );
         rows.push(BdptRow {
             integrator: c.kind.name().to_string(),
             seconds: c.seconds,
