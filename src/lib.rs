@@ -11,6 +11,7 @@
 //! - [`integrator`]: what is computed along the rays; [`bidir`]: the CPU bidirectional
 //!   path tracer's machinery (vertices, walks, connections, MIS and its oracle).
 //! - [`render`]: ties a scene, a tracer and an integrator into a film.
+//! - [`display`]: watching a render converge (the preview's tone mapping, tev streaming).
 //! - [`scene_export`]: the resolved scene as JSON, for reference renderers.
 //! - [`bench`](mod@bench): the measurements behind `splitray bench`.
 //! - [`timeline`]: per-stream and per-thread timelines (Chrome trace-event JSON, SVG).
@@ -18,6 +19,7 @@
 pub mod bench;
 pub mod bidir;
 pub mod bsdf;
+pub mod display;
 pub mod film;
 pub mod integrator;
 pub mod primitives;

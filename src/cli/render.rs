@@ -241,6 +241,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<ExitCode> {
             every_s: args.checkpoint_every,
             save: &mut save,
         }),
+        watch: None,
     };
     let result = render_from(
         &gpu,
