@@ -6,11 +6,13 @@
 //! strides, progressive (tiles updated more than once), and the last pixels equal to the
 //! EXR's. A listener that goes away, or is never there, does not stop the render.
 
+mod common;
+
 use std::collections::HashMap;
 use std::io::Read;
 use std::net::TcpListener;
-use std::path::Path;
-use std::process::{Command, Output};
+
+use common::cli::{printed, splitray};
 
 #[derive(Debug)]
 enum Packet {
@@ -139,23 +141,6 @@ fn parse(stream: &[u8]) -> Vec<Packet> {
     packets
 }
 
-fn splitray(args: &[&str], dir: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_splitray"))
-        .args(args)
-        .current_dir(dir)
-        .env("RUST_LOG", "warn")
-        .output()
-        .unwrap()
-}
-
-fn text(o: &Output) -> String {
-    format!(
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    )
-}
-
 #[test]
 fn tev_receives_a_well_formed_progressive_stream_ending_in_the_exrs_pixels() {
     let listener = TcpListener::bind("127.0.0.1:0").unwrap();
@@ -189,11 +174,11 @@ fn tev_receives_a_well_formed_progressive_stream_ending_in_the_exrs_pixels() {
         ],
         dir.path(),
     );
-    assert!(out.status.success(), "{}", text(&out));
+    assert!(out.status.success(), "{}", printed(&out));
     assert!(
-        text(&out).contains("sent the finished image"),
+        printed(&out).contains("sent the finished image"),
         "{}",
-        text(&out)
+        printed(&out)
     );
     let packets = parse(&receiver.join().unwrap());
 
@@ -320,8 +305,8 @@ fn a_listener_that_goes_away_or_is_never_there_does_not_stop_the_render() {
         dir.path(),
     );
     assert_eq!(receiver.join().unwrap(), 4, "CreateImage first");
-    assert!(out.status.success(), "{}", text(&out));
-    let t = text(&out);
+    assert!(out.status.success(), "{}", printed(&out));
+    let t = printed(&out);
     assert!(t.contains("the render goes on"), "{t}");
     assert!(t.contains("gone before the finished image"), "{t}");
     assert!(dir.path().join("gone.exr").is_file());
@@ -347,8 +332,8 @@ fn a_listener_that_goes_away_or_is_never_there_does_not_stop_the_render() {
         ],
         dir.path(),
     );
-    assert!(out.status.success(), "{}", text(&out));
-    assert!(text(&out).contains("never reached"), "{}", text(&out));
+    assert!(out.status.success(), "{}", printed(&out));
+    assert!(printed(&out).contains("never reached"), "{}", printed(&out));
     assert!(dir.path().join("alone.exr").is_file());
 
     // A malformed address is refused before any work.
@@ -358,9 +343,9 @@ fn a_listener_that_goes_away_or_is_never_there_does_not_stop_the_render() {
     );
     assert!(!out.status.success());
     assert!(
-        text(&out).contains("--display-server: expected HOST:PORT"),
+        printed(&out).contains("--display-server: expected HOST:PORT"),
         "{}",
-        text(&out)
+        printed(&out)
     );
     assert!(!dir.path().join("bad.exr").exists());
 }
