@@ -326,6 +326,11 @@ impl Gpu {
         self.0.accel.is_some()
     }
 
+    /// Whether the device was opened to present to windows ([`Gpu::new_for_presentation`]).
+    pub fn presents(&self) -> bool {
+        self.0.present
+    }
+
     pub fn stream_mapping(&self) -> &StreamMapping {
         &self.0.mapping
     }

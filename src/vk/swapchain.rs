@@ -58,7 +58,7 @@ impl Surface {
     /// been opened with [`Gpu::new_for_presentation`], and that queue must be able to
     /// present to the window (an error says so otherwise).
     pub fn new(gpu: &Gpu, window: Arc<dyn PresentTarget>, stream: StreamKind) -> Result<Self> {
-        if !gpu.0.present {
+        if !gpu.presents() {
             return Err(VkError::Usage(
                 "the device was not opened for presentation (Gpu::new_for_presentation)".into(),
             ));
