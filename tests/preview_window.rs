@@ -428,4 +428,25 @@ fn preview_without_a_display_is_refused_before_any_work() {
         std::fs::read_dir(dir.path()).unwrap().next().is_none(),
         "nothing written"
     );
+
+    // A display that no server answers for.
+    let absent = (1900..2000)
+        .find(|n| !Path::new(&format!("/tmp/.X11-unix/X{n}")).exists())
+        .unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_splitray"))
+        .args(["render", "cornell-box", "--preview", "-o"])
+        .arg(&output)
+        .env("DISPLAY", format!(":{absent}"))
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        text.contains(&format!("--preview: cannot open the X display ':{absent}'")),
+        "{text}"
+    );
+    assert!(
+        std::fs::read_dir(dir.path()).unwrap().next().is_none(),
+        "nothing written"
+    );
 }

@@ -200,13 +200,15 @@ impl Sender {
             let Some(info) = snapshot.info.clone() else {
                 continue;
             };
-            let Some(image) = self.current_image(&info, &snapshot) else {
-                continue;
-            };
             if self.connection.is_none() && (snapshot.finished || self.retry_due()) {
                 self.connect(&info);
             }
-            let sent = self.send_changes(&info, &image);
+            // The film is read only for a viewer that is there.
+            let image = match self.connection.is_some() {
+                true => self.current_image(&info, &snapshot),
+                false => None,
+            };
+            let sent = image.is_some_and(|image| self.send_changes(&info, &image));
             if snapshot.finished {
                 self.report.final_sent = sent;
                 return;

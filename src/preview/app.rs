@@ -72,6 +72,8 @@ pub(super) struct App {
     state: ViewState,
     next_frame: Instant,
     shown_title: String,
+    /// The render's thread closed the window: its going is no request to stop.
+    shutting_down: bool,
 }
 
 impl App {
@@ -86,6 +88,7 @@ impl App {
             state: ViewState::default(),
             next_frame: Instant::now(),
             shown_title: String::new(),
+            shutting_down: false,
         }
     }
 
@@ -208,6 +211,7 @@ impl ApplicationHandler<Command> for App {
                 let _ = reply.send(self.attach(&gpu, feed));
             }
             Command::Close => {
+                self.shutting_down = true;
                 self.presenter = None;
                 self.window = None;
                 event_loop.exit();
@@ -217,7 +221,9 @@ impl ApplicationHandler<Command> for App {
 
     fn window_event(&mut self, _: &ActiveEventLoop, _: WindowId, event: WindowEvent) {
         match event {
-            WindowEvent::CloseRequested | WindowEvent::Destroyed => self.close_window(),
+            WindowEvent::CloseRequested | WindowEvent::Destroyed if !self.shutting_down => {
+                self.close_window()
+            }
             WindowEvent::Resized(size) => {
                 if let Some(presenter) = self.presenter.as_mut() {
                     if let Err(e) = presenter.resize([size.width, size.height]) {

@@ -99,8 +99,13 @@ impl Preview {
                     Ok(event_loop) => event_loop,
                     Err(e) => {
                         let display = std::env::var("DISPLAY").unwrap_or_default();
-                        let _ =
-                            opened.send(Err(format!("cannot open the X display '{display}': {e}")));
+                        // winit's message leads with its own source location: keep the
+                        // reason at its end.
+                        let message = e.to_string();
+                        let reason = message.rsplit(": ").next().unwrap_or(&message);
+                        let _ = opened.send(Err(format!(
+                            "cannot open the X display '{display}': {reason}"
+                        )));
                         return;
                     }
                 };
