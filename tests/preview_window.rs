@@ -6,7 +6,8 @@
 //! - the depth, normal and triangle-id views equal, pixel for pixel, the display twin
 //!   applied to the AOVs of the EXR the render writes;
 //! - S writes a snapshot equal to the twin at the film's size; Up brightens the colour view;
-//! - closing the window (WM_DELETE_WINDOW) stops the render, which writes what it has.
+//! - closing the window (WM_DELETE_WINDOW) stops the render, which writes what it has;
+//! - a CPU integrator's film (bpt, handed over by the render loop) shows as well.
 #![cfg(x11_preview)]
 
 use std::io::{BufRead, BufReader};
@@ -213,16 +214,17 @@ fn title_spp(title: &str) -> Option<u64> {
 /// The mean RGB of window pixels over a rectangle of film pixels.
 fn region_mean(
     size: [u32; 2],
+    film: [u32; 2],
     pixels: &[[u8; 3]],
     film_x: std::ops::Range<u32>,
     film_y: std::ops::Range<u32>,
 ) -> [f64; 3] {
-    let [vx, vy, vw, vh] = splitray::display::tonemap::fit(FILM, size);
+    let [vx, vy, vw, vh] = splitray::display::tonemap::fit(film, size);
     let mut sum = [0.0; 3];
     let mut n = 0.0;
     for y in vy..vy + vh {
         for x in vx..vx + vw {
-            let (fx, fy) = ((x - vx) * FILM[0] / vw, (y - vy) * FILM[1] / vh);
+            let (fx, fy) = ((x - vx) * film[0] / vw, (y - vy) * film[1] / vh);
             if film_x.contains(&fx) && film_y.contains(&fy) {
                 let p = pixels[(y * size[0] + x) as usize];
                 for c in 0..3 {
@@ -233,6 +235,72 @@ fn region_mean(
         }
     }
     sum.map(|s| s / n)
+}
+
+/// Checks that a window of `size` showing a `film`-sized Cornell box shows the left wall
+/// red and the right wall green. Their albedos differ between channels by 9.7x (red
+/// wall, R/G) and 3.2x (green wall, G/R); the sRGB encoding shrinks such ratios to about
+/// their 2.4th root (2.6x, 1.6x), and light bounced off the white walls lowers them
+/// further.
+fn assert_cornell_walls(size: [u32; 2], film: [u32; 2], colour: &[[u8; 3]]) {
+    let at = |lo: f64, hi: f64, n: u32| (lo * n as f64) as u32..(hi * n as f64) as u32;
+    let (rows, [w, _]) = (at(0.25, 0.75, film[1]), film);
+    let left = region_mean(size, film, colour, at(0.15, 0.25, w), rows.clone());
+    let right = region_mean(size, film, colour, at(0.74, 0.84, w), rows);
+    assert!(left[0] > 1.5 * left[1].max(left[2]), "left wall {left:?}");
+    assert!(
+        right[1] > 1.25 * right[0].max(right[2]),
+        "right wall {right:?}"
+    );
+}
+
+/// Starts `splitray render cornell-box --preview --validation` on `display`, rendering
+/// a `film`-sized image with `integrator` to `dir/box.exr` until the window is closed.
+fn start_preview(display: &str, dir: &Path, integrator: &str, film: [u32; 2]) -> Child {
+    let [w, h] = film.map(|v| v.to_string());
+    Command::new(env!("CARGO_BIN_EXE_splitray"))
+        .args(["render", "cornell-box", "--preview", "--validation"])
+        .args(["--integrator", integrator, "--width", &w, "--height", &h])
+        .args(["--spp", "1000000", "--time", "120", "--seed", "3"])
+        .arg("-o")
+        .arg(dir.join("box.exr"))
+        .arg("--stats")
+        .arg(dir.join("box.json"))
+        .env("DISPLAY", display)
+        .env("RUST_LOG", "warn")
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap()
+}
+
+/// Closes the window and waits for the render to stop and write what it has: checks
+/// that it succeeded and said so, and returns its stats.
+fn close_and_finish(x: &X, window: Window, mut process: Child, dir: &Path) -> serde_json::Value {
+    x.close(window);
+    let start = Instant::now();
+    while process.try_wait().unwrap().is_none() {
+        assert!(
+            start.elapsed() < Duration::from_secs(60),
+            "still rendering a minute after the close"
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    let out = process.wait_with_output().unwrap();
+    let text = format!(
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(out.status.success(), "{text}");
+    assert!(
+        text.contains("preview window closed: the render stopped at"),
+        "{text}"
+    );
+    let stats: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("box.json")).unwrap()).unwrap();
+    assert_eq!(stats["stopped_early"], true, "{text}");
+    stats
 }
 
 /// What the display twin shows of the EXR's AOVs in `view` at `size`.
@@ -288,22 +356,7 @@ fn the_preview_window_shows_the_render_its_aovs_and_stops_it_when_closed() {
     let xvfb = Xvfb::start();
     let x = X::connect(&xvfb.display);
     let dir = tempfile::tempdir().unwrap();
-    let output = dir.path().join("box.exr");
-    let stats = dir.path().join("box.json");
-    let mut process = Command::new(env!("CARGO_BIN_EXE_splitray"))
-        .args(["render", "cornell-box", "--preview", "--validation"])
-        .args(["--integrator", "pt", "--width", "80", "--height", "60"])
-        .args(["--spp", "1000000", "--time", "120", "--seed", "3"])
-        .arg("-o")
-        .arg(&output)
-        .arg("--stats")
-        .arg(&stats)
-        .env("DISPLAY", &xvfb.display)
-        .env("RUST_LOG", "warn")
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
+    let mut process = start_preview(&xvfb.display, dir.path(), "pt", FILM);
     let window = x.find_window(&mut process, Duration::from_secs(60));
     x.wait_for_title(window, "eight samples per pixel", |t| {
         title_spp(t).is_some_and(|spp| spp >= 8)
@@ -311,18 +364,7 @@ fn the_preview_window_shows_the_render_its_aovs_and_stops_it_when_closed() {
     std::thread::sleep(Duration::from_millis(600));
     let (size, colour) = x.capture(window);
     assert_eq!(size, splitray::preview::window_size(FILM));
-
-    // The Cornell box: the left wall red, the right wall green. Their albedos differ
-    // between channels by 9.7x (red wall, R/G) and 3.2x (green wall, G/R); the sRGB
-    // encoding shrinks such ratios to about their 2.4th root (2.6x, 1.6x), and light
-    // bounced off the white walls lowers them further.
-    let left = region_mean(size, &colour, 12..20, 15..45);
-    let right = region_mean(size, &colour, 59..67, 15..45);
-    assert!(left[0] > 1.5 * left[1].max(left[2]), "left wall {left:?}");
-    assert!(
-        right[1] > 1.25 * right[0].max(right[2]),
-        "right wall {right:?}"
-    );
+    assert_cornell_walls(size, FILM, &colour);
 
     let mut views = Vec::new();
     for view in [View::Depth, View::Normal, View::TriangleId] {
@@ -348,48 +390,23 @@ fn the_preview_window_shows_the_render_its_aovs_and_stops_it_when_closed() {
     x.press(window, XK_A);
     x.wait_for_title(window, "colour", |t| t.ends_with("colour"));
     std::thread::sleep(Duration::from_millis(600));
-    let before = region_mean(size, &x.capture(window).1, 0..80, 0..60);
+    let before = region_mean(size, FILM, &x.capture(window).1, 0..80, 0..60);
     x.press(window, XK_UP);
     x.press(window, XK_UP);
     x.wait_for_title(window, "+1 EV", |t| t.ends_with("colour +1.0 EV"));
     std::thread::sleep(Duration::from_millis(600));
-    let after = region_mean(size, &x.capture(window).1, 0..80, 0..60);
+    let after = region_mean(size, FILM, &x.capture(window).1, 0..80, 0..60);
     let brightness = |m: [f64; 3]| m.iter().sum::<f64>();
     assert!(
         brightness(after) > 1.15 * brightness(before),
         "one stop brighter: {before:?} → {after:?}"
     );
 
-    x.close(window);
-    let start = Instant::now();
-    let status = loop {
-        if let Some(status) = process.try_wait().unwrap() {
-            break status;
-        }
-        assert!(
-            start.elapsed() < Duration::from_secs(60),
-            "still rendering after the close"
-        );
-        std::thread::sleep(Duration::from_millis(100));
-    };
-    let out = process.wait_with_output().unwrap();
-    let text = format!(
-        "{}{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    assert!(status.success(), "{text}");
-    assert!(
-        text.contains("preview window closed: the render stopped at"),
-        "{text}"
-    );
-    let stats: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
-    assert_eq!(stats["stopped_early"], true, "{text}");
-    assert!(stats["spp"].as_u64().unwrap() >= 2);
+    let stats = close_and_finish(&x, window, process, dir.path());
+    assert!(stats["spp"].as_u64().unwrap() >= 8);
 
     // The AOV views, shown and snapshotted, are the twin's image of the EXR's AOVs.
-    let (film, _) = splitray::film::read_exr(&output).unwrap();
+    let (film, _) = splitray::film::read_exr(dir.path().join("box.exr")).unwrap();
     let aovs = Aovs {
         depth: film.depth.clone().unwrap(),
         triangle_id: film.triangle_id.clone().unwrap(),
@@ -407,6 +424,27 @@ fn the_preview_window_shows_the_render_its_aovs_and_stops_it_when_closed() {
         &twin_view(&aovs, View::TriangleId, FILM),
         FILM[0],
     );
+    drop(xvfb);
+}
+
+#[test]
+fn the_preview_window_shows_a_cpu_integrators_film() {
+    // bpt keeps its film on the host: the render loop hands it over after every batch
+    // and the window uploads it before tone-mapping it.
+    let film = [40, 30];
+    let xvfb = Xvfb::start();
+    let x = X::connect(&xvfb.display);
+    let dir = tempfile::tempdir().unwrap();
+    let mut process = start_preview(&xvfb.display, dir.path(), "bpt", film);
+    let window = x.find_window(&mut process, Duration::from_secs(60));
+    x.wait_for_title(window, "eight samples per pixel", |t| {
+        title_spp(t).is_some_and(|spp| spp >= 8)
+    });
+    std::thread::sleep(Duration::from_millis(600));
+    let (size, colour) = x.capture(window);
+    assert_eq!(size, splitray::preview::window_size(film));
+    assert_cornell_walls(size, film, &colour);
+    close_and_finish(&x, window, process, dir.path());
     drop(xvfb);
 }
 

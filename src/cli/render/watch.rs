@@ -94,6 +94,7 @@ impl Watching {
         if let Some(preview) = &self.preview {
             preview.attach(gpu, feed.clone())?;
         }
+        #[cfg(not(x11_preview))]
         let _ = gpu;
         if let Some(address) = &self.display_server {
             self.tev = Some(TevStream::start(
