@@ -303,6 +303,43 @@ fn close_and_finish(x: &X, window: Window, mut process: Child, dir: &Path) -> se
     stats
 }
 
+/// A preview window on its own Xvfb, its render past eight samples per pixel and its
+/// colour view checked to show the Cornell box.
+struct Session {
+    xvfb: Xvfb,
+    x: X,
+    dir: tempfile::TempDir,
+    process: Child,
+    window: Window,
+    /// The window's size.
+    size: [u32; 2],
+}
+
+impl Session {
+    fn open(integrator: &str, film: [u32; 2]) -> Self {
+        let xvfb = Xvfb::start();
+        let x = X::connect(&xvfb.display);
+        let dir = tempfile::tempdir().unwrap();
+        let mut process = start_preview(&xvfb.display, dir.path(), integrator, film);
+        let window = x.find_window(&mut process, Duration::from_secs(60));
+        x.wait_for_title(window, "eight samples per pixel", |t| {
+            title_spp(t).is_some_and(|spp| spp >= 8)
+        });
+        std::thread::sleep(Duration::from_millis(600));
+        let (size, colour) = x.capture(window);
+        assert_eq!(size, splitray::preview::window_size(film));
+        assert_cornell_walls(size, film, &colour);
+        Self {
+            xvfb,
+            x,
+            dir,
+            process,
+            window,
+            size,
+        }
+    }
+}
+
 /// What the display twin shows of the EXR's AOVs in `view` at `size`.
 fn twin_view(aovs: &Aovs, view: View, size: [u32; 2]) -> Vec<[u8; 3]> {
     let params = ToneParams::new(FILM, size, view, 1.0, false, depth_range(&aovs.depth));
@@ -353,18 +390,14 @@ fn snapshot_file(dir: &Path) -> Option<PathBuf> {
 
 #[test]
 fn the_preview_window_shows_the_render_its_aovs_and_stops_it_when_closed() {
-    let xvfb = Xvfb::start();
-    let x = X::connect(&xvfb.display);
-    let dir = tempfile::tempdir().unwrap();
-    let mut process = start_preview(&xvfb.display, dir.path(), "pt", FILM);
-    let window = x.find_window(&mut process, Duration::from_secs(60));
-    x.wait_for_title(window, "eight samples per pixel", |t| {
-        title_spp(t).is_some_and(|spp| spp >= 8)
-    });
-    std::thread::sleep(Duration::from_millis(600));
-    let (size, colour) = x.capture(window);
-    assert_eq!(size, splitray::preview::window_size(FILM));
-    assert_cornell_walls(size, FILM, &colour);
+    let Session {
+        xvfb,
+        x,
+        dir,
+        process,
+        window,
+        size,
+    } = Session::open("pt", FILM);
 
     let mut views = Vec::new();
     for view in [View::Depth, View::Normal, View::TriangleId] {
@@ -431,21 +464,14 @@ fn the_preview_window_shows_the_render_its_aovs_and_stops_it_when_closed() {
 fn the_preview_window_shows_a_cpu_integrators_film() {
     // bpt keeps its film on the host: the render loop hands it over after every batch
     // and the window uploads it before tone-mapping it.
-    let film = [40, 30];
-    let xvfb = Xvfb::start();
-    let x = X::connect(&xvfb.display);
-    let dir = tempfile::tempdir().unwrap();
-    let mut process = start_preview(&xvfb.display, dir.path(), "bpt", film);
-    let window = x.find_window(&mut process, Duration::from_secs(60));
-    x.wait_for_title(window, "eight samples per pixel", |t| {
-        title_spp(t).is_some_and(|spp| spp >= 8)
-    });
-    std::thread::sleep(Duration::from_millis(600));
-    let (size, colour) = x.capture(window);
-    assert_eq!(size, splitray::preview::window_size(film));
-    assert_cornell_walls(size, film, &colour);
-    close_and_finish(&x, window, process, dir.path());
-    drop(xvfb);
+    let session = Session::open("bpt", [40, 30]);
+    close_and_finish(
+        &session.x,
+        session.window,
+        session.process,
+        session.dir.path(),
+    );
+    drop(session.xvfb);
 }
 
 #[test]
