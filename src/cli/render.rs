@@ -17,13 +17,14 @@ use splitray::render::{
     RenderOptions, RenderOutput, RenderPlan, Resume, Shard,
 };
 use splitray::trace::TracerKind;
-use splitray::vk::{Gpu, GpuDesc, InstanceDesc};
+use splitray::vk::{GpuDesc, InstanceDesc};
 
 use super::render_files::{write_stats, RenderFiles};
 use super::signals::{self, StopSignals};
 use options::{parse_shard, render_options};
 
 mod options;
+mod watch;
 
 /// The scene rendered when none is named.
 const DEFAULT_SCENE: &str = "cornell-box";
@@ -132,6 +133,16 @@ pub struct RenderArgs {
     /// segments); they sum to the image.
     #[arg(long, value_name = "DIR")]
     bdpt_techniques: Option<PathBuf>,
+    /// Show the film converging in a window (needs an X11 display); closing it stops the
+    /// render and writes what it has. Keys: Up/Down exposure, A next view (colour, depth,
+    /// normal, triangle id), S snapshot beside the output, Escape close.
+    #[arg(long)]
+    preview: bool,
+    /// Stream the render as it converges to the tev image viewer listening at HOST:PORT
+    /// (`tev --hostname HOST:PORT`); a listener that is away or goes away does not stop
+    /// the render.
+    #[arg(long, value_name = "HOST:PORT")]
+    display_server: Option<String>,
     /// cbpt: N_C, the most camera paths per step, or `auto` to choose it (and N_L) by
     /// Equation 4 of the CBPT paper from measured BPT and CBPT times (default 2000).
     #[arg(long, value_name = "N|auto")]
@@ -219,7 +230,9 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<ExitCode> {
     }
     let output = output_path(args, &scene.name, shard)?;
     let files = RenderFiles::create(&output, args.stats.as_deref(), args.checkpoint.as_deref())?;
-    let gpu = Gpu::new(&GpuDesc {
+    let mut watching =
+        watch::Watching::open(args, &scene.name, &output, [options.width, options.height])?;
+    let gpu = watching.open_gpu(&GpuDesc {
         instance: InstanceDesc {
             validation: args.validation,
             sync_validation: args.sync_validation,
@@ -230,6 +243,8 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<ExitCode> {
     if let Some(t) = timeline.as_mut() {
         t.attach(&gpu)?;
     }
+    watching.attach(&gpu)?;
+    let mut publisher = watching.publisher();
 
     let RenderFiles {
         image,
@@ -260,6 +275,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<ExitCode> {
             every_s: args.checkpoint_every,
             save: &mut save,
         }),
+        watch: publisher.as_mut().map(|p| p as _),
     };
     let result = render_from(
         &gpu,
@@ -268,10 +284,12 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<ExitCode> {
         plan,
         RenderControl {
             progress: &mut |p| show_progress(&bar, &label, p, pixels, options.time_limit),
-            stop: &|| signals.received().is_some(),
+            stop: &|| signals.received().is_some() || watching.window_closed(),
         },
     );
     bar.finish_and_clear();
+    let window_closed = watching.window_closed();
+    watching.finish();
     let result = result?;
 
     let messages = gpu.validation_messages();
@@ -283,6 +301,10 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<ExitCode> {
     }
     let stopped_by = signals.received();
     if result.sums.passes == 0 {
+        if window_closed && stopped_by.is_none() {
+            eprintln!("preview window closed before the first pass; nothing written");
+            return Ok(ExitCode::SUCCESS);
+        }
         let Some(signal) = stopped_by else {
             bail!("the render holds no passes; nothing was written");
         };
@@ -325,6 +347,13 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<ExitCode> {
         eprintln!(
             "{}: the render stopped at {} spp; {} records the samples reached",
             signals::name(signal),
+            result.sums.spp(),
+            written.exr.display()
+        );
+    } else if window_closed && result.stats.stopped_early {
+        eprintln!(
+            "preview window closed: the render stopped at {} spp; {} records the samples \
+             reached",
             result.sums.spp(),
             written.exr.display()
         );

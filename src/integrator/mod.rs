@@ -28,7 +28,7 @@ use std::str::FromStr;
 pub use eye::{EyeInputs, EyeIntegrator, EyeOptions};
 pub use gpu_types::{FrameParams, GpuMaterial};
 
-use crate::film::FilmSums;
+use crate::film::{DeviceFilm, FilmSums};
 use crate::vk;
 
 /// What can go wrong while an integrator renders.
@@ -99,6 +99,12 @@ pub trait Integrator {
     /// Extra images to write beside the render, if the integrator was asked for any.
     fn extra_images(&mut self) -> Result<Vec<NamedImage>, IntegratorError> {
         Ok(Vec::new())
+    }
+
+    /// The film where it lives on the GPU, for previews that show it from there; `None`
+    /// for integrators that keep it on the host (watchers then take [`Integrator::sums`]).
+    fn device_film(&self) -> Option<DeviceFilm> {
+        None
     }
 }
 
