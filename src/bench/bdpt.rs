@@ -175,7 +175,8 @@ impl Contestant {
         // Warm-up (lavapipe compiles each kernel at its first dispatch), then an empty
         // film: the measured passes continue from pass 1.
         integrator.render_passes(0, 1)?;
-        let empty = FilmSums::new(options.width, options.height, 1, true);
+        let per_pass = integrator.samples_per_pass();
+        let empty = FilmSums::new(options.width, options.height, per_pass, true);
         integrator.restore(&empty)?;
         Ok(Self {
             kind: options.integrator,
@@ -203,7 +204,8 @@ impl Contestant {
         let t = start.elapsed().as_secs_f64().max(1e-9);
         self.seconds += t;
         self.passes += passes;
-        self.samples.push(passes as f64 * pixels / t);
+        let per_pass = self.integrator.samples_per_pass() as f64;
+        self.samples.push(passes as f64 * per_pass * pixels / t);
         self.rays
             .push((self.integrator.stats().rays_traced - rays0) as f64 / t);
         let basic = counter(self.integrator.as_ref(), "basic_contributions") - basic0;

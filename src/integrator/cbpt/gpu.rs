@@ -92,12 +92,15 @@ struct Slot {
 /// The most bytes of one readback buffer of host zones (or one batch's, if more).
 const ZONE_BUFFER_BYTES: u64 = 64 << 20;
 
-/// A step whose combination was submitted.
+/// A step uploaded: `done` marks its upload (`None`: it has no segment).
+pub struct GpuUploaded(GpuPending);
+
+/// A step launched: `done` marks its last download (the transfer stream runs in
+/// order; `None`: it has no segment).
 pub struct GpuPending {
     slot: usize,
     tables: Arc<Tables>,
     batches: Vec<Batch>,
-    /// The last download (the transfer stream runs in order).
     done: Option<TimelinePoint>,
 }
 
@@ -207,7 +210,7 @@ impl GpuCombiner {
     }
 
     /// Puts `tables` on the GPU in `slot`'s buffers; the point marks them there.
-    fn upload(&mut self, slot: usize, tables: &Tables) -> vk::Result<TimelinePoint> {
+    fn upload_vertices(&mut self, slot: usize, tables: &Tables) -> vk::Result<TimelinePoint> {
         let gpu = self.gpu.clone();
         let s = &mut self.slots[slot];
         let mut rec = gpu.recorder(StreamKind::Transfer)?;
@@ -396,10 +399,13 @@ impl GpuCombiner {
 }
 
 impl Evaluator for GpuCombiner {
+    type Uploaded = GpuUploaded;
     type Pending = GpuPending;
 
-    fn start(&mut self, tables: Arc<Tables>) -> Result<GpuPending, IntegratorError> {
-        let _span = tracing::info_span!("cbpt gpu submit", segments = tables.segments()).entered();
+    /// Takes the next slot, places the step's host zones and uploads its linking
+    /// vertices on the transfer stream.
+    fn upload(&mut self, tables: Arc<Tables>) -> Result<GpuUploaded, IntegratorError> {
+        let _span = tracing::info_span!("cbpt upload", segments = tables.segments()).entered();
         let slot = self.next_slot;
         if self.slots[slot].busy {
             return Err(IntegratorError::Usage(
@@ -417,19 +423,31 @@ impl Evaluator for GpuCombiner {
         let mut done = None;
         if !batches.is_empty() {
             self.place_zones(slot, &mut batches)?;
-            let uploaded = self.upload(slot, &tables)?;
-            for b in &batches {
-                done = Some(self.submit_batch(slot, &tables, b, &uploaded)?);
-            }
+            done = Some(self.upload_vertices(slot, &tables)?);
         }
         self.slots[slot].busy = true;
         self.next_slot = 1 - slot;
-        Ok(GpuPending {
+        Ok(GpuUploaded(GpuPending {
             slot,
             tables,
             batches,
             done,
-        })
+        }))
+    }
+
+    /// Submits the step's batches after its upload; the pending step then waits for
+    /// its last download.
+    fn launch(&mut self, uploaded: GpuUploaded) -> Result<GpuPending, IntegratorError> {
+        let mut step = uploaded.0;
+        let _span = tracing::info_span!("cbpt launch", batches = step.batches.len()).entered();
+        if let Some(uploaded) = step.done.take() {
+            let mut last = uploaded.clone();
+            for b in &step.batches {
+                last = self.submit_batch(step.slot, &step.tables, b, &uploaded)?;
+            }
+            step.done = Some(last);
+        }
+        Ok(step)
     }
 
     fn finish(&mut self, p: GpuPending) -> Result<CombinationData, IntegratorError> {

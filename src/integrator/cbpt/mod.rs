@@ -57,9 +57,14 @@ pub struct CpuEvaluator<'a> {
 }
 
 impl Evaluator for CpuEvaluator<'_> {
+    type Uploaded = Arc<Tables>;
     type Pending = CombinationData;
 
-    fn start(&mut self, tables: Arc<Tables>) -> Result<CombinationData, IntegratorError> {
+    fn upload(&mut self, tables: Arc<Tables>) -> Result<Arc<Tables>, IntegratorError> {
+        Ok(tables)
+    }
+
+    fn launch(&mut self, tables: Arc<Tables>) -> Result<CombinationData, IntegratorError> {
         Ok(cpu_kernels::evaluate(self.scene, &tables, Kinds::ALL))
     }
 

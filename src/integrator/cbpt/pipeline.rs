@@ -6,15 +6,19 @@
 //! step t the CPU thread
 //!
 //! 1. samples the population couple {x}_t, {y}_t and packs its linking vertices;
-//! 2. hands them to the driver, which uploads them and starts their combination
-//!    (`upload_async`, `gpu_comp_async`), then waits for the combination of step t − 1
-//!    (`sync_gpu_comp`) and hands it back;
+//! 2. hands them to the driver, which uploads them (`upload_async`), waits for the
+//!    combination of step t − 1 (`sync_gpu_comp`) and hands it back, then launches step
+//!    t's (`gpu_comp_async`);
 //! 3. samples and traces step t's N_T light-tracing paths (`sample({y_lt})`,
 //!    `compute_lt()`) while the device computes;
 //! 4. combines step t − 1 (`combine()`).
 //!
-//! So the CPU samples step t + 1 and combines step t while the device combines step
-//! t + 1's data — the device's time hides behind the CPU's. Not pipelined, every step
+//! So the CPU combines step t − 1 and samples step t + 1 while the device combines step
+//! t — the device's time hides behind the CPU's, or the CPU's behind the device's,
+//! whichever is shorter. The order of step 2 is the paper's: step t is launched only
+//! after step t − 1's data went back, so a device whose submissions execute in the
+//! submitting thread (lavapipe) does not hold step t − 1's data back behind step t's
+//! work (tests/cbpt_pipeline.rs holds the loop to that). Not pipelined, every step
 //! waits for its own combination (the synchronous reference of `bench cbpt`). The
 //! image is the same either way: each step's work depends on that step alone, and
 //! passes are summed in order.
@@ -34,12 +38,21 @@ use super::steps::{ImagePositions, PassPlan, StepId, SAMPLES_PER_PIXEL};
 use crate::bidir::Counters;
 use crate::integrator::IntegratorError;
 
-/// Computes the combination data of population couples, at most two at a time:
-/// [`Evaluator::start`] begins a step's, [`Evaluator::finish`] waits for it, in order.
+/// Computes the combination data of population couples, at most two at a time, in
+/// Algorithm 2's three calls: `upload_async` ([`Evaluator::upload`]), `gpu_comp_async`
+/// ([`Evaluator::launch`]) and `sync_gpu_comp` ([`Evaluator::finish`]), in step order.
 pub trait Evaluator {
+    type Uploaded;
     type Pending;
-    fn start(&mut self, tables: Arc<Tables>) -> Result<Self::Pending, IntegratorError>;
+    fn upload(&mut self, tables: Arc<Tables>) -> Result<Self::Uploaded, IntegratorError>;
+    fn launch(&mut self, uploaded: Self::Uploaded) -> Result<Self::Pending, IntegratorError>;
     fn finish(&mut self, pending: Self::Pending) -> Result<CombinationData, IntegratorError>;
+
+    /// Upload and launch at once.
+    fn start(&mut self, tables: Arc<Tables>) -> Result<Self::Pending, IntegratorError> {
+        let uploaded = self.upload(tables)?;
+        self.launch(uploaded)
+    }
 }
 
 /// Where the time of the steps went (sums over the steps).
@@ -56,7 +69,8 @@ pub struct StepTimes {
     pub wait: Duration,
     /// CPU thread: combine() and splatting.
     pub combine: Duration,
-    /// Driver: uploading a step and submitting its batches.
+    /// Driver: uploading a step and submitting its batches (on a device whose
+    /// submissions run to completion, lavapipe, their execution too).
     pub start: Duration,
     /// Driver: waiting for a step's last download and copying its data out.
     pub finish: Duration,
@@ -128,8 +142,11 @@ pub fn run_steps<E: Evaluator>(
     Ok(out)
 }
 
-/// The combination driver: starts each step it receives, then hands back the previous
-/// one's data (pipelined) or the step's own.
+/// The combination driver. Pipelined, it follows Algorithm 2: it uploads step t as it
+/// arrives, then waits for step t − 1's combination and hands it back, then launches
+/// step t — so the CPU combines step t − 1 while the device computes step t, and on a
+/// device whose submissions run to completion (lavapipe) step t − 1's data is not held
+/// back by step t's work. Otherwise each step is uploaded, launched and finished in turn.
 fn drive<E: Evaluator>(
     evaluator: &mut E,
     tables_rx: Receiver<Arc<Tables>>,
@@ -146,17 +163,23 @@ fn drive<E: Evaluator>(
     let mut pending: Option<E::Pending> = None;
     while let Ok(tables) = tables_rx.recv() {
         let t = Instant::now();
-        let current = evaluator.start(tables)?;
+        let uploaded = evaluator.upload(tables)?;
         times.start += t.elapsed();
-        let ready = if pipelined {
-            pending.replace(current)
-        } else {
-            Some(current)
-        };
-        if let Some(p) = ready {
+        if let Some(p) = pending.take() {
             if data_tx.send(finish(evaluator, p, &mut times)?).is_err() {
                 return Ok(times);
             }
+        }
+        let t = Instant::now();
+        let launched = evaluator.launch(uploaded)?;
+        times.start += t.elapsed();
+        if pipelined {
+            pending = Some(launched);
+        } else if data_tx
+            .send(finish(evaluator, launched, &mut times)?)
+            .is_err()
+        {
+            return Ok(times);
         }
     }
     if let Some(p) = pending {
