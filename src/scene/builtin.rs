@@ -45,6 +45,8 @@ pub fn builtin_names() -> &'static [(&'static str, &'static str)] {
             "fixture",
             "closed room lit only indirectly: its one area light hides in an open box facing a wall",
         ),
+        super::animation::builtin::NAMES[0],
+        super::animation::builtin::NAMES[1],
     ]
 }
 
@@ -53,7 +55,8 @@ pub fn builtin(name: &str) -> Option<Scene> {
     match name {
         "cornell-box" => Some(cornell_box()),
         "fixture" => Some(fixture()),
-        _ => None,
+        // Animated scenes posed at time 0 (`scene::load_animated` keeps them moving).
+        _ => super::animation::builtin::animated(name).map(|a| a.scene),
     }
 }
 
