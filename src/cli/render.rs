@@ -23,6 +23,7 @@ use super::render_files::{write_stats, RenderFiles};
 use super::signals::{self, StopSignals};
 use options::{parse_shard, render_options};
 
+mod frames;
 mod options;
 
 /// The scene rendered when none is named.
@@ -131,6 +132,15 @@ pub struct RenderArgs {
     /// segments); they sum to the image.
     #[arg(long, value_name = "DIR")]
     bdpt_techniques: Option<PathBuf>,
+    /// Render frames A to B-1 (A..B) or A to B (A..=B) of an animated scene, frame k at
+    /// time k / fps: a numbered sequence beside the output (`-o shot.exr` writes
+    /// shot_0000.exr, shot_0001.exr … and their PNGs). Not with --checkpoint, --resume,
+    /// --shard, --reference or --bdpt-techniques; --time limits each frame.
+    #[arg(long, value_name = "A..B")]
+    frames: Option<String>,
+    /// Frames per second of --frames (default 24).
+    #[arg(long, requires = "frames")]
+    fps: Option<f64>,
 }
 
 /// The output path (default `out/<scene>.exr`, `out/<scene>.shard-I-of-N.exr` for a
@@ -176,6 +186,9 @@ fn output_path(args: &RenderArgs, scene_name: &str, shard: Shard) -> anyhow::Res
 }
 
 pub fn run(args: &RenderArgs) -> anyhow::Result<ExitCode> {
+    if let Some(spec) = &args.frames {
+        return frames::run(args, spec);
+    }
     let signals = StopSignals::install()?;
     let mut timeline = super::timeline::TimelineOutput::start(args.timeline.as_deref())?;
     let resume = match &args.resume {
