@@ -663,3 +663,42 @@ fn render_frames_refuses_bad_input() {
     assert!(written.is_empty(), "{written:?}");
     assert!(!dir.path().join("out").exists());
 }
+
+/// `bench dynamic` verifies every tracer's hits on every frame of a moving scene (its
+/// times are measured by the benchmark, not here).
+#[test]
+fn bench_dynamic_verifies_every_tracer_on_every_frame() {
+    use splitray::bench::dynamic::{self, Contender, DynamicBenchOptions};
+    use splitray::bench::workloads::Workload;
+    let gpu = common::gpu();
+    let dir = tempfile::tempdir().unwrap();
+    let a = load(dir.path());
+    let opts = DynamicBenchOptions {
+        width: 24,
+        height: 16,
+        frames: 2,
+        fps: 3.0,
+        workloads: vec![Workload::Primary, Workload::Shadow],
+        verify_rays: 64,
+        ..Default::default()
+    };
+    let report = dynamic::run(&gpu, &a, &opts).unwrap();
+    assert_eq!(report.frames, 1..3);
+    assert_eq!(report.moved_triangles, 42.0);
+    let expected = Contender::ALL.len() - report.skipped.len();
+    for w in &report.workloads {
+        assert_eq!(w.rows.len(), expected);
+        for r in &w.rows {
+            assert_eq!(r.mismatches, 0);
+            // The warm-up frame and 2 timed frames, 64 rays of each of 2 workloads.
+            assert_eq!(r.verified_rays, 3 * 2 * 64, "{:?}", r.tracer);
+            assert_eq!(r.frames_ms.len(), 2);
+        }
+    }
+    let text = report.to_string();
+    assert!(text.contains("target pdacrt frame time / ray-query") || !gpu.ray_query());
+    let still = scene::load_animated("cornell-box").unwrap();
+    let e = dynamic::run(&gpu, &still, &opts).unwrap_err().to_string();
+    assert!(e.contains("does not move"), "{e}");
+    common::assert_clean(&gpu);
+}
