@@ -149,6 +149,26 @@ fn the_scene_file_animates_meshes_sequence_and_camera() {
     assert_eq!(a.camera_at(0.5).fov_y, 39.3077);
 }
 
+/// The shipped example turns the tall block a quarter turn about its own axis.
+#[test]
+fn the_shipped_animated_cornell_box_turns_its_tall_block_in_place() {
+    let a = scene::load_animated(&format!("{SCENES}/cornell-animated.toml")).unwrap();
+    let still = scene::load(&format!("{SCENES}/cornell-box.toml")).unwrap();
+    assert_eq!(a.scene.bounds(), still.bounds());
+    assert_eq!(a.animation.end_time(), Some(2.0));
+    let centre = Vec3::new(368.5, 0.0, 351.25);
+    let tall = &a.animation.meshes[1];
+    let (rest, turned) = (&a.scene.triangles[tall.range.clone()], a.pose(2.0));
+    for (r, t) in rest.iter().zip(&turned.triangles[tall.range.clone()]) {
+        for (p, q) in r.p.iter().zip(t.p) {
+            // A quarter turn about +y: (x, z) − centre goes to (z, −x) − centre.
+            let d = *p - centre;
+            let want = centre + Vec3::new(d.z, d.y, -d.x);
+            assert!(q.abs_diff_eq(want, 1e-3), "{q} vs {want}");
+        }
+    }
+}
+
 /// Writes the test scene with `from` replaced by `to` and loads it; returns the error.
 fn load_error(from: &str, to: &str) -> String {
     let dir = tempfile::tempdir().unwrap();
