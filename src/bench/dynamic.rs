@@ -21,7 +21,7 @@ use serde::Serialize;
 
 use super::trace::BenchResult;
 use super::workloads::{self, Workload};
-use crate::render::frames::FrameRange;
+use crate::render::frames::{move_triangles, FrameRange};
 use crate::scene::{AnimatedScene, Scene};
 use crate::trace::{
     cpu, CpuBvh, CpuBvhTracer, CpuDacrtTracer, GpuTriangle, Hit, PdacrtTracer, Query, Ray,
@@ -512,15 +512,7 @@ pub fn run(
         let next = range.time(k);
         let changed = animated.advance(&mut scene, t, next);
         t = next;
-        for r in &changed {
-            for (g, tri) in triangles[r.clone()]
-                .iter_mut()
-                .zip(&scene.triangles[r.clone()])
-            {
-                *g = GpuTriangle::new(tri.p);
-            }
-            moved += r.len();
-        }
+        moved += move_triangles(&mut triangles, &scene, &changed);
         gpu.wait_idle()?;
         let batches = frame_batches(&slots, &scene, &triangles, opts)?;
         for (i, (_, b)) in batches.iter().enumerate() {

@@ -213,14 +213,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<ExitCode> {
     }
     let output = output_path(args, &scene.name, shard)?;
     let files = RenderFiles::create(&output, args.stats.as_deref(), args.checkpoint.as_deref())?;
-    let gpu = Gpu::new(&GpuDesc {
-        instance: InstanceDesc {
-            validation: args.validation,
-            sync_validation: args.sync_validation,
-        },
-        device: args.device.clone(),
-        ..Default::default()
-    })?;
+    let gpu = open_gpu(args)?;
     if let Some(t) = timeline.as_mut() {
         t.attach(&gpu)?;
     }
@@ -324,6 +317,18 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<ExitCode> {
         );
     }
     Ok(exit_code(stopped_by))
+}
+
+/// The device `--device` names, with validation where asked for.
+fn open_gpu(args: &RenderArgs) -> anyhow::Result<Gpu> {
+    Ok(Gpu::new(&GpuDesc {
+        instance: InstanceDesc {
+            validation: args.validation,
+            sync_validation: args.sync_validation,
+        },
+        device: args.device.clone(),
+        ..Default::default()
+    })?)
 }
 
 fn exit_code(stopped_by: Option<i32>) -> ExitCode {

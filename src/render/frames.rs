@@ -199,15 +199,7 @@ pub fn render_frames(
             let next = range.time(k);
             let changed = animated.advance(&mut scene, t, next);
             t = next;
-            for r in &changed {
-                for (g, tri) in triangles[r.clone()]
-                    .iter_mut()
-                    .zip(&scene.triangles[r.clone()])
-                {
-                    *g = GpuTriangle::new(tri.p);
-                }
-                changed_triangles += r.len();
-            }
+            changed_triangles = move_triangles(&mut triangles, &scene, &changed);
             tracer.borrow_mut().current = k;
             next_frame(integrator.as_mut(), &scene, &triangles, &changed, options)?;
             // The CPU integrators trace without it: the AOVs still need it moved.
@@ -277,6 +269,23 @@ fn next_frame(
         false,
     ))?;
     Ok(())
+}
+
+/// Rewrites the `changed` ranges of `triangles` from `scene`'s; returns how many.
+pub fn move_triangles(
+    triangles: &mut [GpuTriangle],
+    scene: &Scene,
+    changed: &[Range<usize>],
+) -> usize {
+    for r in changed {
+        for (g, t) in triangles[r.clone()]
+            .iter_mut()
+            .zip(&scene.triangles[r.clone()])
+        {
+            *g = GpuTriangle::new(t.p);
+        }
+    }
+    changed.iter().map(|r| r.len()).sum()
 }
 
 fn gpu_triangles(scene: &Scene) -> Vec<GpuTriangle> {

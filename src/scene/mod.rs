@@ -21,6 +21,7 @@ pub mod builtin;
 pub mod camera;
 pub mod error;
 pub mod obj;
+pub mod shapes;
 pub mod toml_file;
 pub mod validate;
 

@@ -61,8 +61,7 @@ impl AccelerationStructure {
         vertices: &Buffer,
         triangle_count: u32,
     ) -> Result<Self> {
-        let geometry = triangle_geometry(name, vertices, triangle_count)?;
-        Self::build(rec, name, false, geometry, triangle_count, None, false)
+        Self::build_triangles_with(rec, name, vertices, triangle_count, false)
     }
 
     /// [`Self::build_triangles`] with ALLOW_UPDATE, so that
@@ -73,8 +72,18 @@ impl AccelerationStructure {
         vertices: &Buffer,
         triangle_count: u32,
     ) -> Result<Self> {
+        Self::build_triangles_with(rec, name, vertices, triangle_count, true)
+    }
+
+    fn build_triangles_with(
+        rec: &mut Recorder,
+        name: &str,
+        vertices: &Buffer,
+        triangle_count: u32,
+        updatable: bool,
+    ) -> Result<Self> {
         let geometry = triangle_geometry(name, vertices, triangle_count)?;
-        Self::build(rec, name, false, geometry, triangle_count, None, true)
+        Self::build(rec, name, false, geometry, triangle_count, None, updatable)
     }
 
     /// Records an in-place update (a refit: the same triangles, moved) of a bottom-level

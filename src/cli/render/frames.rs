@@ -19,12 +19,14 @@ use splitray::render::frames::{
     check_frames, frame_path, render_frames, Frame, FrameRange, FramesControl, DEFAULT_FPS,
 };
 use splitray::render::{RenderError, RenderStats, Shard};
-use splitray::vk::{Gpu, GpuDesc, InstanceDesc};
+use splitray::vk::Gpu;
 
 use super::super::render_files::{write_stats, RenderFiles};
 use super::super::signals::{self, StopSignals};
 use super::options::render_options;
-use super::{output_path, print_summary, progress_bar, show_progress, RenderArgs, DEFAULT_SCENE};
+use super::{
+    open_gpu, output_path, print_summary, progress_bar, show_progress, RenderArgs, DEFAULT_SCENE,
+};
 
 /// One frame's line of the `--stats` file.
 #[derive(serde::Serialize)]
@@ -85,14 +87,7 @@ pub(super) fn run(args: &RenderArgs, spec: &str) -> anyhow::Result<ExitCode> {
         args.stats.as_deref(),
         None,
     )?;
-    let gpu = Gpu::new(&GpuDesc {
-        instance: InstanceDesc {
-            validation: args.validation,
-            sync_validation: args.sync_validation,
-        },
-        device: args.device.clone(),
-        ..Default::default()
-    })?;
+    let gpu = open_gpu(args)?;
     if let Some(t) = timeline.as_mut() {
         t.attach(&gpu)?;
     }

@@ -20,7 +20,9 @@ use std::sync::Arc;
 use glam::{Quat, Vec3};
 
 use super::{AnimatedScene, Animation, Keyframes, MeshMotion, Motion, Procedure, Transform};
-use crate::scene::{Camera, FilmSize, Material, PointLight, RenderSettings, Scene, Triangle};
+use crate::scene::{
+    shapes, Camera, FilmSize, Material, PointLight, RenderSettings, Scene, Triangle,
+};
 
 /// The animated built-in scene names and a one-line description of each.
 pub const NAMES: [(&str, &str); 2] = [
@@ -60,6 +62,27 @@ fn ceiling_light(centre: Vec3, side: f32, material: u32) -> [Triangle; 2] {
         Triangle::new(c(-h, -h), c(h, -h), c(h, h), material),
         Triangle::new(c(-h, -h), c(h, h), c(-h, h), material),
     ]
+}
+
+/// Appends `rest` to the soup as a mesh moved by `keys` (increasing times).
+fn keyed_mesh(
+    name: String,
+    rest: Vec<Triangle>,
+    keys: Vec<(f32, Transform)>,
+    triangles: &mut Vec<Triangle>,
+) -> MeshMotion {
+    let start = triangles.len();
+    triangles.extend(&rest);
+    MeshMotion {
+        name,
+        range: start..triangles.len(),
+        motion: Motion::Keyed {
+            rest,
+            base: None,
+            keys: Some(Keyframes::new(keys).expect("increasing times")),
+            sequence: None,
+        },
+    }
 }
 
 /// Finishes a scene: posed at time 0, validated by the caller's tests.
@@ -172,9 +195,6 @@ fn waves() -> AnimatedScene {
         .into_iter()
         .enumerate()
     {
-        let rest = cube(1);
-        let start = triangles.len();
-        triangles.extend(&rest);
         let keys = (0..=8)
             .map(|k| {
                 let t = k as f32 * 0.5;
@@ -188,16 +208,12 @@ fn waves() -> AnimatedScene {
                 (t, transform)
             })
             .collect();
-        meshes.push(MeshMotion {
-            name: format!("crate {i}"),
-            range: start..triangles.len(),
-            motion: Motion::Keyed {
-                rest,
-                base: None,
-                keys: Some(Keyframes::new(keys).expect("increasing times")),
-                sequence: None,
-            },
-        });
+        meshes.push(keyed_mesh(
+            format!("crate {i}"),
+            cube(1),
+            keys,
+            &mut triangles,
+        ));
     }
     triangles.extend(ceiling_light(Vec3::new(0.0, 5.0, 0.0), 1.0, 2));
 
@@ -234,72 +250,6 @@ fn waves() -> AnimatedScene {
             camera: Some(camera_keys),
         },
     )
-}
-
-/// An icosphere of radius 1: the icosahedron with each face split in four `levels`
-/// times, vertices pushed onto the sphere; faces wound outwards.
-fn icosphere(levels: u32, material: u32) -> Vec<Triangle> {
-    let g = (1.0 + 5.0f32.sqrt()) * 0.5;
-    let v = [
-        [-1.0, g, 0.0],
-        [1.0, g, 0.0],
-        [-1.0, -g, 0.0],
-        [1.0, -g, 0.0],
-        [0.0, -1.0, g],
-        [0.0, 1.0, g],
-        [0.0, -1.0, -g],
-        [0.0, 1.0, -g],
-        [g, 0.0, -1.0],
-        [g, 0.0, 1.0],
-        [-g, 0.0, -1.0],
-        [-g, 0.0, 1.0],
-    ]
-    .map(|p| Vec3::from_array(p).normalize());
-    let faces: [[usize; 3]; 20] = [
-        [0, 11, 5],
-        [0, 5, 1],
-        [0, 1, 7],
-        [0, 7, 10],
-        [0, 10, 11],
-        [1, 5, 9],
-        [5, 11, 4],
-        [11, 10, 2],
-        [10, 7, 6],
-        [7, 1, 8],
-        [3, 9, 4],
-        [3, 4, 2],
-        [3, 2, 6],
-        [3, 6, 8],
-        [3, 8, 9],
-        [4, 9, 5],
-        [2, 4, 11],
-        [6, 2, 10],
-        [8, 6, 7],
-        [9, 8, 1],
-    ];
-    let mut tris: Vec<[Vec3; 3]> = faces.iter().map(|f| f.map(|i| v[i])).collect();
-    for _ in 0..levels {
-        tris = tris
-            .iter()
-            .flat_map(|&[a, b, c]| {
-                let (ab, bc, ca) = (
-                    (a + b).normalize(),
-                    (b + c).normalize(),
-                    (c + a).normalize(),
-                );
-                [[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]
-            })
-            .collect();
-    }
-    tris.into_iter()
-        .map(|[a, b, c]| {
-            let mut t = Triangle::new(a, b, c, material);
-            if t.geometric_normal().dot(t.centroid()) < 0.0 {
-                t.p.swap(1, 2);
-            }
-            t
-        })
-        .collect()
 }
 
 /// Deterministic numbers in [0, 1) for the swarm's layout.
@@ -339,9 +289,10 @@ fn swarm() -> AnimatedScene {
     ];
     let mut meshes = Vec::new();
     for i in 0..SWARM_SPHERES {
-        let rest = icosphere(3, 1 + i % 2);
-        let start = triangles.len();
-        triangles.extend(&rest);
+        let rest: Vec<Triangle> = shapes::icosphere(3)
+            .into_iter()
+            .map(|[a, b, c]| Triangle::new(a, b, c, 1 + i % 2))
+            .collect();
         let radius = 1.0 + 2.5 * hash01(i, 1);
         let height = 0.3 + 2.0 * hash01(i, 2);
         let size = 0.15 + 0.2 * hash01(i, 3);
@@ -364,16 +315,12 @@ fn swarm() -> AnimatedScene {
                 (t, transform)
             })
             .collect();
-        meshes.push(MeshMotion {
-            name: format!("sphere {i}"),
-            range: start..triangles.len(),
-            motion: Motion::Keyed {
-                rest,
-                base: None,
-                keys: Some(Keyframes::new(keys).expect("increasing times")),
-                sequence: None,
-            },
-        });
+        meshes.push(keyed_mesh(
+            format!("sphere {i}"),
+            rest,
+            keys,
+            &mut triangles,
+        ));
     }
     triangles.extend(ceiling_light(Vec3::new(0.0, 4.5, 0.0), 1.0, 3));
     posed(
