@@ -41,3 +41,55 @@ pub(crate) fn write_ranges<T: bytemuck::Pod>(
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::film::FilmSums;
+    use crate::integrator::{Integrator, IntegratorError, IntegratorStats};
+
+    /// An integrator that implements only what every integrator must.
+    struct Still;
+
+    impl Integrator for Still {
+        fn name(&self) -> &'static str {
+            "still"
+        }
+        fn render_passes(&mut self, _: u32, _: u32) -> Result<(), IntegratorError> {
+            Ok(())
+        }
+        fn sums(&mut self) -> Result<FilmSums, IntegratorError> {
+            Ok(FilmSums::new(1, 1, 1, false))
+        }
+        fn restore(&mut self, _: &FilmSums) -> Result<(), IntegratorError> {
+            Ok(())
+        }
+        fn stats(&self) -> IntegratorStats {
+            IntegratorStats::default()
+        }
+    }
+
+    #[test]
+    fn an_integrator_that_cannot_animate_says_so() {
+        let scene = crate::scene::builtin("cornell-box").unwrap();
+        let e = Still
+            .set_frame(&SceneFrame {
+                scene: &scene,
+                triangles: &[],
+                changed: &[0..1],
+                camera: scene.camera_frame(),
+            })
+            .unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "the still integrator cannot render animated scenes yet"
+        );
+        let frame = SceneFrame {
+            scene: &scene,
+            triangles: &[],
+            changed: &[3..3],
+            camera: scene.camera_frame(),
+        };
+        assert!(!frame.geometry_changed());
+    }
+}

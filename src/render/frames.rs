@@ -324,10 +324,11 @@ impl Tracer for SharedTracer {
         changed: &[Range<usize>],
     ) -> vk::Result<()> {
         let mut shared = self.0.borrow_mut();
-        if shared.holds != shared.current {
+        let moved = changed.iter().any(|r| !r.is_empty());
+        if shared.holds != shared.current && moved {
             shared.tracer.update_geometry(triangles, changed)?;
-            shared.holds = shared.current;
         }
+        shared.holds = shared.current;
         Ok(())
     }
     fn trace(

@@ -96,8 +96,9 @@ pub struct LoadedMesh {
     pub motion: Option<MeshMotion>,
 }
 
-/// Rejects a transform part that is not finite, a zero scale and a zero rotation axis
-/// or quaternion; `what` names the part in the message.
+/// The transform of `scale`, `rotate` and `translate` (each the identity where left
+/// out); refuses a part that is not finite, a zero scale, and a zero rotation axis or
+/// quaternion.
 fn transform_of(
     scale: Option<&Scale>,
     rotate: Option<&RotationToml>,
