@@ -190,6 +190,7 @@ pub fn render_frames(
             run.stopped = true;
             break;
         }
+        let _span = tracing::info_span!("frame", index = k).entered();
         gpu.wait_idle()?;
         let _ = gpu.take_profile();
         gpu.reset_peak_memory();
