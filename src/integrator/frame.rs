@@ -76,7 +76,7 @@ mod tests {
             .set_frame(&SceneFrame {
                 scene: &scene,
                 triangles: &[],
-                changed: &[0..1],
+                changed: &[0..1, 2..3],
                 camera: scene.camera_frame(),
             })
             .unwrap_err();
@@ -87,7 +87,7 @@ mod tests {
         let frame = SceneFrame {
             scene: &scene,
             triangles: &[],
-            changed: &[3..3],
+            changed: &[3..3, 5..5],
             camera: scene.camera_frame(),
         };
         assert!(!frame.geometry_changed());
