@@ -10,6 +10,7 @@ pub mod merge;
 pub mod part;
 mod plan;
 pub mod shard;
+mod watch;
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -30,6 +31,7 @@ pub use part::PartRecord;
 use plan::start_film;
 pub use plan::{CheckpointHook, FilmSnapshot, RenderPlan, Resume};
 pub use shard::{PassRanges, Shard};
+pub use watch::{FilmWatch, WatchStart};
 
 #[derive(Debug, thiserror::Error)]
 pub enum RenderError {
@@ -342,6 +344,15 @@ fn render_prepared(
         integrator.settings(),
     );
     let (first_pass, resumed_passes) = start_film(integrator, options, &plan, &fingerprint)?;
+    if let Some(watch) = plan.watch.as_deref_mut() {
+        watch.start(&WatchStart {
+            width: options.width,
+            height: options.height,
+            aovs: &aovs,
+            device_film: integrator.device_film(),
+            spp: resumed_passes as u64 * integrator.samples_per_pass() as u64,
+        })?;
+    }
     let previous_time_s = plan
         .resume
         .as_ref()
@@ -357,10 +368,14 @@ fn render_prepared(
             fingerprint: &fingerprint,
             previous_time_s,
             checkpoint: plan.checkpoint.take(),
+            watch: plan.watch.as_deref_mut(),
         },
         start,
     )?;
     let sums = integrator.sums()?;
+    if let Some(watch) = plan.watch {
+        watch.finish(&sums)?;
+    }
     let extra_images = integrator.extra_images()?;
     let integrator_stats = stats_since(integrator.stats(), &stats_before);
     let settings = integrator.settings();
@@ -546,7 +561,7 @@ fn integrator_on(
 }
 
 /// What the pass loop continues from and hands its film to.
-struct PassLoop<'f, 'h> {
+struct PassLoop<'f, 'h, 'w> {
     /// Global index of the film's first pass.
     first_pass: u32,
     /// Passes the film holds before the loop starts (from a checkpoint).
@@ -556,6 +571,7 @@ struct PassLoop<'f, 'h> {
     /// Render time of the runs before this one.
     previous_time_s: f64,
     checkpoint: Option<CheckpointHook<'h>>,
+    watch: Option<&'w mut (dyn FilmWatch + 'h)>,
 }
 
 /// How the pass loop ended.
@@ -595,9 +611,10 @@ fn run_passes(
     integrator: &mut dyn Integrator,
     options: &RenderOptions,
     control: RenderControl<'_>,
-    mut job: PassLoop<'_, '_>,
+    mut job: PassLoop<'_, '_, '_>,
     start: Instant,
 ) -> Result<PassRun, RenderError> {
+    let watched_batch_s = job.watch.as_ref().and_then(|w| w.batch_target_s());
     let per_pass = integrator.samples_per_pass().max(1);
     let block = job.shard.passes(options.spp.div_ceil(per_pass));
     let target_spp = (block.end - block.start) as u64 * per_pass as u64;
@@ -621,6 +638,10 @@ fn run_passes(
         let time_left_s = options
             .time_limit
             .map(|t| t - start.elapsed().as_secs_f64());
+        let time_left_s = match (time_left_s, watched_batch_s) {
+            (Some(t), Some(w)) => Some(t.min(w)),
+            (t, w) => t.or(w),
+        };
         batch = batch_size(
             batch_start.elapsed().as_secs_f64() / count as f64,
             time_left_s,
@@ -637,14 +658,18 @@ fn run_passes(
                 mse_read_at = elapsed_s;
             }
         }
-        (control.progress)(&Progress {
+        let progress = Progress {
             passes,
             spp: passes as u64 * per_pass as u64,
             target_spp,
             elapsed_s,
             time_limit: options.time_limit,
             relative_mse,
-        });
+        };
+        (control.progress)(&progress);
+        if let Some(watch) = job.watch.as_deref_mut() {
+            watch.batch(&progress, &mut || integrator.sums())?;
+        }
         if let Some(hook) = &mut job.checkpoint {
             if !last && elapsed_s - saved_at >= hook.every_s {
                 let sums = integrator.sums()?;

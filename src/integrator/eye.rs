@@ -4,12 +4,14 @@
 //! Stages per chunk (each a named dispatch): `camera_rays` → trace → `shade_primary`, or
 //! for AO: → `ao_rays` → trace (occlusion) → `shade_ao`, and likewise for the others.
 
+use std::sync::Arc;
+
 use super::frame::write_ranges;
 use super::gpu_types::{FrameParams, GpuMaterial};
 use super::{
     check_film_size, Integrator, IntegratorError, IntegratorKind, IntegratorStats, SceneFrame,
 };
-use crate::film::FilmSums;
+use crate::film::{DeviceFilm, FilmSums};
 use crate::scene::CameraFrame;
 use crate::shaders;
 use crate::trace::{GpuTriangle, Hit, Query, Ray, Tracer};
@@ -134,7 +136,8 @@ pub struct EyeIntegrator {
     triangles: Buffer,
     triangle_material: Buffer,
     materials: Buffer,
-    accum: Buffer,
+    /// Per pixel Σ L (rgb) and samples (w): the film, shared with previews.
+    accum: Arc<Buffer>,
     slots: [RaySlot; 2],
     frame: FrameParams,
     ao_radius_fraction: f32,
@@ -199,7 +202,7 @@ impl EyeIntegrator {
             triangles: gpu.upload("shade-triangles", inputs.triangles)?,
             triangle_material: gpu.upload("triangle-material", inputs.triangle_material)?,
             materials: gpu.upload("materials", inputs.materials)?,
-            accum: gpu.zeroed::<[f32; 4]>("accum", pixels)?,
+            accum: Arc::new(gpu.zeroed::<[f32; 4]>("accum", pixels)?),
             slots: [
                 RaySlot::new(gpu, 0, chunk as u64, per_pixel as u64)?,
                 RaySlot::new(gpu, 1, chunk as u64, per_pixel as u64)?,
@@ -332,6 +335,14 @@ impl Integrator for EyeIntegrator {
             self.ao_radius_fraction,
         );
         Ok(())
+    }
+
+    fn device_film(&self) -> Option<DeviceFilm> {
+        Some(DeviceFilm {
+            sums: self.accum.clone(),
+            width: self.frame.width,
+            height: self.frame.height,
+        })
     }
 
     fn settings(&self) -> Vec<(String, String)> {

@@ -29,7 +29,7 @@ pub use eye::{EyeInputs, EyeIntegrator, EyeOptions};
 pub use frame::SceneFrame;
 pub use gpu_types::{FrameParams, GpuMaterial};
 
-use crate::film::FilmSums;
+use crate::film::{DeviceFilm, FilmSums};
 use crate::vk;
 
 /// What can go wrong while an integrator renders.
@@ -113,6 +113,12 @@ pub trait Integrator {
             "the {} integrator cannot render animated scenes yet",
             self.name()
         )))
+    }
+
+    /// The film where it lives on the GPU, for previews that show it from there; `None`
+    /// for integrators that keep it on the host (watchers then take [`Integrator::sums`]).
+    fn device_film(&self) -> Option<DeviceFilm> {
+        None
     }
 }
 

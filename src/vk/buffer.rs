@@ -218,6 +218,11 @@ impl Gpu {
 }
 
 impl Buffer {
+    /// The device the buffer lives on.
+    pub fn gpu(&self) -> &Gpu {
+        &self.gpu
+    }
+
     pub fn size(&self) -> u64 {
         self.size
     }
@@ -346,6 +351,31 @@ impl Buffer {
         rec.copy(&staging, 0, self, offset, bytes.len() as u64);
         let point = rec.submit(&[])?;
         self.gpu.wait(&point)
+    }
+
+    /// Reads the whole buffer back as `T`s once `point` is reached: for a buffer that only
+    /// work up to `point` writes (a copy of a film another stream keeps writing), so that
+    /// the read waits for nothing else. Falls back to [`Buffer::read`] where the buffer
+    /// is not host-visible.
+    pub fn read_after<T: bytemuck::Pod>(&self, point: &super::TimelinePoint) -> Result<Vec<T>> {
+        self.gpu.wait(point)?;
+        let Some(ptr) = self.allocation.as_ref().and_then(|a| a.mapped_ptr()) else {
+            return self.read();
+        };
+        let n = self.element_count::<T>();
+        let mut out = vec![T::zeroed(); n];
+        let bytes = n * size_of::<T>();
+        // SAFETY: mapped, host-coherent, at least `bytes` long; the work writing it ended
+        // at `point` (every submission ends with a host-visibility barrier), and the
+        // caller's contract is that nothing later writes it.
+        unsafe {
+            std::ptr::copy_nonoverlapping(
+                ptr.as_ptr() as *const u8,
+                bytemuck::cast_slice_mut::<T, u8>(&mut out).as_mut_ptr(),
+                bytes,
+            )
+        };
+        Ok(out)
     }
 }
 

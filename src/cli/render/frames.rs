@@ -7,7 +7,7 @@
 //! Options that belong to one image are refused with the sequence: checkpoints and
 //! resuming (a stopped sequence continues with the frames left: `--frames K..B`),
 //! shards (a render farm splits a sequence by giving each job its own frame range),
-//! `--reference` and `--bdpt-techniques`. `--time` limits each frame; `--stats` writes
+//! `--reference`, `--bdpt-techniques`, `--preview` and `--display-server`. `--time` limits each frame; `--stats` writes
 //! one JSON file with every frame's statistics.
 
 use std::path::{Path, PathBuf};
@@ -25,7 +25,7 @@ use super::super::render_files::{write_stats, RenderFiles};
 use super::super::signals::{self, StopSignals};
 use super::options::render_options;
 use super::{
-    open_gpu, output_path, print_summary, progress_bar, show_progress, RenderArgs, DEFAULT_SCENE,
+    gpu_desc, output_path, print_summary, progress_bar, show_progress, RenderArgs, DEFAULT_SCENE,
 };
 
 /// One frame's line of the `--stats` file.
@@ -57,6 +57,12 @@ fn refuse_single_image_options(args: &RenderArgs) -> anyhow::Result<()> {
     if args.reference.is_some() {
         bail!("--reference compares one image: it cannot be used with --frames");
     }
+    if args.preview || args.display_server.is_some() {
+        bail!(
+            "--preview and --display-server watch one image converge: they cannot be used \
+             with --frames"
+        );
+    }
     if args.bdpt_techniques.is_some() {
         bail!("--bdpt-techniques writes the technique images of one image: it cannot be used with --frames");
     }
@@ -87,7 +93,7 @@ pub(super) fn run(args: &RenderArgs, spec: &str) -> anyhow::Result<ExitCode> {
         args.stats.as_deref(),
         None,
     )?;
-    let gpu = open_gpu(args)?;
+    let gpu = Gpu::new(&gpu_desc(args))?;
     if let Some(t) = timeline.as_mut() {
         t.attach(&gpu)?;
     }

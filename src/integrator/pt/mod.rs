@@ -35,6 +35,7 @@ pub mod gpu;
 pub mod lights;
 pub mod materials;
 
+use std::sync::Arc;
 use std::time::Instant;
 
 use glam::Vec3;
@@ -43,7 +44,7 @@ use self::gpu::{PathState, PtMaterial, PtParams, FLAG_BSDF, FLAG_NEE, FLAG_SORTE
 pub use self::lights::LightTable;
 use super::{check_film_size, Integrator, IntegratorError, IntegratorStats, SceneFrame};
 use crate::bsdf::BsdfParams;
-use crate::film::FilmSums;
+use crate::film::{DeviceFilm, FilmSums};
 use crate::primitives::compact::Kept;
 use crate::primitives::{Compact, RadixSort, Tuning};
 use crate::scene::{CameraFrame, Scene};
@@ -330,7 +331,8 @@ pub struct PtIntegrator<'t> {
     pipelines: Pipelines,
     scene: SceneBuffers,
     wave: Wavefront,
-    accum: Buffer,
+    /// Per pixel Σ L (rgb) and samples (w): the film, shared with previews.
+    accum: Arc<Buffer>,
     accum2: Buffer,
     params: PtParams,
     pixels: usize,
@@ -380,7 +382,7 @@ impl<'t> PtIntegrator<'t> {
             pipelines: Pipelines::new(gpu)?,
             scene: SceneBuffers::new(gpu, scene)?,
             wave: Wavefront::new(gpu, chunk, options.sort)?,
-            accum: gpu.zeroed::<[f32; 4]>("pt-accum", pixels)?,
+            accum: Arc::new(gpu.zeroed::<[f32; 4]>("pt-accum", pixels)?),
             accum2: gpu.zeroed::<[f32; 4]>("pt-accum2", pixels)?,
             params,
             pixels,
@@ -448,7 +450,7 @@ impl<'t> PtIntegrator<'t> {
             &self.pipelines.finish,
             &[
                 (&self.wave.paths).into(),
-                (&self.accum).into(),
+                (&*self.accum).into(),
                 (&self.accum2).into(),
             ],
             &self.params,
@@ -637,6 +639,14 @@ impl Integrator for PtIntegrator<'_> {
             ));
         }
         Ok(self.move_to_frame(frame)?)
+    }
+
+    fn device_film(&self) -> Option<DeviceFilm> {
+        Some(DeviceFilm {
+            sums: self.accum.clone(),
+            width: self.params.width,
+            height: self.params.height,
+        })
     }
 
     fn settings(&self) -> Vec<(String, String)> {
