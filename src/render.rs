@@ -5,6 +5,7 @@
 
 pub mod checkpoint;
 pub mod fingerprint;
+pub mod frames;
 pub mod merge;
 pub mod part;
 mod plan;
@@ -19,7 +20,7 @@ use serde::Serialize;
 use crate::film::{self, Film, FilmError, FilmSums, RenderMetadata};
 use crate::integrator::{
     self, aov, EyeInputs, EyeIntegrator, EyeOptions, GpuMaterial, Integrator, IntegratorError,
-    IntegratorKind, NamedImage,
+    IntegratorKind, IntegratorStats, NamedImage,
 };
 use crate::scene::{Scene, SceneError};
 use crate::trace::{GpuTriangle, Tracer, TracerKind};
@@ -273,7 +274,7 @@ pub fn render_from(
     gpu: &Gpu,
     scene: &Scene,
     options: &RenderOptions,
-    mut plan: RenderPlan<'_>,
+    plan: RenderPlan<'_>,
     control: RenderControl<'_>,
 ) -> Result<RenderOutput, RenderError> {
     let limit = gpu.info().limits.max_storage_buffer_range;
@@ -295,6 +296,47 @@ pub fn render_from(
         aov::render_aovs(gpu, tracer.as_mut(), &triangle_buffer, &camera)?
     };
     let mut integrator = integrator_on(gpu, scene, options, &triangles, tracer)?;
+    render_prepared(
+        gpu,
+        scene,
+        options,
+        Prepared {
+            integrator: integrator.as_mut(),
+            aovs,
+            start,
+            stats_before: IntegratorStats::default(),
+        },
+        plan,
+        control,
+    )
+}
+
+/// An integrator ready for passes, with the render's AOVs.
+struct Prepared<'i> {
+    integrator: &'i mut dyn Integrator,
+    aovs: aov::Aovs,
+    /// When the render started (its time includes what was done before the passes).
+    start: Instant,
+    /// The integrator's counts before this render (an animation's earlier frames).
+    stats_before: IntegratorStats,
+}
+
+/// The passes of a prepared render following `plan`, and the output they make: the
+/// film with its AOVs, statistics, metadata.
+fn render_prepared(
+    gpu: &Gpu,
+    scene: &Scene,
+    options: &RenderOptions,
+    prepared: Prepared<'_>,
+    mut plan: RenderPlan<'_>,
+    control: RenderControl<'_>,
+) -> Result<RenderOutput, RenderError> {
+    let Prepared {
+        integrator,
+        aovs,
+        start,
+        stats_before,
+    } = prepared;
     let fingerprint = Fingerprint::new(
         scene,
         options.width,
@@ -304,8 +346,7 @@ pub fn render_from(
         integrator.samples_per_pass(),
         integrator.settings(),
     );
-    let (first_pass, resumed_passes) =
-        start_film(integrator.as_mut(), options, &plan, &fingerprint)?;
+    let (first_pass, resumed_passes) = start_film(integrator, options, &plan, &fingerprint)?;
     if let Some(watch) = plan.watch.as_deref_mut() {
         watch.start(&WatchStart {
             width: options.width,
@@ -320,7 +361,7 @@ pub fn render_from(
         .as_ref()
         .map_or(0.0, |r| r.checkpoint.header.render_time_s);
     let run = run_passes(
-        integrator.as_mut(),
+        integrator,
         options,
         control,
         PassLoop {
@@ -339,9 +380,8 @@ pub fn render_from(
         watch.finish(&sums)?;
     }
     let extra_images = integrator.extra_images()?;
-    let integrator_stats = integrator.stats();
+    let integrator_stats = stats_since(integrator.stats(), &stats_before);
     let settings = integrator.settings();
-    drop(integrator);
     let seconds = start.elapsed().as_secs_f64();
     let (_, peak_gpu_bytes) = gpu.memory_bytes();
 
@@ -415,6 +455,15 @@ pub fn render_from(
         stats,
         extra_images,
     })
+}
+
+/// What an integrator counted since `before`.
+fn stats_since(mut now: IntegratorStats, before: &IntegratorStats) -> IntegratorStats {
+    now.rays_traced -= before.rays_traced.min(now.rays_traced);
+    for (key, value) in &mut now.counters {
+        *value -= before.counters.get(key).copied().unwrap_or(0).min(*value);
+    }
+    now
 }
 
 /// The integrator `options` asks for, on its own tracer, ready to render passes (for

@@ -3,6 +3,7 @@
 
 pub mod bdpt;
 pub mod cbpt;
+pub mod dynamic;
 pub mod host;
 pub mod primitives;
 pub mod pt;

@@ -23,6 +23,7 @@ use super::render_files::{write_stats, RenderFiles};
 use super::signals::{self, StopSignals};
 use options::{parse_shard, render_options};
 
+mod frames;
 mod options;
 mod watch;
 
@@ -133,6 +134,16 @@ pub struct RenderArgs {
     /// segments); they sum to the image.
     #[arg(long, value_name = "DIR")]
     bdpt_techniques: Option<PathBuf>,
+    /// Render frames A to B-1 (A..B) or A to B (A..=B) of an animated scene, frame k at
+    /// time k / fps: a numbered sequence beside the output (`-o shot.exr` writes
+    /// shot_0000.exr, shot_0001.exr … and their PNGs). Not with --checkpoint, --resume,
+    /// --shard, --reference, --bdpt-techniques, --preview or --display-server; --time
+    /// limits each frame.
+    #[arg(long, value_name = "A..B")]
+    frames: Option<String>,
+    /// Frames per second of --frames (default 24).
+    #[arg(long, requires = "frames")]
+    fps: Option<f64>,
     /// Show the film converging in a window (needs an X11 display); closing it stops the
     /// render and writes what it has. Keys: Up/Down exposure, A next view (colour, depth,
     /// normal, triangle id), S snapshot beside the output, Escape close.
@@ -206,6 +217,9 @@ fn output_path(args: &RenderArgs, scene_name: &str, shard: Shard) -> anyhow::Res
 }
 
 pub fn run(args: &RenderArgs) -> anyhow::Result<ExitCode> {
+    if let Some(spec) = &args.frames {
+        return frames::run(args, spec);
+    }
     let signals = StopSignals::install()?;
     let mut timeline = super::timeline::TimelineOutput::start(args.timeline.as_deref())?;
     let resume = match &args.resume {
@@ -232,14 +246,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<ExitCode> {
     let files = RenderFiles::create(&output, args.stats.as_deref(), args.checkpoint.as_deref())?;
     let mut watching =
         watch::Watching::open(args, &scene.name, &output, [options.width, options.height])?;
-    let gpu = watching.open_gpu(&GpuDesc {
-        instance: InstanceDesc {
-            validation: args.validation,
-            sync_validation: args.sync_validation,
-        },
-        device: args.device.clone(),
-        ..Default::default()
-    })?;
+    let gpu = watching.open_gpu(&gpu_desc(args))?;
     if let Some(t) = timeline.as_mut() {
         t.attach(&gpu)?;
     }
@@ -359,6 +366,18 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<ExitCode> {
         );
     }
     Ok(exit_code(stopped_by))
+}
+
+/// The device `--device` names, with validation where asked for.
+fn gpu_desc(args: &RenderArgs) -> GpuDesc {
+    GpuDesc {
+        instance: InstanceDesc {
+            validation: args.validation,
+            sync_validation: args.sync_validation,
+        },
+        device: args.device.clone(),
+        ..Default::default()
+    }
 }
 
 fn exit_code(stopped_by: Option<i32>) -> ExitCode {

@@ -17,6 +17,7 @@ pub mod aov;
 pub mod bpt;
 pub mod cbpt;
 mod eye;
+pub mod frame;
 pub mod gpu_types;
 pub mod light_tracer;
 pub mod pt;
@@ -26,6 +27,7 @@ use std::fmt;
 use std::str::FromStr;
 
 pub use eye::{EyeInputs, EyeIntegrator, EyeOptions};
+pub use frame::SceneFrame;
 pub use gpu_types::{FrameParams, GpuMaterial};
 
 use crate::film::{DeviceFilm, FilmSums};
@@ -101,6 +103,19 @@ pub trait Integrator {
         Ok(Vec::new())
     }
 
+    /// Moves to another frame of an animated scene: updates, in place, what the
+    /// integrator renders from (its scene tables, its tracer's geometry, the camera),
+    /// uploading only what changed. The film is kept ([`Integrator::restore`] clears
+    /// it). The next passes render the posed scene exactly as an integrator made for it
+    /// would. Integrators that cannot animate say so.
+    fn set_frame(&mut self, frame: &SceneFrame<'_>) -> Result<(), IntegratorError> {
+        let _ = frame;
+        Err(IntegratorError::Usage(format!(
+            "the {} integrator cannot render animated scenes yet",
+            self.name()
+        )))
+    }
+
     /// The film where it lives on the GPU, for previews that show it from there; `None`
     /// for integrators that keep it on the host (watchers then take [`Integrator::sums`]).
     fn device_film(&self) -> Option<DeviceFilm> {
@@ -172,6 +187,21 @@ impl IntegratorKind {
              linked to every light path on the GPU in double-buffered batches",
         ),
     ];
+
+    /// Whether the integrator renders animated scenes ([`Integrator::set_frame`]).
+    pub fn animates(self) -> bool {
+        matches!(
+            self,
+            Self::Primary
+                | Self::Ao
+                | Self::Shadow
+                | Self::Reflection
+                | Self::Path
+                | Self::Pt
+                | Self::Bpt
+                | Self::Light
+        )
+    }
 
     pub fn name(self) -> &'static str {
         match self {

@@ -30,6 +30,7 @@
 //! unsorted active list, and compaction keeps the order. So the same seed gives the same
 //! image on the same device, and sorting on or off gives a bit-identical film.
 
+mod frame;
 pub mod gpu;
 pub mod lights;
 pub mod materials;
@@ -41,7 +42,7 @@ use glam::Vec3;
 
 use self::gpu::{PathState, PtMaterial, PtParams, FLAG_BSDF, FLAG_NEE, FLAG_SORTED};
 pub use self::lights::LightTable;
-use super::{check_film_size, Integrator, IntegratorError, IntegratorStats};
+use super::{check_film_size, Integrator, IntegratorError, IntegratorStats, SceneFrame};
 use crate::bsdf::BsdfParams;
 use crate::film::{DeviceFilm, FilmSums};
 use crate::primitives::compact::Kept;
@@ -339,6 +340,9 @@ pub struct PtIntegrator<'t> {
     passes_per_chunk: u32,
     pixels_per_chunk: usize,
     nee_on: bool,
+    /// The light table on the GPU, as the host last computed it (a new frame uploads it
+    /// only where it changed).
+    light_table: LightTable,
     passes: u32,
     rays_traced: u64,
 }
@@ -385,6 +389,7 @@ impl<'t> PtIntegrator<'t> {
             passes_per_chunk: passes_per_chunk as u32,
             pixels_per_chunk,
             nee_on: options.strategy != Strategy::Bsdf && !scene.lights.lights.is_empty(),
+            light_table: scene.lights.clone(),
             passes: 0,
             rays_traced: 0,
         })
@@ -627,6 +632,15 @@ impl Integrator for PtIntegrator<'_> {
         }
     }
 
+    fn set_frame(&mut self, frame: &SceneFrame<'_>) -> Result<(), IntegratorError> {
+        if (frame.camera.width, frame.camera.height) != (self.params.width, self.params.height) {
+            return Err(IntegratorError::Usage(
+                "a frame cannot change the film size".to_string(),
+            ));
+        }
+        Ok(self.move_to_frame(frame)?)
+    }
+
     fn device_film(&self) -> Option<DeviceFilm> {
         Some(DeviceFilm {
             sums: self.accum.clone(),
@@ -695,6 +709,13 @@ impl Tracer for BorrowedTracer<'_> {
     }
     fn set_geometry(&mut self, triangles: &[crate::trace::GpuTriangle]) -> vk::Result<()> {
         self.0.set_geometry(triangles)
+    }
+    fn update_geometry(
+        &mut self,
+        triangles: &[crate::trace::GpuTriangle],
+        changed: &[std::ops::Range<usize>],
+    ) -> vk::Result<()> {
+        self.0.update_geometry(triangles, changed)
     }
     fn trace(
         &mut self,
