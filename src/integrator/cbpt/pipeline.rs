@@ -119,6 +119,14 @@ pub fn run_steps<E: Evaluator>(
     steps: Vec<StepId>,
     pipelined: bool,
 ) -> Result<StepsOutput, IntegratorError> {
+    // Named apart so that a timeline's pipelined stretches can be told from the
+    // synchronous ones (tools/timeline_overlap.py --within).
+    let _span = if pipelined {
+        tracing::info_span!("cbpt steps pipelined", steps = steps.len())
+    } else {
+        tracing::info_span!("cbpt steps synchronous", steps = steps.len())
+    }
+    .entered();
     let start = Instant::now();
     let (tables_tx, tables_rx) = sync_channel::<Arc<Tables>>(1);
     let (data_tx, data_rx) = sync_channel::<CombinationData>(1);
