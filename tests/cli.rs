@@ -279,7 +279,7 @@ fn bad_input_gives_a_clear_error_and_no_output() {
     assert_fails(
         d,
         &["render", "--bdpt-techniques", ".", "-o", "a.exr"],
-        &["--bdpt-techniques", "bpt or light"],
+        &["--bdpt-techniques", "bpt, light, lvc-bdpt or cis-lbdpt"],
     );
     // clap's own usage errors exit with 2; an unknown integrator is one of them.
     let out = splitray(&["render", "--integrator", "bogus"], d);

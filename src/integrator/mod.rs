@@ -10,7 +10,9 @@
 //! The ray workloads of the PDACRT paper's Tables 1–2 are integrators too ([`eye`]):
 //! `primary` (eye-light shading), `ao` (8 ambient-occlusion rays per hit), `shadow` (one
 //! point light), `reflection` (one mirror bounce) and `path` (7 diffuse bounces). `pt` is
-//! the physically based wavefront path tracer of [`pt`]. First-hit AOVs (depth, triangle
+//! the physically based wavefront path tracer of [`pt`]; `bpt` and `light` the CPU
+//! bidirectional integrators of [`bpt`]; `lvc-bdpt` and `cis-lbdpt` the GPU
+//! light-vertex-cache ones of [`lvc`]. First-hit AOVs (depth, triangle
 //! id, normal) come from one pass of pixel-centre rays for every integrator ([`aov`]).
 
 pub mod aov;
@@ -18,6 +20,7 @@ pub mod bpt;
 mod eye;
 pub mod gpu_types;
 pub mod light_tracer;
+pub mod lvc;
 pub mod pt;
 
 use std::collections::BTreeMap;
@@ -121,6 +124,10 @@ pub enum IntegratorKind {
     Bpt,
     /// Light tracing on the CPU ([`light_tracer`]).
     Light,
+    /// Light-vertex-cache BPT on the GPU, uniform connections ([`lvc`]).
+    LvcBdpt,
+    /// CIS-LBDPT on the GPU: material sorting, resampled connections ([`lvc`]).
+    CisLbdpt,
 }
 
 impl IntegratorKind {
@@ -157,6 +164,14 @@ impl IntegratorKind {
             IntegratorKind::Light,
             "light tracing on the CPU: light subpaths splatted to the camera",
         ),
+        (
+            IntegratorKind::LvcBdpt,
+            "bidirectional path tracing on the GPU with a light vertex cache: N uniform connections",
+        ),
+        (
+            IntegratorKind::CisLbdpt,
+            "LVC-BDPT with material sorting and N connections resampled from M candidates",
+        ),
     ];
 
     pub fn name(self) -> &'static str {
@@ -169,6 +184,8 @@ impl IntegratorKind {
             Self::Pt => "pt",
             Self::Bpt => "bpt",
             Self::Light => "light",
+            Self::LvcBdpt => "lvc-bdpt",
+            Self::CisLbdpt => "cis-lbdpt",
         }
     }
 }

@@ -57,6 +57,9 @@ pub struct SavedOptions {
     pub sort_materials: bool,
     pub strategy: String,
     pub time_limit: Option<f64>,
+    /// Absent in checkpoints of integrators that have none.
+    #[serde(default)]
+    pub lvc: crate::integrator::lvc::options::LvcSettings,
 }
 
 impl SavedOptions {
@@ -74,6 +77,7 @@ impl SavedOptions {
             sort_materials: options.sort_materials,
             strategy: format!("{:?}", options.strategy).to_lowercase(),
             time_limit: options.time_limit,
+            lvc: options.lvc,
         }
     }
 
@@ -96,6 +100,7 @@ impl SavedOptions {
             // Technique images are not saved in a checkpoint: a resumed render cannot
             // write them (the command line refuses the combination).
             bdpt_techniques: false,
+            lvc: self.lvc,
         })
     }
 }
