@@ -22,116 +22,17 @@
 //! most 1 in 100), and every vertex before the divergence must agree.
 mod common;
 
+use common::lvc_dump::{render, BounceDump, ChunkDump};
 use glam::Vec3;
 use splitray::bidir::random::{fold_seed, PathSampler};
 use splitray::bidir::{Connector, CpuScene, PinholeCamera, WalkSettings};
-use splitray::integrator::lvc::camera_pass::BounceView;
 use splitray::integrator::lvc::fixed::FixedFilm;
 use splitray::integrator::lvc::gpu::{dims, Contribution, LvcVertex, VERTEX_CONNECTIBLE};
-use splitray::integrator::lvc::light_tracing::SplatBatch;
-use splitray::integrator::lvc::{
-    twin, ChunkView, LvcIntegrator, LvcOptions, Observer, Shared, Variant,
-};
+use splitray::integrator::lvc::{twin, LvcOptions, Variant};
 use splitray::integrator::pt::PtScene;
 use splitray::integrator::Integrator;
 use splitray::scene::{builtin, Material, PointLight, Scene, Triangle};
-use splitray::trace::{Hit, Ray, TracerKind, MISS};
-use splitray::vk::{self, Buffer};
-
-/// What one camera bounce left.
-struct BounceDump {
-    view_paths: u32,
-    base: u32,
-    pixel_offset: u32,
-    pixel_count: u32,
-    bounce: u32,
-    active: Vec<u32>,
-    vertices: Vec<LvcVertex>,
-    emitted: Vec<Contribution>,
-    contributions: Vec<Contribution>,
-    rays: Vec<Ray>,
-    hits: Vec<Hit>,
-    radiance: Vec<[f32; 4]>,
-}
-
-/// What one chunk left.
-struct ChunkDump {
-    chunk: ChunkView,
-    cache: Vec<LvcVertex>,
-    index: Vec<u32>,
-    path_offset: Vec<u32>,
-    splats: Vec<Contribution>,
-    splat_rays: Vec<Ray>,
-    splat_hits: Vec<Hit>,
-    splat_film: Vec<u32>,
-    bounces: Vec<BounceDump>,
-}
-
-#[derive(Default)]
-struct Dumps {
-    chunks: Vec<ChunkDump>,
-}
-
-fn read<T: bytemuck::Pod>(b: &Buffer, n: usize) -> vk::Result<Vec<T>> {
-    let mut v: Vec<T> = b.read()?;
-    v.truncate(n);
-    Ok(v)
-}
-
-impl Observer for Dumps {
-    fn light_pass(&mut self, s: &Shared, chunk: &ChunkView) -> vk::Result<()> {
-        let n = chunk.vertices as usize;
-        self.chunks.push(ChunkDump {
-            chunk: *chunk,
-            cache: read(&s.cache.vertices, n)?,
-            index: read(&s.cache.index, n)?,
-            path_offset: read(&s.cache.path_offset, chunk.light_paths as usize + 1)?,
-            splats: Vec::new(),
-            splat_rays: Vec::new(),
-            splat_hits: Vec::new(),
-            splat_film: Vec::new(),
-            bounces: Vec::new(),
-        });
-        Ok(())
-    }
-
-    fn splats(&mut self, s: &Shared, _chunk: &ChunkView, batch: &SplatBatch) -> vk::Result<()> {
-        let n = batch.count as usize;
-        let c = self.chunks.last_mut().unwrap();
-        c.splats
-            .extend(read::<Contribution>(&s.wave.contributions, n)?);
-        c.splat_rays.extend(read::<Ray>(&s.wave.shadow_rays, n)?);
-        c.splat_hits.extend(read::<Hit>(&s.wave.shadow_hits, n)?);
-        Ok(())
-    }
-
-    fn splat_film(&mut self, film: &Buffer, _chunk: &ChunkView) -> vk::Result<()> {
-        self.chunks.last_mut().unwrap().splat_film = film.read()?;
-        Ok(())
-    }
-
-    fn bounce(&mut self, s: &Shared, _chunk: &ChunkView, v: &BounceView) -> vk::Result<()> {
-        let w = s.wave;
-        let n = v.paths as usize;
-        let slots = v.connection_base as usize + n * s.connections as usize;
-        let paths = (v.range.passes * v.range.pixel_count) as usize;
-        self.chunks.last_mut().unwrap().bounces.push(BounceDump {
-            view_paths: v.paths,
-            base: v.connection_base,
-            pixel_offset: v.range.pixel_offset,
-            pixel_count: v.range.pixel_count,
-            bounce: v.bounce,
-            active: read(&w.active[v.list], n)?,
-            vertices: read(&w.vertices, n)?,
-            emitted: read(&w.emitted, n)?,
-            contributions: read(&w.contributions, slots)?,
-            rays: read(&w.shadow_rays, slots)?,
-            hits: read(&w.shadow_hits, slots)?,
-            radiance: read(&w.radiance, paths)?,
-        });
-        Ok(())
-    }
-}
+use splitray::trace::MISS;
 
 /// Relative closeness of two vectors, scaled by the larger norm (and `floor`).
 fn close(a: Vec3, b: Vec3, rel: f32, floor: f32) -> bool {
@@ -261,20 +162,16 @@ fn options(variant: Variant, connections: u32, max_depth: i32) -> LvcOptions {
     o
 }
 
-/// Renders the case, observing every chunk.
-fn render(gpu: &vk::Gpu, case: &Case) -> (Dumps, LvcIntegrator<'static>) {
-    let pt = PtScene::new(&case.scene);
-    let tracer = TracerKind::default().create(gpu, &pt.triangles).unwrap();
-    let frame = case.scene.camera.frame(case.width, case.height);
-    let mut lvc = LvcIntegrator::new(gpu, tracer, &pt, &frame, &case.options).unwrap();
-    let mut dumps = Dumps::default();
-    lvc.render_observed(0, case.passes, &mut dumps).unwrap();
-    (dumps, lvc)
-}
-
 fn check_case(case: Case) {
     let gpu = common::gpu();
-    let (dumps, mut lvc) = render(&gpu, &case);
+    let (dumps, mut lvc) = render(
+        &gpu,
+        &case.scene,
+        case.width,
+        case.height,
+        &case.options,
+        case.passes,
+    );
     let c = *lvc.constants();
     let counts = lvc.counts();
     let cpu_scene = CpuScene::new(&case.scene);

@@ -47,20 +47,20 @@ fn both(name: &str, passes: u32) {
 
 #[test]
 fn cornell_box_matches_mitsuba() {
-    both("cornell_path_64", 128);
+    both("cornell_path_64", 64);
 }
 
 #[test]
 fn glossy_conductor_matches_mitsuba() {
-    both("glossy_path_64", 128);
+    both("glossy_path_64", 64);
 }
 
 #[test]
 fn mirror_caustic_matches_mitsuba() {
-    both("mirror_path_64", 128);
+    both("mirror_path_64", 64);
 }
 
 #[test]
 fn fixture_matches_mitsuba() {
-    both("fixture_ptracer_64", 128);
+    both("fixture_ptracer_64", 64);
 }

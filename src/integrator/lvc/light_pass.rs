@@ -50,6 +50,7 @@ pub fn trace_light_paths(
     };
     let mut rec = gpu.recorder(StreamKind::Main)?;
     rec.fill_range(&cache.vertex_count, paths as u64 * 4, 4, 0)?;
+    rec.barrier();
     rec.dispatch_items(
         &k.light_generate,
         &[
