@@ -6,7 +6,9 @@
 //! the integrator's film, so the films at the end are equal-time renders. Reported per
 //! integrator: samples/s, Mrays/s and, for `bpt` and `light`, CBPT's throughput measure
 //! (basic contributions f_{i,j} per second, §6.2) — medians over the slices — and,
-//! given a reference, the relative MSE of the final film and its ratio to `pt`'s.
+//! given a reference, the relative MSE of the final film and its ratio to `pt`'s. Then
+//! the light-vertex-cache integrators at equal samples per pixel, with one stream and
+//! three ([`super::lvc`]).
 
 use std::fmt;
 use std::sync::Arc;
@@ -33,6 +35,10 @@ pub struct BdptBenchOptions {
     pub seed: u64,
     /// Mean RGB of a reference image of this film size, and where it came from.
     pub reference: Option<(Arc<Vec<[f32; 3]>>, String)>,
+    /// Passes of the equal-spp comparison of `lvc-bdpt` and `cis-lbdpt` (0: none).
+    pub spp: u32,
+    /// Rounds of the equal-spp comparison.
+    pub spp_rounds: u32,
 }
 
 impl Default for BdptBenchOptions {
@@ -44,12 +50,16 @@ impl Default for BdptBenchOptions {
                 IntegratorKind::Pt,
                 IntegratorKind::Bpt,
                 IntegratorKind::Light,
+                IntegratorKind::LvcBdpt,
+                IntegratorKind::CisLbdpt,
             ],
             seconds: 30.0,
             rounds: 10,
             max_depth: -1,
             seed: 0,
             reference: None,
+            spp: 4,
+            spp_rounds: 3,
         }
     }
 }
@@ -84,6 +94,8 @@ pub struct BdptBenchReport {
     pub rounds: u32,
     pub reference: Option<String>,
     pub rows: Vec<BdptRow>,
+    /// `lvc-bdpt` and `cis-lbdpt` at equal spp, with 1 and 3 streams.
+    pub equal_spp: Vec<super::lvc::SppRow>,
 }
 
 impl BdptBenchReport {
@@ -146,7 +158,11 @@ impl fmt::Display for BdptBenchReport {
                 }
             }
         }
-        Ok(())
+        let mse = |k: &str| self.rows.iter().find(|r| r.integrator == k)?.relative_mse;
+        if let (Some(cis), Some(lvc)) = (mse("cis-lbdpt"), mse("lvc-bdpt")) {
+            writeln!(f, "relative MSE cis-lbdpt / lvc-bdpt: {:.3}", cis / lvc)?;
+        }
+        super::lvc::write_equal_spp(f, &self.equal_spp)
     }
 }
 
@@ -269,6 +285,28 @@ pub fn run(
                 .and_then(|(r, _)| relative_mse(&mean, r)),
         });
     }
+    let mut base = RenderOptions::resolve(
+        scene,
+        Some(options.width),
+        Some(options.height),
+        None,
+        Some(options.seed),
+        None,
+        None,
+    )?;
+    base.max_depth = options.max_depth;
+    let equal_spp = if options.spp > 0 {
+        super::lvc::equal_spp(
+            gpu,
+            scene,
+            &base,
+            &options.integrators,
+            options.spp,
+            options.spp_rounds,
+        )?
+    } else {
+        Vec::new()
+    };
     Ok(BdptBenchReport {
         date: super::today(),
         device: device_description(gpu),
@@ -283,5 +321,6 @@ pub fn run(
         rounds,
         reference: options.reference.as_ref().map(|(_, name)| name.clone()),
         rows,
+        equal_spp,
     })
 }

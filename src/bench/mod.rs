@@ -3,6 +3,7 @@
 
 pub mod bdpt;
 pub mod host;
+pub mod lvc;
 pub mod primitives;
 pub mod pt;
 pub mod trace;

@@ -66,16 +66,23 @@ enum BenchCommand {
         json: Option<PathBuf>,
     },
     /// Integrators at equal wall time, taken in turns: samples/s, Mrays/s, basic
-    /// contributions/s (bpt, light) and, with --reference, relative MSE.
+    /// contributions/s (bpt, light) and, with --reference, relative MSE; then lvc-bdpt
+    /// and cis-lbdpt at equal spp with 1 and 3 streams: time, per-stream busy time and
+    /// overlap, per-kernel GPU time.
     Bdpt {
-        /// A built-in scene, a scene .toml or an .obj.
-        scene: String,
+        /// Built-in scenes, scene .toml or .obj files, each benchmarked in turn.
+        #[arg(required = true, num_args = 1..)]
+        scenes: Vec<String>,
         #[arg(long, default_value_t = 160)]
         width: u32,
         #[arg(long, default_value_t = 120)]
         height: u32,
         /// Comma-separated integrators to compare.
-        #[arg(long, value_delimiter = ',', default_value = "pt,bpt,light")]
+        #[arg(
+            long,
+            value_delimiter = ',',
+            default_value = "pt,bpt,light,lvc-bdpt,cis-lbdpt"
+        )]
         integrators: Vec<IntegratorKind>,
         /// Seconds each integrator renders.
         #[arg(long, default_value_t = 30.0)]
@@ -88,10 +95,17 @@ enum BenchCommand {
         max_depth: i32,
         #[arg(long, default_value_t = 0)]
         seed: u64,
-        /// A converged image of this film size (EXR): relative MSE of each film.
+        /// A converged image of this film size (EXR): relative MSE of each film. Once per
+        /// scene, in the scenes' order (all or none).
         #[arg(long, value_name = "REF.exr")]
-        reference: Option<PathBuf>,
-        /// Also write the report as JSON.
+        reference: Vec<PathBuf>,
+        /// Passes of the equal-spp comparison of lvc-bdpt and cis-lbdpt (0: none).
+        #[arg(long, default_value_t = 4)]
+        spp: u32,
+        /// Rounds of the equal-spp comparison (the median is reported).
+        #[arg(long, default_value_t = 3)]
+        spp_rounds: u32,
+        /// Also write the reports as JSON (a list, one per scene).
         #[arg(long, value_name = "OUT.json")]
         json: Option<PathBuf>,
     },
@@ -192,14 +206,15 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     let mut timeline = super::timeline::TimelineOutput::start(args.timeline.as_deref())?;
     // Load inputs before opening the device, so bad input fails fast.
     let scene = match &args.what {
-        BenchCommand::Trace { scene, .. }
-        | BenchCommand::Pt { scene, .. }
-        | BenchCommand::Bdpt { scene, .. } => Some(splitray::scene::load(scene)?),
-        BenchCommand::Primitives { .. } => None,
+        BenchCommand::Trace { scene, .. } | BenchCommand::Pt { scene, .. } => {
+            Some(splitray::scene::load(scene)?)
+        }
+        BenchCommand::Bdpt { .. } | BenchCommand::Primitives { .. } => None,
     };
-    let reference = match &args.what {
+    let bdpt_inputs = match &args.what {
         BenchCommand::Bdpt {
-            reference: Some(path),
+            scenes,
+            reference,
             width,
             height,
             time,
@@ -208,9 +223,22 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             if time.is_nan() || *time <= 0.0 {
                 anyhow::bail!("--time must be a positive number of seconds");
             }
-            Some(read_reference(path, *width, *height)?)
+            if !reference.is_empty() && reference.len() != scenes.len() {
+                anyhow::bail!(
+                    "--reference: {} given for {} scenes (one per scene, in order, or none)",
+                    reference.len(),
+                    scenes.len()
+                );
+            }
+            let mut inputs = Vec::new();
+            for (k, name) in scenes.iter().enumerate() {
+                let r = reference.get(k);
+                let r = r.map(|p| read_reference(p, *width, *height)).transpose()?;
+                inputs.push((splitray::scene::load(name)?, r));
+            }
+            inputs
         }
-        _ => None,
+        _ => Vec::new(),
     };
     let gpu = Gpu::new(&GpuDesc {
         instance: InstanceDesc {
@@ -277,26 +305,33 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             rounds,
             max_depth,
             seed,
+            spp,
+            spp_rounds,
             json,
             ..
         } => {
-            let scene = scene.expect("loaded above");
-            let report = bdpt_bench::run(
-                &gpu,
-                &scene,
-                &BdptBenchOptions {
-                    width: *width,
-                    height: *height,
-                    integrators: integrators.clone(),
-                    seconds: *time,
-                    rounds: *rounds,
-                    max_depth: *max_depth,
-                    seed: *seed,
-                    reference,
-                },
-            )?;
-            print!("{report}");
-            write_json(json, &report)?;
+            let mut reports = Vec::new();
+            for (scene, reference) in bdpt_inputs {
+                let report = bdpt_bench::run(
+                    &gpu,
+                    &scene,
+                    &BdptBenchOptions {
+                        width: *width,
+                        height: *height,
+                        integrators: integrators.clone(),
+                        seconds: *time,
+                        rounds: *rounds,
+                        max_depth: *max_depth,
+                        seed: *seed,
+                        reference,
+                        spp: *spp,
+                        spp_rounds: *spp_rounds,
+                    },
+                )?;
+                print!("{report}");
+                reports.push(report);
+            }
+            write_json(json, &reports)?;
         }
         BenchCommand::Trace {
             width,
