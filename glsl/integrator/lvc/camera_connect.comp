@@ -1,7 +1,10 @@
 #version 460
+//! variant resampled: LVC_RESAMPLE
 // Camera pass, stream 1 (Algorithm 8, line 7): connections (s >= 2, t >= 2) of the camera
-// vertex to vertices of its pass's light vertex cache, written to slots
-// n + i N + k (k < N) of the shadow rays and contributions (n = the live paths).
+// vertex to vertices of its pass's light vertex cache, written to slots i N + k (k < N)
+// of the connections' shadow rays and contributions (bound from slot P.base of the
+// buffers that direct lighting's slots start). Two variants: uniform (the default
+// build) and resampled (LVC_RESAMPLE).
 //
 // Uniform (LVC-BDPT, Davidovic et al. 2014): N vertices drawn uniformly with replacement
 // from the |C_q| vertices of pass q's N_L light paths. Each estimates
@@ -20,6 +23,7 @@
 //
 // The MIS weight is the path's alone, as if the selection were uniform (count
 // C.count_connection = N N_L / E|C_q|), so the weights of a path's techniques sum to 1.
+#extension GL_EXT_control_flow_attributes : require
 #include "grid.glsl"
 #include "geometry.glsl"
 #include "random.glsl"
@@ -43,16 +47,18 @@ layout(std430, set = 0, binding = 10) writeonly buffer Contributions { Contribut
 #include "lvc_bsdf.glsl"
 #include "lvc_random.glsl"
 
+#ifdef LVC_RESAMPLE
 // Most candidates (M) per camera vertex (src/integrator/lvc/options.rs).
 const uint MAX_CANDIDATES = 16u;
 shared uint candidate_slot[WORKGROUP_SIZE * MAX_CANDIDATES];
 shared vec4 candidate_value[WORKGROUP_SIZE * MAX_CANDIDATES];   // g, MIS weight
 shared float candidate_target[WORKGROUP_SIZE * MAX_CANDIDATES];
+#endif
 
 // The unoccluded, MIS-weighted contribution of connecting camera vertex z (index j) to
 // cache vertex y (src/bidir/connect.rs `Connector::connect`); zero when the path would
 // be too long or nothing is carried.
-vec3 connection(LvcVertex z, vec3 z_ng, LvcVertex y, out float weight) {
+vec3 connection(LvcVertex z, vec3 z_ng, EndpointBsdf zb, LvcVertex y, out float weight) {
     weight = 0.0;
     uint i = y.depth;
     uint j = z.depth;
@@ -62,8 +68,17 @@ vec3 connection(LvcVertex z, vec3 z_ng, LvcVertex y, out float weight) {
     float dist2 = dot(to, to);
     if (!(dist2 > 0.0)) return vec3(0.0);
     vec3 dir = to / sqrt(dist2);
-    Endpoint ez = endpoint_eval(z, z_ng, dir, TRANSPORT_RADIANCE);
-    Endpoint ey = endpoint_eval(y, y_ng, -dir, TRANSPORT_IMPORTANCE);
+    // Both endpoints through one copy of the BSDF code: a loop that stays a loop halves
+    // the kernel, whose compilation took most of the integrator's on lavapipe.
+    Endpoint ez, ey;
+    [[dont_unroll]] for (uint side = 0u; side < 2u; ++side) {
+        bool light = side == 1u;
+        EndpointBsdf b = light ? endpoint_bsdf(y) : zb;
+        Endpoint e = endpoint_eval_with(b, light ? y : z, light ? y_ng : z_ng,
+                                        light ? -dir : dir,
+                                        light ? TRANSPORT_IMPORTANCE : TRANSPORT_RADIANCE);
+        if (light) ey = e; else ez = e;
+    }
     vec3 value = y.beta * ey.f * ez.f * z.beta / dist2;
     if (value == vec3(0.0)) return vec3(0.0);
     float light_rev = ez.pdf_fwd * abs_cos(y_ng, dir) / dist2;
@@ -109,19 +124,18 @@ void main() {
     if (size == 0u) return;
     uint j = z.depth;
     vec3 z_ng = triangle_normal(z.triangle);
+    EndpointBsdf zb = endpoint_bsdf(z);
 
-    if ((C.flags & LVC_FLAG_RESAMPLE) == 0u) {
-        float scale = float(size) / (float(n) * float(C.light_paths));
-        for (uint k = 0u; k < n; ++k) {
-            uint pick = uniform_index(pixel, pass, select_dim(j, k), C.seed, size);
-            uint slot = cache_index[start + pick];
-            float weight;
-            vec3 g = connection(z, z_ng, cache[slot], weight);
-            emit(first + k, z, z_ng, slot, g, weight, scale);
-        }
-        return;
+#ifndef LVC_RESAMPLE
+    float scale = float(size) / (float(n) * float(C.light_paths));
+    for (uint k = 0u; k < n; ++k) {
+        uint pick = uniform_index(pixel, pass, select_dim(j, k), C.seed, size);
+        uint slot = cache_index[start + pick];
+        float weight;
+        vec3 g = connection(z, z_ng, zb, cache[slot], weight);
+        emit(first + k, z, z_ng, slot, g, weight, scale);
     }
-
+#else
     // The candidates live in shared memory, each invocation its own MAX_CANDIDATES
     // entries (function-local arrays indexed in loops blow up some drivers' compilers).
     uint m_count = min(C.candidates, MAX_CANDIDATES);
@@ -131,7 +145,7 @@ void main() {
         uint pick = uniform_index(pixel, pass, select_dim(j, m), C.seed, size);
         uint slot = cache_index[start + pick];
         float weight;
-        vec3 g = connection(z, z_ng, cache[slot], weight);
+        vec3 g = connection(z, z_ng, zb, cache[slot], weight);
         float target = max(lvc_luminance(g), 0.0);
         candidate_slot[own + m] = slot;
         candidate_value[own + m] = vec4(g, weight);
@@ -158,4 +172,5 @@ void main() {
         vec4 g = candidate_value[own + chosen];
         emit(first + k, z, z_ng, candidate_slot[own + chosen], g.rgb * ris, g.a, scale);
     }
+#endif
 }

@@ -34,7 +34,6 @@ struct LvcConstants {
 };
 
 const uint LVC_FLAG_SORTED = 1u;    // kernels read their items through the sorted order
-const uint LVC_FLAG_RESAMPLE = 2u;  // connections by resampled importance sampling
 
 // Per dispatch, as push constants (32 bytes).
 struct LvcPush {

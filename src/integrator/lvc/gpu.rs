@@ -42,8 +42,6 @@ const _: () = assert!(size_of::<LvcConstants>() == 112);
 
 /// Kernels read their items through the material-sorted order.
 pub const FLAG_SORTED: u32 = 1;
-/// Connections by resampled importance sampling (CIS-LBDPT).
-pub const FLAG_RESAMPLE: u32 = 2;
 
 impl LvcConstants {
     /// The camera part; counts, depths and the rest are the caller's.

@@ -2,6 +2,7 @@
 //! material-key and gather kernels (which take `pt`'s push constants).
 
 use super::gpu::LvcPush;
+use super::options::Variant;
 use crate::integrator::pt::gpu::PtParams;
 use crate::shaders::{self, Kernel};
 use crate::vk::{self, ComputePipeline, Gpu};
@@ -18,6 +19,8 @@ pub struct Kernels {
     pub camera_generate: ComputePipeline,
     pub camera_vertex: ComputePipeline,
     pub camera_direct: ComputePipeline,
+    /// Uniform connections (LVC-BDPT) or resampled ones (CIS-LBDPT): only the variant's
+    /// is built (a driver that compiles at pipeline creation pays for one).
     pub camera_connect: ComputePipeline,
     pub camera_bounce: ComputePipeline,
     pub camera_accumulate: ComputePipeline,
@@ -29,7 +32,7 @@ pub struct Kernels {
 }
 
 impl Kernels {
-    pub fn new(gpu: &Gpu) -> vk::Result<Self> {
+    pub fn new(gpu: &Gpu, variant: Variant) -> vk::Result<Self> {
         let lvc = |kernel: Kernel, bindings| {
             vk::compute_pipeline(
                 gpu,
@@ -58,7 +61,10 @@ impl Kernels {
             camera_generate: lvc(shaders::INTEGRATOR_LVC_CAMERA_GENERATE, 5)?,
             camera_vertex: lvc(shaders::INTEGRATOR_LVC_CAMERA_VERTEX, 13)?,
             camera_direct: lvc(shaders::INTEGRATOR_LVC_CAMERA_DIRECT, 10)?,
-            camera_connect: lvc(shaders::INTEGRATOR_LVC_CAMERA_CONNECT, 11)?,
+            camera_connect: match variant {
+                Variant::LvcBdpt => lvc(shaders::INTEGRATOR_LVC_CAMERA_CONNECT, 11)?,
+                Variant::CisLbdpt => lvc(shaders::INTEGRATOR_LVC_CAMERA_CONNECT__RESAMPLED, 11)?,
+            },
             camera_bounce: lvc(shaders::INTEGRATOR_LVC_CAMERA_BOUNCE, 9)?,
             camera_accumulate: lvc(shaders::INTEGRATOR_LVC_CAMERA_ACCUMULATE, 7)?,
             finish: lvc(shaders::INTEGRATOR_LVC_FINISH, 5)?,

@@ -63,7 +63,7 @@ use crate::vk::{self, Buffer, Gpu, Recorder};
 
 use self::cache::LightCache;
 use self::camera_pass::{trace_camera_paths, CameraRange, CameraTargets, Streams};
-use self::gpu::{LvcConstants, FLAG_RESAMPLE, FLAG_SORTED};
+use self::gpu::{LvcConstants, FLAG_SORTED};
 use self::kernels::{pt_params, Kernels};
 use self::light_pass::trace_light_paths;
 use self::light_tracing::splat_cache;
@@ -218,9 +218,6 @@ impl<'t> LvcIntegrator<'t> {
         constants.connections = options.connections;
         constants.candidates = options.candidates;
         constants.flags = if options.sort { FLAG_SORTED } else { 0 };
-        if options.variant == Variant::CisLbdpt {
-            constants.flags |= FLAG_RESAMPLE;
-        }
         // Provisional counts for the prepass (its vertices do not depend on them).
         constants.set_counts(&lvc_counts(
             &options.families,
@@ -234,7 +231,7 @@ impl<'t> LvcIntegrator<'t> {
             gpu: gpu.clone(),
             tracer,
             options: *options,
-            kernels: Kernels::new(gpu)?,
+            kernels: Kernels::new(gpu, options.variant)?,
             scene: SceneBuffers::new(gpu, scene)?,
             constants_buffer: gpu.upload("lvc-constants", &[constants])?,
             constants,
