@@ -56,6 +56,8 @@ pub fn builtin_names() -> &'static [(&'static str, &'static str)] {
             "lamps",
             "room with three hanging lamps, lights deep inside their shades, layered materials, ~7k triangles",
         ),
+        super::animation::builtin::NAMES[0],
+        super::animation::builtin::NAMES[1],
     ]
 }
 
@@ -65,7 +67,8 @@ pub fn builtin(name: &str) -> Option<Scene> {
         "cornell-box" => Some(cornell_box()),
         "fixture" => Some(fixture()),
         "lamps" => Some(lamps::lamps()),
-        _ => None,
+        // Animated scenes posed at time 0 (`scene::load_animated` keeps them moving).
+        _ => super::animation::builtin::animated(name).map(|a| a.scene),
     }
 }
 

@@ -2,6 +2,7 @@
 //! profiler log. [`Gpu`] is a cheap, cloneable handle to it.
 
 use std::collections::VecDeque;
+use std::ffi::CStr;
 use std::mem::ManuallyDrop;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
@@ -102,6 +103,8 @@ pub(crate) struct GpuInner {
     pub(crate) timeline: Mutex<Option<Vec<GpuBatch>>>,
     /// Present where the device offers VK_KHR/EXT_calibrated_timestamps.
     pub(crate) calibrator: Option<Calibrator>,
+    /// Opened with VK_KHR_swapchain ([`Gpu::new_for_presentation`]).
+    pub(crate) present: bool,
 }
 
 /// The device handle every other object holds.
@@ -125,13 +128,38 @@ impl Gpu {
         let instance = Instance::new(desc.instance)?;
         let devices = physical::enumerate(&instance)?;
         let info = physical::select(&devices, desc.device.as_deref())?;
-        Self::open(instance, info, desc.placement)
+        Self::open(instance, info, desc.placement, false)
+    }
+
+    /// [`Gpu::new`] for a device that also presents to windows: the instance gets the
+    /// window system's `surface_extensions` (see `vk::surface_extensions`) and the device
+    /// VK_KHR_swapchain, which it must offer.
+    pub fn new_for_presentation(desc: &GpuDesc, surface_extensions: &[&CStr]) -> Result<Self> {
+        let _span = tracing::info_span!("open device").entered();
+        let instance = Instance::with_extensions(desc.instance, surface_extensions)?;
+        let devices = physical::enumerate(&instance)?;
+        let info = physical::select(&devices, desc.device.as_deref())?;
+        // SAFETY: a plain query on a physical device of this instance.
+        let extensions = unsafe { instance.raw.enumerate_device_extension_properties(info.raw) }
+            .call("vkEnumerateDeviceExtensionProperties")?;
+        let has_swapchain = extensions.iter().any(|e| {
+            e.extension_name_as_c_str()
+                .is_ok_and(|n| n == khr::swapchain::NAME)
+        });
+        if !has_swapchain {
+            return Err(VkError::MissingFeature {
+                device: info.name.clone(),
+                what: "VK_KHR_swapchain (to present to a window)".into(),
+            });
+        }
+        Self::open(instance, info, desc.placement, true)
     }
 
     fn open(
         instance: Arc<Instance>,
         info: PhysicalDeviceInfo,
         placement: StreamPlacement,
+        present: bool,
     ) -> Result<Self> {
         let mapping = StreamMapping::plan(&info, placement);
         let per_family = mapping.queues_per_family();
@@ -148,6 +176,9 @@ impl Gpu {
         // them all; elsewhere the device is opened exactly as without them.
         let ray_query = info.capabilities.ray_query;
         let mut extensions = vec![khr::push_descriptor::NAME.as_ptr()];
+        if present {
+            extensions.push(khr::swapchain::NAME.as_ptr());
+        }
         if let Some(calibration) = info.calibration {
             extensions.push(calibration.name().as_ptr());
         }
@@ -277,6 +308,7 @@ impl Gpu {
             profile: Mutex::new(ProfileLog::default()),
             timeline: Mutex::new(None),
             calibrator,
+            present,
         }));
         for s in &gpu.0.streams {
             gpu.set_object_name(s.timeline.raw, &format!("timeline:{}", s.kind.name()));
@@ -292,6 +324,11 @@ impl Gpu {
     /// (VK_KHR_ray_query, VK_KHR_acceleration_structure, bufferDeviceAddress).
     pub fn ray_query(&self) -> bool {
         self.0.accel.is_some()
+    }
+
+    /// Whether the device was opened to present to windows ([`Gpu::new_for_presentation`]).
+    pub fn presents(&self) -> bool {
+        self.0.present
     }
 
     pub fn stream_mapping(&self) -> &StreamMapping {
