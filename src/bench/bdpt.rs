@@ -3,12 +3,14 @@
 //! Every integrator gets the same time, in [`BdptBenchOptions::rounds`] slices taken in
 //! turn (the order rotates every round), so that a change of load on a shared machine
 //! hits them alike. Each slice renders whole passes until its time is up and continues
-//! the integrator's film, so the films at the end are equal-time renders. Reported per
+//! the integrator's film, so the films at the end are equal-time renders; an integrator
+//! that batches passes (`passes_per_call`) gets as many per call as the time left holds
+//! at its latest rate. Reported per
 //! integrator: samples/s, Mrays/s and, for `bpt` and `light`, CBPT's throughput measure
 //! (basic contributions f_{i,j} per second, §6.2) — medians over the slices — and,
 //! given a reference, the relative MSE of the final film and its ratio to `pt`'s. Then
 //! the light-vertex-cache integrators at equal samples per pixel, with one stream and
-//! three ([`super::lvc`]).
+//! three, sorted or not ([`super::lvc`]).
 
 use std::fmt;
 use std::sync::Arc;
@@ -35,10 +37,8 @@ pub struct BdptBenchOptions {
     pub seed: u64,
     /// Mean RGB of a reference image of this film size, and where it came from.
     pub reference: Option<(Arc<Vec<[f32; 3]>>, String)>,
-    /// Passes of the equal-spp comparison of `lvc-bdpt` and `cis-lbdpt` (0: none).
-    pub spp: u32,
-    /// Rounds of the equal-spp comparison.
-    pub spp_rounds: u32,
+    /// The equal-spp comparison of `lvc-bdpt` and `cis-lbdpt` (passes 0: none).
+    pub equal_spp: super::lvc::SppPlan,
 }
 
 impl Default for BdptBenchOptions {
@@ -58,8 +58,7 @@ impl Default for BdptBenchOptions {
             max_depth: -1,
             seed: 0,
             reference: None,
-            spp: 4,
-            spp_rounds: 3,
+            equal_spp: Default::default(),
         }
     }
 }
@@ -171,6 +170,8 @@ struct Contestant {
     kind: IntegratorKind,
     integrator: Box<dyn Integrator>,
     next_pass: u32,
+    /// Seconds per pass of the latest call, which sizes the next one.
+    pass_seconds: Option<f64>,
     seconds: f64,
     passes: u32,
     samples: Vec<f64>,
@@ -194,6 +195,7 @@ impl Contestant {
             kind: options.integrator,
             integrator,
             next_pass: 1,
+            pass_seconds: None,
             seconds: 0.0,
             passes: 0,
             samples: Vec::new(),
@@ -209,9 +211,18 @@ impl Contestant {
         let start = Instant::now();
         let mut passes = 0u32;
         while passes == 0 || start.elapsed().as_secs_f64() < slice {
-            self.integrator.render_passes(self.next_pass, 1)?;
-            self.next_pass += 1;
-            passes += 1;
+            // As many passes per call as fit in the time left by the latest call's rate
+            // (at least one, at most what the integrator batches), so that integrators
+            // that batch passes into one wavefront do so without overrunning the slice.
+            let left = slice - start.elapsed().as_secs_f64();
+            let count = self.pass_seconds.map_or(1, |t| {
+                ((left / t.max(1e-9)).floor() as u32).clamp(1, self.integrator.passes_per_call())
+            });
+            let call = Instant::now();
+            self.integrator.render_passes(self.next_pass, count)?;
+            self.pass_seconds = Some(call.elapsed().as_secs_f64() / count as f64);
+            self.next_pass += count;
+            passes += count;
         }
         let t = start.elapsed().as_secs_f64().max(1e-9);
         self.seconds += t;
@@ -295,15 +306,8 @@ pub fn run(
         None,
     )?;
     base.max_depth = options.max_depth;
-    let equal_spp = if options.spp > 0 {
-        super::lvc::equal_spp(
-            gpu,
-            scene,
-            &base,
-            &options.integrators,
-            options.spp,
-            options.spp_rounds,
-        )?
+    let equal_spp = if options.equal_spp.passes > 0 {
+        super::lvc::equal_spp(gpu, scene, &base, &options.integrators, &options.equal_spp)?
     } else {
         Vec::new()
     };

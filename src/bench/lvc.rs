@@ -1,12 +1,14 @@
 //! The light-vertex-cache integrators at equal samples per pixel (thesis Table 4.1):
-//! LVC-BDPT and CIS-LBDPT with one stream and with three, each rendering the same passes
-//! in turns (the order rotates every round), with the GPU time of every kernel and the
-//! busy time of every stream, and how long two or more streams were busy at once (their
-//! overlap: zero where the streams share one queue, as on lavapipe).
+//! LVC-BDPT and CIS-LBDPT with one stream and with three (`--streams`), with material
+//! sorting as the device's default, on or off (`--sort`), each configuration rendering
+//! the same passes in turns (the order rotates every round), with the GPU time of every
+//! kernel and the busy time of every stream, and how long two or more streams were busy
+//! at once (their overlap: zero where the streams share one queue, as on lavapipe).
 
 use serde::Serialize;
 
 use crate::film::FilmSums;
+use crate::integrator::lvc::sort_pays;
 use crate::integrator::{Integrator, IntegratorKind};
 use crate::render::{create_integrator, RenderError, RenderOptions};
 use crate::scene::Scene;
@@ -29,12 +31,82 @@ pub struct SppRow {
     pub kernels: Vec<KernelTime>,
 }
 
-/// The configurations measured for `integrators` (those of them that use a cache).
-pub fn configurations(integrators: &[IntegratorKind]) -> Vec<(IntegratorKind, u32)> {
+/// Material sorting in a configuration: the integrator's default on the device, or
+/// forced on or off.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum SortSetting {
+    Default,
+    On,
+    Off,
+}
+
+impl std::str::FromStr for SortSetting {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "default" => Ok(Self::Default),
+            "on" => Ok(Self::On),
+            "off" => Ok(Self::Off),
+            _ => Err(format!("'{s}': the sort setting is default, on or off")),
+        }
+    }
+}
+
+impl SortSetting {
+    /// Whether `kind` sorts with this setting on a device where sorting does or does not
+    /// pay (`sort_pays`).
+    fn resolve(self, kind: IntegratorKind, sort_pays: bool) -> bool {
+        match self {
+            Self::On => true,
+            Self::Off => false,
+            Self::Default => kind == IntegratorKind::CisLbdpt && sort_pays,
+        }
+    }
+}
+
+/// What the equal-spp comparison measures.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SppPlan {
+    /// Passes per round (0: no comparison).
+    pub passes: u32,
+    pub rounds: u32,
+    /// Stream counts, each 1 or 3.
+    pub streams: Vec<u32>,
+    pub sort: Vec<SortSetting>,
+}
+
+impl Default for SppPlan {
+    fn default() -> Self {
+        Self {
+            passes: 4,
+            rounds: 3,
+            streams: vec![1, 3],
+            sort: vec![SortSetting::Default],
+        }
+    }
+}
+
+/// The configurations measured for `integrators` (those of them that use a cache): every
+/// stream count and sort setting of `plan` (on a device where sorting does or does not
+/// pay), a setting that resolves to one already listed measured once.
+pub fn configurations(
+    integrators: &[IntegratorKind],
+    plan: &SppPlan,
+    sort_pays: bool,
+) -> Vec<(IntegratorKind, u32, bool)> {
     let mut out = Vec::new();
     for &kind in integrators {
-        if matches!(kind, IntegratorKind::LvcBdpt | IntegratorKind::CisLbdpt) {
-            out.extend([(kind, 1), (kind, 3)]);
+        if !matches!(kind, IntegratorKind::LvcBdpt | IntegratorKind::CisLbdpt) {
+            continue;
+        }
+        for &sort in &plan.sort {
+            for &streams in &plan.streams {
+                let c = (kind, streams, sort.resolve(kind, sort_pays));
+                if !out.contains(&c) {
+                    out.push(c);
+                }
+            }
         }
     }
     out
@@ -94,33 +166,35 @@ fn median(mut v: Vec<f64>) -> f64 {
 struct Config {
     kind: IntegratorKind,
     streams: u32,
+    sorted: bool,
     integrator: Box<dyn Integrator>,
     seconds: Vec<f64>,
     log: ProfileLog,
 }
 
-/// Renders `passes` passes with every configuration, `rounds` times in turns.
-#[allow(clippy::too_many_arguments)]
+/// Renders `plan.passes` passes with every configuration, `plan.rounds` times in turns.
 pub fn equal_spp(
     gpu: &Gpu,
     scene: &Scene,
     base: &RenderOptions,
     integrators: &[IntegratorKind],
-    passes: u32,
-    rounds: u32,
+    plan: &SppPlan,
 ) -> Result<Vec<SppRow>, RenderError> {
+    let passes = plan.passes.max(1);
     let mut configs = Vec::new();
-    for (kind, streams) in configurations(integrators) {
+    for (kind, streams, sorted) in configurations(integrators, plan, sort_pays(gpu)) {
         let mut o = base.clone();
         o.integrator = kind;
-        o.spp = passes.max(1);
+        o.spp = passes;
         o.lvc.streams = Some(streams);
+        o.lvc.sort = Some(sorted);
         let mut integrator = create_integrator(gpu, scene, &o)?;
         // Warm-up: the first dispatch of each kernel compiles it on some drivers.
         integrator.render_passes(0, 1)?;
         configs.push(Config {
             kind,
             streams,
+            sorted,
             integrator,
             seconds: Vec::new(),
             log: ProfileLog::default(),
@@ -130,14 +204,14 @@ pub fn equal_spp(
     let _ = gpu.take_profile();
     let empty = FilmSums::new(base.width, base.height, 1, true);
     let n = configs.len();
-    for round in 0..rounds.max(1) as usize {
+    for round in 0..plan.rounds.max(1) as usize {
         for k in 0..n {
             let c = &mut configs[(round + k) % n];
             c.integrator.restore(&empty)?;
             gpu.wait_idle()?;
             let _ = gpu.take_profile();
             let start = std::time::Instant::now();
-            c.integrator.render_passes(1, passes.max(1))?;
+            c.integrator.render_passes(1, passes)?;
             gpu.wait_idle()?;
             c.seconds.push(start.elapsed().as_secs_f64());
             c.log.extend(gpu.take_profile());
@@ -147,17 +221,12 @@ pub fn equal_spp(
         .into_iter()
         .map(|c| {
             let (stream_busy_ms, overlap_ms) = stream_use(&c.log);
-            let sorted = c
-                .integrator
-                .settings()
-                .iter()
-                .any(|(k, v)| k == "sort_materials" && v == "true");
             SppRow {
                 integrator: c.kind.name().to_string(),
                 streams: c.streams,
-                sorted,
+                sorted: c.sorted,
                 seconds: median(c.seconds),
-                passes: passes.max(1),
+                passes,
                 stream_busy_ms,
                 overlap_ms,
                 kernels: c.log.summary(),
@@ -205,23 +274,64 @@ pub fn write_equal_spp(f: &mut std::fmt::Formatter<'_>, rows: &[SppRow]) -> std:
             r.overlap_ms
         )?;
     }
-    let time = |k: &str, s: u32| {
+    let time = |k: &str, streams: u32, sorted: bool| {
         rows.iter()
-            .find(|r| r.integrator == k && r.streams == s)
+            .find(|r| r.integrator == k && r.streams == streams && r.sorted == sorted)
             .map(|r| r.seconds)
     };
-    for s in [1, 3] {
-        if let (Some(lvc), Some(cis)) = (time("lvc-bdpt", s), time("cis-lbdpt", s)) {
+    let on_off = |sorted: bool| if sorted { "sorted" } else { "unsorted" };
+    for (streams, sorted) in [(1, false), (3, false), (1, true), (3, true)] {
+        if let (Some(lvc), Some(cis)) = (
+            time("lvc-bdpt", streams, sorted),
+            time("cis-lbdpt", streams, sorted),
+        ) {
             writeln!(
                 f,
-                "lvc-bdpt / cis-lbdpt time at equal spp, {s} stream(s): {:.3}",
+                "lvc-bdpt / cis-lbdpt time at equal spp, {streams} stream(s), both {}: {:.3}",
+                on_off(sorted),
                 lvc / cis
             )?;
         }
     }
+    // Each method with its own default sorting (the first configuration of each).
+    let first = |k: &str| rows.iter().find(|r| r.integrator == k);
+    if let (Some(lvc), Some(cis)) = (first("lvc-bdpt"), first("cis-lbdpt")) {
+        if lvc.sorted != cis.sorted {
+            for streams in [1, 3] {
+                if let (Some(l), Some(c)) = (
+                    time("lvc-bdpt", streams, lvc.sorted),
+                    time("cis-lbdpt", streams, cis.sorted),
+                ) {
+                    writeln!(
+                        f,
+                        "lvc-bdpt ({}) / cis-lbdpt ({}) time at equal spp, {streams} stream(s): {:.3}",
+                        on_off(lvc.sorted),
+                        on_off(cis.sorted),
+                        l / c
+                    )?;
+                }
+            }
+        }
+    }
     for k in ["lvc-bdpt", "cis-lbdpt"] {
-        if let (Some(one), Some(three)) = (time(k, 1), time(k, 3)) {
-            writeln!(f, "{k}: 1 stream / 3 streams time: {:.3}", one / three)?;
+        for sorted in [false, true] {
+            if let (Some(one), Some(three)) = (time(k, 1, sorted), time(k, 3, sorted)) {
+                writeln!(
+                    f,
+                    "{k} ({}): 1 stream / 3 streams time: {:.3}",
+                    on_off(sorted),
+                    one / three
+                )?;
+            }
+        }
+        for streams in [1, 3] {
+            if let (Some(off), Some(on)) = (time(k, streams, false), time(k, streams, true)) {
+                writeln!(
+                    f,
+                    "{k}, {streams} stream(s): unsorted / sorted time: {:.3}",
+                    off / on
+                )?;
+            }
         }
     }
     for r in rows.iter().filter(|r| r.streams == 3) {
@@ -238,7 +348,13 @@ pub fn write_equal_spp(f: &mut std::fmt::Formatter<'_>, rows: &[SppRow]) -> std:
                 )
             })
             .collect();
-        writeln!(f, "{} kernels (self ms): {}", r.integrator, top.join(", "))?;
+        writeln!(
+            f,
+            "{} ({}) kernels (self ms): {}",
+            r.integrator,
+            on_off(r.sorted),
+            top.join(", ")
+        )?;
     }
     Ok(())
 }
@@ -258,6 +374,42 @@ mod tests {
             submission: 1,
             info: ScopeInfo::default(),
         }
+    }
+
+    #[test]
+    fn configurations_cover_streams_and_sorting_once_each() {
+        use IntegratorKind::{CisLbdpt, LvcBdpt, Pt};
+        let plan = SppPlan {
+            sort: vec![SortSetting::Default, SortSetting::On, SortSetting::Off],
+            ..Default::default()
+        };
+        // Where sorting does not pay, each default is "off" and measured once.
+        assert_eq!(
+            configurations(&[Pt, LvcBdpt, CisLbdpt], &plan, false),
+            vec![
+                (LvcBdpt, 1, false),
+                (LvcBdpt, 3, false),
+                (LvcBdpt, 1, true),
+                (LvcBdpt, 3, true),
+                (CisLbdpt, 1, false),
+                (CisLbdpt, 3, false),
+                (CisLbdpt, 1, true),
+                (CisLbdpt, 3, true),
+            ]
+        );
+        let plan = SppPlan {
+            streams: vec![3],
+            ..Default::default()
+        };
+        assert_eq!(
+            configurations(&[LvcBdpt, CisLbdpt], &plan, true),
+            vec![(LvcBdpt, 3, false), (CisLbdpt, 3, true)]
+        );
+        assert_eq!("on".parse(), Ok(SortSetting::On));
+        assert!("yes"
+            .parse::<SortSetting>()
+            .unwrap_err()
+            .contains("default, on or off"));
     }
 
     #[test]

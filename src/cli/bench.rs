@@ -6,6 +6,7 @@ use anyhow::Context;
 use clap::{Args, Subcommand};
 use splitray::bench::bdpt::{self as bdpt_bench, BdptBenchOptions};
 use splitray::bench::dynamic::{self, Contender, DynamicBenchOptions};
+use splitray::bench::lvc::{SortSetting, SppPlan};
 use splitray::bench::primitives::{self, PrimitivesBenchOptions};
 use splitray::bench::pt::{self as pt_bench, PtBenchOptions};
 use splitray::bench::trace::{self, TraceBenchOptions};
@@ -106,6 +107,13 @@ enum BenchCommand {
         /// Rounds of the equal-spp comparison (the median is reported).
         #[arg(long, default_value_t = 3)]
         spp_rounds: u32,
+        /// Stream counts of the equal-spp comparison (each 1 or 3).
+        #[arg(long, value_delimiter = ',', default_value = "1,3")]
+        streams: Vec<u32>,
+        /// Material sorting in the equal-spp comparison: default (each integrator's
+        /// choice on the device), on, off; several compare them (e.g. on,off).
+        #[arg(long, value_delimiter = ',', default_value = "default")]
+        sort: Vec<SortSetting>,
         /// Also write the reports as JSON (a list, one per scene).
         #[arg(long, value_name = "OUT.json")]
         json: Option<PathBuf>,
@@ -259,10 +267,14 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             width,
             height,
             time,
+            streams,
             ..
         } => {
             if time.is_nan() || *time <= 0.0 {
                 anyhow::bail!("--time must be a positive number of seconds");
+            }
+            if let Some(s) = streams.iter().find(|s| !matches!(s, 1 | 3)) {
+                anyhow::bail!("--streams: {s} streams; the kernels run on 1 or 3");
             }
             if !reference.is_empty() && reference.len() != scenes.len() {
                 anyhow::bail!(
@@ -348,6 +360,8 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             seed,
             spp,
             spp_rounds,
+            streams,
+            sort,
             json,
             ..
         } => {
@@ -365,8 +379,12 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
                         max_depth: *max_depth,
                         seed: *seed,
                         reference,
-                        spp: *spp,
-                        spp_rounds: *spp_rounds,
+                        equal_spp: SppPlan {
+                            passes: *spp,
+                            rounds: *spp_rounds,
+                            streams: streams.clone(),
+                            sort: sort.clone(),
+                        },
                     },
                 )?;
                 print!("{report}");
