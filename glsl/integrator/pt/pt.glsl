@@ -31,6 +31,7 @@ struct PtParams {
 const uint PT_FLAG_SORTED = 1u;  // shade reads its items through the sorted order
 const uint PT_FLAG_NEE = 2u;     // next-event estimation on
 const uint PT_FLAG_BSDF = 4u;    // emission found by BSDF sampling counts
+const uint PT_FLAG_NORMALS = 8u; // the normals table has three per triangle (else a dummy)
 // Both NEE and BSDF on = multiple importance sampling (power heuristic).
 
 // 48 bytes per path.

@@ -106,7 +106,8 @@ void main() {
 
     // Shading frame: interpolated normals where the mesh has them, else geometric.
     vec3 ns = ng;
-    vec4 n0 = normals[3u * hit.triangle];
+    bool has_normals = (params.flags & PT_FLAG_NORMALS) != 0u;
+    vec4 n0 = has_normals ? normals[3u * hit.triangle] : vec4(0.0);
     if (n0.w != 0.0) {
         vec3 n1 = normals[3u * hit.triangle + 1u].xyz;
         vec3 n2 = normals[3u * hit.triangle + 2u].xyz;
