@@ -164,22 +164,16 @@ impl AccelerationStructure {
             sizes.acceleration_structure_size,
             MemoryKind::Device,
             BufferUsage {
-                device_address: true,
                 accel_build_input: false,
                 accel_storage: true,
             },
         )?;
         // Scratch: over-allocate by the alignment and round the address up.
         let align = accel.scratch_alignment;
-        let scratch = gpu.create_buffer_with(
+        let scratch = gpu.create_buffer(
             &format!("{name}:scratch"),
             sizes.build_scratch_size + align,
             MemoryKind::Device,
-            BufferUsage {
-                device_address: true,
-                accel_build_input: false,
-                accel_storage: false,
-            },
         )?;
         let scratch_address = scratch.device_address().next_multiple_of(align);
         let create_info = vk::AccelerationStructureCreateInfoKHR::default()

@@ -14,6 +14,7 @@ use super::clock::Calibrator;
 use super::error::{CallContext, Result, VkError};
 use super::instance::{Instance, InstanceDesc};
 use super::physical::{self, PhysicalDeviceInfo};
+use super::pipeline::BufferAccess;
 use super::profiler::{GpuBatch, ProfileLog, QueryBatch};
 use super::stream::{StreamKind, StreamMapping, StreamPlacement, TimelineHandle, TimelinePoint};
 
@@ -24,6 +25,10 @@ pub struct GpuDesc {
     /// Device index or name substring; `None` picks the best (see [`physical::select`]).
     pub device: Option<String>,
     pub placement: StreamPlacement,
+    /// How kernels with a descriptor twin take their buffers; `None`: the device's
+    /// default ([`BufferAccess::for_device`]), or `SPLITRAY_BUFFER_ACCESS`
+    /// (`descriptors` or `addresses`) where it is set.
+    pub buffer_access: Option<BufferAccess>,
 }
 
 /// Bytes allocated through the allocator: now and at the peak.
@@ -102,6 +107,7 @@ pub(crate) struct GpuInner {
     pub(crate) timeline: Mutex<Option<Vec<GpuBatch>>>,
     /// Present where the device offers VK_KHR/EXT_calibrated_timestamps.
     pub(crate) calibrator: Option<Calibrator>,
+    pub(crate) buffer_access: BufferAccess,
 }
 
 /// The device handle every other object holds.
@@ -125,13 +131,24 @@ impl Gpu {
         let instance = Instance::new(desc.instance)?;
         let devices = physical::enumerate(&instance)?;
         let info = physical::select(&devices, desc.device.as_deref())?;
-        Self::open(instance, info, desc.placement)
+        let from_env = std::env::var("SPLITRAY_BUFFER_ACCESS").ok();
+        let buffer_access = match (desc.buffer_access, from_env.as_deref()) {
+            (Some(access), _) => access,
+            (None, None | Some("")) => BufferAccess::for_device(&info),
+            (None, Some(s)) => BufferAccess::parse(s).ok_or_else(|| {
+                VkError::Usage(format!(
+                    "SPLITRAY_BUFFER_ACCESS={s}: expected `descriptors` or `addresses`"
+                ))
+            })?,
+        };
+        Self::open(instance, info, desc.placement, buffer_access)
     }
 
     fn open(
         instance: Arc<Instance>,
         info: PhysicalDeviceInfo,
         placement: StreamPlacement,
+        buffer_access: BufferAccess,
     ) -> Result<Self> {
         let mapping = StreamMapping::plan(&info, placement);
         let per_family = mapping.queues_per_family();
@@ -161,7 +178,7 @@ impl Gpu {
         let int64_atomics = info.capabilities.buffer_int64_atomics;
         let mut f12 = vk::PhysicalDeviceVulkan12Features::default()
             .timeline_semaphore(true)
-            .buffer_device_address(ray_query)
+            .buffer_device_address(true)
             .shader_buffer_int64_atomics(int64_atomics);
         let f10 =
             vk::PhysicalDeviceFeatures::default().shader_int64(info.capabilities.shader_int64);
@@ -194,7 +211,7 @@ impl Gpu {
             device: raw.clone(),
             physical_device: info.raw,
             debug_settings: Default::default(),
-            buffer_device_address: ray_query,
+            buffer_device_address: true,
             allocation_sizes: Default::default(),
         })
         .map_err(|source| VkError::Alloc {
@@ -277,6 +294,7 @@ impl Gpu {
             profile: Mutex::new(ProfileLog::default()),
             timeline: Mutex::new(None),
             calibrator,
+            buffer_access,
         }));
         for s in &gpu.0.streams {
             gpu.set_object_name(s.timeline.raw, &format!("timeline:{}", s.kind.name()));
@@ -292,6 +310,11 @@ impl Gpu {
     /// (VK_KHR_ray_query, VK_KHR_acceleration_structure, bufferDeviceAddress).
     pub fn ray_query(&self) -> bool {
         self.0.accel.is_some()
+    }
+
+    /// How kernels with a descriptor twin take their buffers on this device.
+    pub fn buffer_access(&self) -> BufferAccess {
+        self.0.buffer_access
     }
 
     pub fn stream_mapping(&self) -> &StreamMapping {
