@@ -12,6 +12,7 @@ fn main() {
     let out_dir = PathBuf::from(std::env::var_os("OUT_DIR").unwrap());
     let glsl_root = manifest.join("glsl");
     println!("cargo:rerun-if-changed=tools/shader_build.rs");
+    declare_preview_cfg();
     rerun_for_tree(&glsl_root);
 
     let compiler = shaderc::Compiler::new().expect("shaderc: cannot create a compiler");
@@ -80,5 +81,19 @@ fn rerun_for_tree(dir: &Path) {
                 println!("cargo:rerun-if-changed={}", path.display());
             }
         }
+    }
+}
+
+/// `cfg(x11_preview)`: the preview window is built (the `window` feature, on a system
+/// whose window system winit reaches through X11).
+fn declare_preview_cfg() {
+    println!("cargo::rustc-check-cfg=cfg(x11_preview)");
+    let os = std::env::var("CARGO_CFG_TARGET_OS").unwrap_or_default();
+    let x11 = matches!(
+        os.as_str(),
+        "linux" | "dragonfly" | "freebsd" | "netbsd" | "openbsd"
+    );
+    if x11 && std::env::var_os("CARGO_FEATURE_WINDOW").is_some() {
+        println!("cargo:rustc-cfg=x11_preview");
     }
 }

@@ -11,6 +11,8 @@
 //! - [`integrator`]: what is computed along the rays; [`bidir`]: the CPU bidirectional
 //!   path tracer's machinery (vertices, walks, connections, MIS and its oracle).
 //! - [`render`]: ties a scene, a tracer and an integrator into a film.
+//! - [`display`]: watching a render converge (the preview's tone mapping, tev streaming);
+//!   `preview`: the preview window (the `window` feature, on X11 systems).
 //! - [`scene_export`]: the resolved scene as JSON, for reference renderers.
 //! - [`bench`](mod@bench): the measurements behind `splitray bench`.
 //! - [`timeline`]: per-stream and per-thread timelines (Chrome trace-event JSON, SVG).
@@ -18,8 +20,11 @@
 pub mod bench;
 pub mod bidir;
 pub mod bsdf;
+pub mod display;
 pub mod film;
 pub mod integrator;
+#[cfg(x11_preview)]
+pub mod preview;
 pub mod primitives;
 pub mod render;
 pub mod scene;

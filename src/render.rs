@@ -6,10 +6,12 @@
 pub mod checkpoint;
 pub mod device_fit;
 pub mod fingerprint;
+pub mod frames;
 pub mod merge;
 pub mod part;
 mod plan;
 pub mod shard;
+mod watch;
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -19,7 +21,7 @@ use serde::Serialize;
 use crate::film::{self, Film, FilmError, FilmSums, RenderMetadata};
 use crate::integrator::{
     self, aov, EyeInputs, EyeIntegrator, EyeOptions, GpuMaterial, Integrator, IntegratorError,
-    IntegratorKind, NamedImage,
+    IntegratorKind, IntegratorStats, NamedImage,
 };
 use crate::scene::{Scene, SceneError};
 use crate::trace::{GpuTriangle, Tracer, TracerKind};
@@ -30,6 +32,7 @@ pub use part::PartRecord;
 use plan::start_film;
 pub use plan::{CheckpointHook, FilmSnapshot, RenderPlan, Resume};
 pub use shard::{PassRanges, Shard};
+pub use watch::{FilmWatch, WatchStart};
 
 #[derive(Debug, thiserror::Error)]
 pub enum RenderError {
@@ -269,7 +272,7 @@ pub fn render_from(
     gpu: &Gpu,
     scene: &Scene,
     options: &RenderOptions,
-    mut plan: RenderPlan<'_>,
+    plan: RenderPlan<'_>,
     control: RenderControl<'_>,
 ) -> Result<RenderOutput, RenderError> {
     device_fit::check(gpu, scene, options)?;
@@ -290,6 +293,47 @@ pub fn render_from(
         aov::render_aovs(gpu, tracer.as_mut(), &triangle_buffer, &camera)?
     };
     let mut integrator = integrator_on(gpu, scene, options, &triangles, tracer)?;
+    render_prepared(
+        gpu,
+        scene,
+        options,
+        Prepared {
+            integrator: integrator.as_mut(),
+            aovs,
+            start,
+            stats_before: IntegratorStats::default(),
+        },
+        plan,
+        control,
+    )
+}
+
+/// An integrator ready for passes, with the render's AOVs.
+struct Prepared<'i> {
+    integrator: &'i mut dyn Integrator,
+    aovs: aov::Aovs,
+    /// When the render started (its time includes what was done before the passes).
+    start: Instant,
+    /// The integrator's counts before this render (an animation's earlier frames).
+    stats_before: IntegratorStats,
+}
+
+/// The passes of a prepared render following `plan`, and the output they make: the
+/// film with its AOVs, statistics, metadata.
+fn render_prepared(
+    gpu: &Gpu,
+    scene: &Scene,
+    options: &RenderOptions,
+    prepared: Prepared<'_>,
+    mut plan: RenderPlan<'_>,
+    control: RenderControl<'_>,
+) -> Result<RenderOutput, RenderError> {
+    let Prepared {
+        integrator,
+        aovs,
+        start,
+        stats_before,
+    } = prepared;
     let fingerprint = Fingerprint::new(
         scene,
         options.width,
@@ -299,14 +343,22 @@ pub fn render_from(
         integrator.samples_per_pass(),
         integrator.settings(),
     );
-    let (first_pass, resumed_passes) =
-        start_film(integrator.as_mut(), options, &plan, &fingerprint)?;
+    let (first_pass, resumed_passes) = start_film(integrator, options, &plan, &fingerprint)?;
+    if let Some(watch) = plan.watch.as_deref_mut() {
+        watch.start(&WatchStart {
+            width: options.width,
+            height: options.height,
+            aovs: &aovs,
+            device_film: integrator.device_film(),
+            spp: resumed_passes as u64 * integrator.samples_per_pass() as u64,
+        })?;
+    }
     let previous_time_s = plan
         .resume
         .as_ref()
         .map_or(0.0, |r| r.checkpoint.header.render_time_s);
     let run = run_passes(
-        integrator.as_mut(),
+        integrator,
         options,
         control,
         PassLoop {
@@ -316,14 +368,17 @@ pub fn render_from(
             fingerprint: &fingerprint,
             previous_time_s,
             checkpoint: plan.checkpoint.take(),
+            watch: plan.watch.as_deref_mut(),
         },
         start,
     )?;
     let sums = integrator.sums()?;
+    if let Some(watch) = plan.watch {
+        watch.finish(&sums)?;
+    }
     let extra_images = integrator.extra_images()?;
-    let integrator_stats = integrator.stats();
+    let integrator_stats = stats_since(integrator.stats(), &stats_before);
     let settings = integrator.settings();
-    drop(integrator);
     let seconds = start.elapsed().as_secs_f64();
     let (_, peak_gpu_bytes) = gpu.memory_bytes();
 
@@ -397,6 +452,15 @@ pub fn render_from(
         stats,
         extra_images,
     })
+}
+
+/// What an integrator counted since `before`.
+fn stats_since(mut now: IntegratorStats, before: &IntegratorStats) -> IntegratorStats {
+    now.rays_traced -= before.rays_traced.min(now.rays_traced);
+    for (key, value) in &mut now.counters {
+        *value -= before.counters.get(key).copied().unwrap_or(0).min(*value);
+    }
+    now
 }
 
 /// The integrator `options` asks for, on its own tracer, ready to render passes (for
@@ -496,7 +560,7 @@ fn integrator_on(
 }
 
 /// What the pass loop continues from and hands its film to.
-struct PassLoop<'f, 'h> {
+struct PassLoop<'f, 'h, 'w> {
     /// Global index of the film's first pass.
     first_pass: u32,
     /// Passes the film holds before the loop starts (from a checkpoint).
@@ -506,6 +570,7 @@ struct PassLoop<'f, 'h> {
     /// Render time of the runs before this one.
     previous_time_s: f64,
     checkpoint: Option<CheckpointHook<'h>>,
+    watch: Option<&'w mut (dyn FilmWatch + 'h)>,
 }
 
 /// How the pass loop ended.
@@ -545,9 +610,10 @@ fn run_passes(
     integrator: &mut dyn Integrator,
     options: &RenderOptions,
     control: RenderControl<'_>,
-    mut job: PassLoop<'_, '_>,
+    mut job: PassLoop<'_, '_, '_>,
     start: Instant,
 ) -> Result<PassRun, RenderError> {
+    let watched_batch_s = job.watch.as_ref().and_then(|w| w.batch_target_s());
     let per_pass = integrator.samples_per_pass().max(1);
     let block = job.shard.passes(options.spp.div_ceil(per_pass));
     let target_spp = (block.end - block.start) as u64 * per_pass as u64;
@@ -571,6 +637,10 @@ fn run_passes(
         let time_left_s = options
             .time_limit
             .map(|t| t - start.elapsed().as_secs_f64());
+        let time_left_s = match (time_left_s, watched_batch_s) {
+            (Some(t), Some(w)) => Some(t.min(w)),
+            (t, w) => t.or(w),
+        };
         batch = batch_size(
             batch_start.elapsed().as_secs_f64() / count as f64,
             time_left_s,
@@ -587,14 +657,18 @@ fn run_passes(
                 mse_read_at = elapsed_s;
             }
         }
-        (control.progress)(&Progress {
+        let progress = Progress {
             passes,
             spp: passes as u64 * per_pass as u64,
             target_spp,
             elapsed_s,
             time_limit: options.time_limit,
             relative_mse,
-        });
+        };
+        (control.progress)(&progress);
+        if let Some(watch) = job.watch.as_deref_mut() {
+            watch.batch(&progress, &mut || integrator.sums())?;
+        }
         if let Some(hook) = &mut job.checkpoint {
             if !last && elapsed_s - saved_at >= hook.every_s {
                 let sums = integrator.sums()?;

@@ -35,62 +35,10 @@ const SIZE: u32 = 16;
 
 /// An icosahedron subdivided once (80 facets) on the unit sphere, facing its centre.
 fn sphere(material: Material) -> Scene {
-    let t = (1.0 + 5f32.sqrt()) / 2.0;
-    let v: Vec<Vec3> = [
-        (-1.0, t, 0.0),
-        (1.0, t, 0.0),
-        (-1.0, -t, 0.0),
-        (1.0, -t, 0.0),
-        (0.0, -1.0, t),
-        (0.0, 1.0, t),
-        (0.0, -1.0, -t),
-        (0.0, 1.0, -t),
-        (t, 0.0, -1.0),
-        (t, 0.0, 1.0),
-        (-t, 0.0, -1.0),
-        (-t, 0.0, 1.0),
-    ]
-    .iter()
-    .map(|&(x, y, z)| Vec3::new(x, y, z).normalize())
-    .collect();
-    let faces = [
-        [0, 11, 5],
-        [0, 5, 1],
-        [0, 1, 7],
-        [0, 7, 10],
-        [0, 10, 11],
-        [1, 5, 9],
-        [5, 11, 4],
-        [11, 10, 2],
-        [10, 7, 6],
-        [7, 1, 8],
-        [3, 9, 4],
-        [3, 4, 2],
-        [3, 2, 6],
-        [3, 6, 8],
-        [3, 8, 9],
-        [4, 9, 5],
-        [2, 4, 11],
-        [6, 2, 10],
-        [8, 6, 7],
-        [9, 8, 1],
-    ];
-    let mut triangles = Vec::new();
-    for f in faces {
-        let (a, b, c) = (v[f[0]], v[f[1]], v[f[2]]);
-        let (ab, bc, ca) = (
-            (a + b).normalize(),
-            (b + c).normalize(),
-            (c + a).normalize(),
-        );
-        for [p, q, r] in [[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]] {
-            let mut tri = Triangle::new(p, q, r, 0);
-            if tri.geometric_normal().dot(-tri.centroid()) < 0.0 {
-                tri = Triangle::new(p, r, q, 0);
-            }
-            triangles.push(tri);
-        }
-    }
+    let triangles = splitray::scene::shapes::icosphere(1)
+        .into_iter()
+        .map(|[a, b, c]| Triangle::new(a, c, b, 0))
+        .collect();
     Scene {
         name: "sphere-furnace".into(),
         camera: Camera {

@@ -262,6 +262,22 @@ fn sigint_writes_the_samples_reached_and_the_render_resumes_bit_identically() {
         "{t}"
     );
     assert!(!d.join("other.exr").exists() && temporaries(d).is_empty());
+
+    // Asking for no more samples than it holds is refused rather than rewriting its image.
+    let held = reached.to_string();
+    let out = splitray(
+        &[
+            "render", "--resume", "run.ckpt", "--spp", &held, "-o", "same.exr",
+        ],
+        d,
+    );
+    let t = text(&out);
+    assert_eq!(out.status.code(), Some(1), "{t}");
+    assert!(
+        t.contains("run.ckpt") && t.contains(&format!("holds {held} spp already")),
+        "{t}"
+    );
+    assert!(!d.join("same.exr").exists() && temporaries(d).is_empty());
 }
 
 #[test]

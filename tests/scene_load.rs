@@ -403,7 +403,7 @@ fn project(s: &Scene, p: Vec3) -> (f32, f32) {
 #[test]
 fn builtin_cornell_box() {
     let names: Vec<&str> = builtin_names().iter().map(|(n, _)| *n).collect();
-    assert_eq!(names, ["cornell-box", "fixture"]);
+    assert_eq!(names, ["cornell-box", "fixture", "lamps", "waves", "swarm"]);
     let s = scene::load("cornell-box").unwrap();
     let stats = scene::validate::validate_scene(&s, &scene::Location::file("builtin")).unwrap();
     assert!((32..=36).contains(&stats.triangles));

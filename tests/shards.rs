@@ -78,7 +78,14 @@ fn merged_shards_equal_one_render_of_the_same_passes() {
     let scene = builtin("cornell-box").unwrap();
     let dir = tempfile::tempdir().unwrap();
     const PASSES: u32 = 8;
-    for kind in [IntegratorKind::Pt, IntegratorKind::Ao] {
+    // `bpt` and `light` splat light-tracing samples: each shard normalises its splats by
+    // its own passes' light subpaths, so merged shards still hold one render's passes.
+    for kind in [
+        IntegratorKind::Pt,
+        IntegratorKind::Ao,
+        IntegratorKind::Bpt,
+        IntegratorKind::Light,
+    ] {
         let opts = options(&scene, kind, PASSES, 7);
         let whole = render(&gpu, &scene, &opts, Shard::WHOLE);
         let shards: Vec<RenderOutput> = (0..3)
@@ -135,7 +142,7 @@ fn merged_shards_equal_one_render_of_the_same_passes() {
         );
         check_stderr(&merged.sums, &whole.sums, kind);
         assert!(merged.film.stderr == merged.sums.stderr(), "{kind}");
-        if kind == IntegratorKind::Pt {
+        if matches!(kind, IntegratorKind::Pt | IntegratorKind::Bpt) {
             let other = render(
                 &gpu,
                 &scene,

@@ -11,9 +11,13 @@
 set -euo pipefail
 
 # fonts-dejavu-core: a sans-serif font for the labels of `splitray timeline -o X.png`.
+# The preview window (`render --preview`): the X libraries winit loads at run time
+# (libx11-xcb1, libxcursor1, libxi6, libxkbcommon-x11-0); xvfb for the test that opens
+# it on a virtual display; x11-apps (xwd) and imagemagick to capture a window by hand.
 packages=(
   libvulkan1 libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers vulkan-tools
   libshaderc-dev glslang-dev spirv-tools pkg-config fonts-dejavu-core
+  libx11-xcb1 libxcursor1 libxi6 libxkbcommon-x11-0 xvfb x11-apps imagemagick
 )
 
 missing=()

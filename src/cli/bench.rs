@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use anyhow::Context;
 use clap::{Args, Subcommand};
 use splitray::bench::bdpt::{self as bdpt_bench, BdptBenchOptions};
+use splitray::bench::dynamic::{self, Contender, DynamicBenchOptions};
 use splitray::bench::primitives::{self, PrimitivesBenchOptions};
 use splitray::bench::pt::{self as pt_bench, PtBenchOptions};
 use splitray::bench::trace::{self, TraceBenchOptions};
@@ -165,6 +166,40 @@ enum BenchCommand {
         #[arg(long, value_name = "OUT.json")]
         json: Option<PathBuf>,
     },
+    /// Per-frame time on an animated scene (waves, swarm, or a scene file with keys): the
+    /// geometry update (nothing for PDACRT, a BVH build for the others) plus the
+    /// frame's primary and shadow rays, tracers taking turns frame by frame.
+    Dynamic {
+        /// An animated built-in scene (waves, swarm) or scene .toml.
+        scene: String,
+        /// Timed frames, after one warm-up frame.
+        #[arg(long, default_value_t = 8)]
+        frames: u32,
+        /// Frames per second: frame k shows time k / fps.
+        #[arg(long, default_value_t = 24.0)]
+        fps: f64,
+        /// The warm-up frame; frames first+1 ..= first+frames are timed.
+        #[arg(long, default_value_t = 0)]
+        first: u32,
+        #[arg(long, default_value_t = 512)]
+        width: u32,
+        #[arg(long, default_value_t = 512)]
+        height: u32,
+        /// Comma-separated workloads: primary, shadow (also reflection, ao).
+        #[arg(long, value_delimiter = ',', default_value = "primary,shadow")]
+        workloads: Vec<Workload>,
+        /// Comma-separated tracers: pdacrt, ray-query (BLAS + TLAS built every frame),
+        /// ray-query-refit (BLAS refitted), cpu-dacrt, cpu-bvh (rebuilt every frame).
+        #[arg(
+            long,
+            value_delimiter = ',',
+            default_value = "pdacrt,ray-query,ray-query-refit,cpu-dacrt,cpu-bvh"
+        )]
+        tracers: Vec<Contender>,
+        /// Also write the report as JSON.
+        #[arg(long, value_name = "OUT.json")]
+        json: Option<PathBuf>,
+    },
 }
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
@@ -195,7 +230,11 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         BenchCommand::Trace { scene, .. }
         | BenchCommand::Pt { scene, .. }
         | BenchCommand::Bdpt { scene, .. } => Some(splitray::scene::load(scene)?),
-        BenchCommand::Primitives { .. } => None,
+        BenchCommand::Primitives { .. } | BenchCommand::Dynamic { .. } => None,
+    };
+    let animated = match &args.what {
+        BenchCommand::Dynamic { scene, .. } => Some(splitray::scene::load_animated(scene)?),
+        _ => None,
     };
     let reference = match &args.what {
         BenchCommand::Bdpt {
@@ -295,6 +334,35 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
                     reference,
                 },
             )?;
+            print!("{report}");
+            write_json(json, &report)?;
+        }
+        BenchCommand::Dynamic {
+            frames,
+            fps,
+            first,
+            width,
+            height,
+            workloads,
+            tracers,
+            json,
+            ..
+        } => {
+            let report = dynamic::run(
+                &gpu,
+                animated.as_ref().expect("loaded above"),
+                &DynamicBenchOptions {
+                    width: *width,
+                    height: *height,
+                    first: *first,
+                    frames: *frames,
+                    fps: *fps,
+                    workloads: workloads.clone(),
+                    contenders: tracers.clone(),
+                    ..Default::default()
+                },
+            )
+            .map_err(|e| anyhow::anyhow!("{e}"))?;
             print!("{report}");
             write_json(json, &report)?;
         }

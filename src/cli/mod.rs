@@ -40,8 +40,9 @@ pub enum Command {
     /// List the built-in scenes (usable as `splitray render NAME`).
     Scenes,
     /// Measure: `bench primitives` (GPU sort/scan/... vs CPU), `bench trace SCENE`
-    /// (tracers compared on a ray workload), `bench pt SCENE` or `bench bdpt SCENE`
-    /// (integrators at equal time).
+    /// (tracers compared on a ray workload), `bench dynamic SCENE` (tracers on an
+    /// animated scene, per frame), `bench pt SCENE` or `bench bdpt SCENE` (integrators
+    /// at equal time).
     Bench(bench::BenchArgs),
     /// Draw a timeline (`--timeline FILE.json` of `render` or `bench`) as a Gantt chart:
     /// `splitray timeline FILE.json -o timeline.svg` (or .png).

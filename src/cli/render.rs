@@ -17,13 +17,15 @@ use splitray::render::{
     RenderOptions, RenderOutput, RenderPlan, Resume, Shard,
 };
 use splitray::trace::TracerKind;
-use splitray::vk::{Gpu, GpuDesc, InstanceDesc};
+use splitray::vk::{GpuDesc, InstanceDesc};
 
 use super::render_files::{write_stats, RenderFiles};
 use super::signals::{self, StopSignals};
 use options::{parse_shard, render_options};
 
+mod frames;
 mod options;
+mod watch;
 
 /// The scene rendered when none is named.
 const DEFAULT_SCENE: &str = "cornell-box";
@@ -131,6 +133,26 @@ pub struct RenderArgs {
     /// segments); they sum to the image.
     #[arg(long, value_name = "DIR")]
     bdpt_techniques: Option<PathBuf>,
+    /// Render frames A to B-1 (A..B) or A to B (A..=B) of an animated scene, frame k at
+    /// time k / fps: a numbered sequence beside the output (`-o shot.exr` writes
+    /// shot_0000.exr, shot_0001.exr … and their PNGs). Not with --checkpoint, --resume,
+    /// --shard, --reference, --bdpt-techniques, --preview or --display-server; --time
+    /// limits each frame.
+    #[arg(long, value_name = "A..B")]
+    frames: Option<String>,
+    /// Frames per second of --frames (default 24).
+    #[arg(long, requires = "frames")]
+    fps: Option<f64>,
+    /// Show the film converging in a window (needs an X11 display); closing it stops the
+    /// render and writes what it has. Keys: Up/Down exposure, A next view (colour, depth,
+    /// normal, triangle id), S snapshot beside the output, Escape close.
+    #[arg(long)]
+    preview: bool,
+    /// Stream the render as it converges to the tev image viewer listening at HOST:PORT
+    /// (`tev --hostname HOST:PORT`); a listener that is away or goes away does not stop
+    /// the render.
+    #[arg(long, value_name = "HOST:PORT")]
+    display_server: Option<String>,
 }
 
 /// The output path (default `out/<scene>.exr`, `out/<scene>.shard-I-of-N.exr` for a
@@ -176,6 +198,9 @@ fn output_path(args: &RenderArgs, scene_name: &str, shard: Shard) -> anyhow::Res
 }
 
 pub fn run(args: &RenderArgs) -> anyhow::Result<ExitCode> {
+    if let Some(spec) = &args.frames {
+        return frames::run(args, spec);
+    }
     let signals = StopSignals::install()?;
     let mut timeline = super::timeline::TimelineOutput::start(args.timeline.as_deref())?;
     let resume = match &args.resume {
@@ -200,17 +225,14 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<ExitCode> {
     }
     let output = output_path(args, &scene.name, shard)?;
     let files = RenderFiles::create(&output, args.stats.as_deref(), args.checkpoint.as_deref())?;
-    let gpu = Gpu::new(&GpuDesc {
-        instance: InstanceDesc {
-            validation: args.validation,
-            sync_validation: args.sync_validation,
-        },
-        device: args.device.clone(),
-        ..Default::default()
-    })?;
+    let mut watching =
+        watch::Watching::open(args, &scene.name, &output, [options.width, options.height])?;
+    let gpu = watching.open_gpu(&gpu_desc(args))?;
     if let Some(t) = timeline.as_mut() {
         t.attach(&gpu)?;
     }
+    watching.attach(&gpu)?;
+    let mut publisher = watching.publisher();
 
     let RenderFiles {
         image,
@@ -241,6 +263,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<ExitCode> {
             every_s: args.checkpoint_every,
             save: &mut save,
         }),
+        watch: publisher.as_mut().map(|p| p as _),
     };
     let result = render_from(
         &gpu,
@@ -249,10 +272,12 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<ExitCode> {
         plan,
         RenderControl {
             progress: &mut |p| show_progress(&bar, &label, p, pixels, options.time_limit),
-            stop: &|| signals.received().is_some(),
+            stop: &|| signals.received().is_some() || watching.window_closed(),
         },
     );
     bar.finish_and_clear();
+    let window_closed = watching.window_closed();
+    watching.finish();
     let result = result?;
 
     let messages = gpu.validation_messages();
@@ -264,6 +289,10 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<ExitCode> {
     }
     let stopped_by = signals.received();
     if result.sums.passes == 0 {
+        if window_closed && stopped_by.is_none() {
+            eprintln!("preview window closed before the first pass; nothing written");
+            return Ok(ExitCode::SUCCESS);
+        }
         let Some(signal) = stopped_by else {
             bail!("the render holds no passes; nothing was written");
         };
@@ -309,8 +338,27 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<ExitCode> {
             result.sums.spp(),
             written.exr.display()
         );
+    } else if window_closed && result.stats.stopped_early {
+        eprintln!(
+            "preview window closed: the render stopped at {} spp; {} records the samples \
+             reached",
+            result.sums.spp(),
+            written.exr.display()
+        );
     }
     Ok(exit_code(stopped_by))
+}
+
+/// The device `--device` names, with validation where asked for.
+fn gpu_desc(args: &RenderArgs) -> GpuDesc {
+    GpuDesc {
+        instance: InstanceDesc {
+            validation: args.validation,
+            sync_validation: args.sync_validation,
+        },
+        device: args.device.clone(),
+        ..Default::default()
+    }
 }
 
 fn exit_code(stopped_by: Option<i32>) -> ExitCode {

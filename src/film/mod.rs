@@ -9,6 +9,7 @@
 //! - [`FilmSums`] ([`sums`]): the per-pass sums every integrator accumulates (mean and
 //!   standard error), which checkpoints save and shards merge.
 //! - [`write_outputs`]: both at once.
+//! - [`DeviceFilm`] ([`device`]): an integrator's film where it lives on the GPU.
 //!
 //! Every file is written atomically ([`atomic`]): to a temporary file in the target's
 //! folder, renamed over the target only on success, removed on failure.
@@ -16,6 +17,7 @@
 
 pub mod accum;
 pub mod atomic;
+pub mod device;
 mod error;
 pub mod exr_out;
 mod metadata;
@@ -25,6 +27,7 @@ pub mod sums;
 
 pub use accum::Film;
 pub use atomic::{discard_all_temporaries, write_atomically, AtomicFile};
+pub use device::DeviceFilm;
 pub use error::FilmError;
 pub use exr_out::{read_exr, write_exr};
 pub use metadata::RenderMetadata;

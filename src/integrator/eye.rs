@@ -4,9 +4,14 @@
 //! Stages per chunk (each a named dispatch): `camera_rays` → trace → `shade_primary`, or
 //! for AO: → `ao_rays` → trace (occlusion) → `shade_ao`, and likewise for the others.
 
+use std::sync::Arc;
+
+use super::frame::write_ranges;
 use super::gpu_types::{FrameParams, GpuMaterial};
-use super::{check_film_size, Integrator, IntegratorError, IntegratorKind, IntegratorStats};
-use crate::film::FilmSums;
+use super::{
+    check_film_size, Integrator, IntegratorError, IntegratorKind, IntegratorStats, SceneFrame,
+};
+use crate::film::{DeviceFilm, FilmSums};
 use crate::scene::CameraFrame;
 use crate::shaders;
 use crate::trace::{GpuTriangle, Hit, Query, Ray, Tracer};
@@ -131,12 +136,30 @@ pub struct EyeIntegrator {
     triangles: Buffer,
     triangle_material: Buffer,
     materials: Buffer,
-    accum: Buffer,
+    /// Per pixel Σ L (rgb) and samples (w): the film, shared with previews.
+    accum: Arc<Buffer>,
     slots: [RaySlot; 2],
     frame: FrameParams,
+    ao_radius_fraction: f32,
     chunk: u32,
     passes: u32,
     rays_traced: u64,
+}
+
+/// Sets what `frame` takes from the camera and the scene's extent and light.
+fn set_scene_params(
+    frame: &mut FrameParams,
+    camera: &CameraFrame,
+    scene_radius: f32,
+    light: glam::Vec4,
+    ao_radius_fraction: f32,
+) {
+    let posed = FrameParams::new(camera);
+    (frame.origin, frame.forward, frame.right, frame.up) =
+        (posed.origin, posed.forward, posed.right, posed.up);
+    frame.ao_radius = ao_radius_fraction * scene_radius;
+    frame.ray_epsilon = 1e-4 * scene_radius.max(1e-3);
+    frame.light = light.into();
 }
 
 impl EyeIntegrator {
@@ -164,9 +187,13 @@ impl EyeIntegrator {
         frame.seed = options.seed as u32 ^ (options.seed >> 32) as u32;
         frame.jitter = (options.spp > 1) as u32;
         frame.ao_rays = ao_rays;
-        frame.ao_radius = options.ao_radius_fraction * inputs.scene_radius;
-        frame.ray_epsilon = 1e-4 * inputs.scene_radius.max(1e-3);
-        frame.light = inputs.light.into();
+        set_scene_params(
+            &mut frame,
+            &inputs.camera,
+            inputs.scene_radius,
+            inputs.light,
+            options.ao_radius_fraction,
+        );
         Ok(Self {
             gpu: gpu.clone(),
             tracer,
@@ -175,12 +202,13 @@ impl EyeIntegrator {
             triangles: gpu.upload("shade-triangles", inputs.triangles)?,
             triangle_material: gpu.upload("triangle-material", inputs.triangle_material)?,
             materials: gpu.upload("materials", inputs.materials)?,
-            accum: gpu.zeroed::<[f32; 4]>("accum", pixels)?,
+            accum: Arc::new(gpu.zeroed::<[f32; 4]>("accum", pixels)?),
             slots: [
                 RaySlot::new(gpu, 0, chunk as u64, per_pixel as u64)?,
                 RaySlot::new(gpu, 1, chunk as u64, per_pixel as u64)?,
             ],
             frame,
+            ao_radius_fraction: options.ao_radius_fraction,
             chunk,
             passes: 0,
             rays_traced: 0,
@@ -282,6 +310,39 @@ impl Integrator for EyeIntegrator {
             rays_traced: self.rays_traced,
             ..Default::default()
         }
+    }
+
+    /// The triangles (tracer's and shading's) in the changed ranges, the camera, and
+    /// what follows from the scene's extent (ray offsets, AO radius, the light when the
+    /// scene has no point light); materials never change.
+    fn set_frame(&mut self, frame: &SceneFrame<'_>) -> Result<(), IntegratorError> {
+        if (frame.camera.width, frame.camera.height) != (self.frame.width, self.frame.height) {
+            return Err(IntegratorError::Usage(
+                "a frame cannot change the film size".to_string(),
+            ));
+        }
+        self.gpu.wait_idle()?;
+        if frame.geometry_changed() {
+            self.tracer
+                .update_geometry(frame.triangles, frame.changed)?;
+            write_ranges(&self.triangles, frame.triangles, frame.changed, 1)?;
+        }
+        set_scene_params(
+            &mut self.frame,
+            &frame.camera,
+            frame.scene.bounds().radius(),
+            crate::render::shadow_light(frame.scene),
+            self.ao_radius_fraction,
+        );
+        Ok(())
+    }
+
+    fn device_film(&self) -> Option<DeviceFilm> {
+        Some(DeviceFilm {
+            sums: self.accum.clone(),
+            width: self.frame.width,
+            height: self.frame.height,
+        })
     }
 
     fn settings(&self) -> Vec<(String, String)> {

@@ -16,6 +16,7 @@
 pub mod aov;
 pub mod bpt;
 mod eye;
+pub mod frame;
 pub mod gpu_types;
 pub mod light_tracer;
 pub mod pt;
@@ -25,9 +26,10 @@ use std::fmt;
 use std::str::FromStr;
 
 pub use eye::{EyeInputs, EyeIntegrator, EyeOptions};
+pub use frame::SceneFrame;
 pub use gpu_types::{FrameParams, GpuMaterial};
 
-use crate::film::FilmSums;
+use crate::film::{DeviceFilm, FilmSums};
 use crate::vk;
 
 /// What can go wrong while an integrator renders.
@@ -99,6 +101,25 @@ pub trait Integrator {
     fn extra_images(&mut self) -> Result<Vec<NamedImage>, IntegratorError> {
         Ok(Vec::new())
     }
+
+    /// Moves to another frame of an animated scene: updates, in place, what the
+    /// integrator renders from (its scene tables, its tracer's geometry, the camera),
+    /// uploading only what changed. The film is kept ([`Integrator::restore`] clears
+    /// it). The next passes render the posed scene exactly as an integrator made for it
+    /// would. Integrators that cannot animate say so.
+    fn set_frame(&mut self, frame: &SceneFrame<'_>) -> Result<(), IntegratorError> {
+        let _ = frame;
+        Err(IntegratorError::Usage(format!(
+            "the {} integrator cannot render animated scenes yet",
+            self.name()
+        )))
+    }
+
+    /// The film where it lives on the GPU, for previews that show it from there; `None`
+    /// for integrators that keep it on the host (watchers then take [`Integrator::sums`]).
+    fn device_film(&self) -> Option<DeviceFilm> {
+        None
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize)]
@@ -158,6 +179,21 @@ impl IntegratorKind {
             "light tracing on the CPU: light subpaths splatted to the camera",
         ),
     ];
+
+    /// Whether the integrator renders animated scenes ([`Integrator::set_frame`]).
+    pub fn animates(self) -> bool {
+        matches!(
+            self,
+            Self::Primary
+                | Self::Ao
+                | Self::Shadow
+                | Self::Reflection
+                | Self::Path
+                | Self::Pt
+                | Self::Bpt
+                | Self::Light
+        )
+    }
 
     pub fn name(self) -> &'static str {
         match self {

@@ -1,9 +1,9 @@
 //! [`RenderPlan`]: where a render starts (a fresh film or a checkpoint's), which of the
-//! image's passes it takes (a [`Shard`]'s block) and when it saves its film.
+//! image's passes it takes (a [`Shard`]'s block), when it saves its film and who watches.
 
 use std::path::Path;
 
-use super::{Checkpoint, Fingerprint, RenderError, RenderOptions, Shard};
+use super::{Checkpoint, FilmWatch, Fingerprint, RenderError, RenderOptions, Shard};
 use crate::film::FilmSums;
 use crate::integrator::Integrator;
 
@@ -18,6 +18,8 @@ pub struct RenderPlan<'a> {
     pub resume: Option<Resume<'a>>,
     /// Saves the film every so many seconds, at a pass boundary.
     pub checkpoint: Option<CheckpointHook<'a>>,
+    /// Shows the film as it converges (a preview window, a display server).
+    pub watch: Option<&'a mut dyn FilmWatch>,
 }
 
 /// A checkpoint to continue, and the file it came from (errors name it).

@@ -29,6 +29,13 @@
 //!   everything it sees is lit by light that bounced off the +x wall (image left) first,
 //!   or by light leaving the box's opening at grazing angles.
 //!   There are no point lights.
+//!
+//! ## `lamps`
+//! A room lit by three hanging lamps whose area lights sit deep inside their shades, with
+//! layered materials and procedural objects of some thousands of triangles: see
+//! [`lamps`](self::lamps) (its own module).
+
+mod lamps;
 
 use glam::Vec3;
 
@@ -45,6 +52,12 @@ pub fn builtin_names() -> &'static [(&'static str, &'static str)] {
             "fixture",
             "closed room lit only indirectly: its one area light hides in an open box facing a wall",
         ),
+        (
+            "lamps",
+            "room with three hanging lamps, lights deep inside their shades, layered materials, ~7k triangles",
+        ),
+        super::animation::builtin::NAMES[0],
+        super::animation::builtin::NAMES[1],
     ]
 }
 
@@ -53,7 +66,9 @@ pub fn builtin(name: &str) -> Option<Scene> {
     match name {
         "cornell-box" => Some(cornell_box()),
         "fixture" => Some(fixture()),
-        _ => None,
+        "lamps" => Some(lamps::lamps()),
+        // Animated scenes posed at time 0 (`scene::load_animated` keeps them moving).
+        _ => super::animation::builtin::animated(name).map(|a| a.scene),
     }
 }
 

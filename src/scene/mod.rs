@@ -16,15 +16,18 @@
 //! - Shading normals ([`Triangle::n`]) come from OBJ `vn` data only when every vertex of
 //!   the mesh has one; they are not normalised or re-oriented.
 
+pub mod animation;
 pub mod builtin;
 pub mod camera;
 pub mod error;
 pub mod obj;
+pub mod shapes;
 pub mod toml_file;
 pub mod validate;
 
 use std::path::Path;
 
+pub use animation::AnimatedScene;
 pub use builtin::{builtin, builtin_names};
 pub use camera::{Camera, CameraFrame};
 pub use error::{Location, SceneError};
@@ -445,9 +448,28 @@ pub fn framing_camera(bounds: &Aabb) -> Camera {
     }
 }
 
+/// Loads a scene and what moves in it, as [`load`] does (an animated scene's
+/// [`AnimatedScene::scene`] is posed at time 0; a static one has no animation).
+pub fn load_animated(spec: &str) -> Result<AnimatedScene, SceneError> {
+    if let Some(animated) = animation::builtin::animated(spec) {
+        return Ok(animated);
+    }
+    let path = Path::new(spec);
+    let is_toml = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
+    if is_toml {
+        let _span = tracing::info_span!("scene load", what = spec).entered();
+        return toml_file::load_toml_animated(path);
+    }
+    load(spec).map(AnimatedScene::from)
+}
+
 /// Loads a scene: a built-in name (see [`builtin_names`]), a path to a `.toml` scene
 /// file, or a path to an `.obj` mesh (which gets a framing camera and a 512×512 film).
-/// The result is validated ([`validate::validate_scene`]).
+/// The result is validated ([`validate::validate_scene`]). An animated scene is posed
+/// at time 0 ([`load_animated`] keeps what moves).
 pub fn load(spec: &str) -> Result<Scene, SceneError> {
     let _span = tracing::info_span!("scene load", what = spec).entered();
     if let Some(scene) = builtin(spec) {

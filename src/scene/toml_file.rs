@@ -13,6 +13,13 @@
 //! up       = [0.0, 1.0, 0.0]        # optional; default +y
 //! fov_y    = 39.3077                # full vertical field of view, degrees, in (0, 180)
 //!
+//! [[camera.keyframe]]               # optional: a moving camera. Each key may leave out any
+//! time = 0.0                        # field, which then comes from [camera] (whose position,
+//! position = [278.0, 273.0, -800.0] # look_at and fov_y are needed only where a key leaves
+//! [[camera.keyframe]]               # them out). Times in seconds, increasing; every field
+//! time = 2.0                        # moves linearly between keys; before the first key and
+//! position = [400.0, 273.0, -700.0] # after the last the camera holds still
+//!
 //! [film]                            # optional; default 512 × 512
 //! width = 512                       # 1 ..= 16384
 //! height = 512
@@ -20,10 +27,31 @@
 //! [[mesh]]                          # one or more; triangles are appended in this order
 //! path = "cornell.obj"              # a Wavefront .obj (its mtllib is loaded too)
 //! material = "white"                # optional: every triangle of this mesh uses this material
-//! transform = { scale = 2.0, translate = [0.0, 1.0, 0.0] }
-//!                                   # optional: p' = p · scale + translate; scale is a number
-//!                                   # or [sx, sy, sz] (non-zero); a mirroring scale flips the
-//!                                   # vertex order so the front side stays the front side
+//! transform = { scale = 2.0, translate = [0.0, 1.0, 0.0], rotate = { axis = [0.0, 1.0, 0.0], degrees = 30.0 } }
+//!                                   # optional: p' = translate + rotate · (scale ⊙ p); scale
+//!                                   # is a number or [sx, sy, sz] (non-zero); rotate is
+//!                                   # { axis = [x, y, z], degrees = a } or
+//!                                   # { quaternion = [x, y, z, w] }; a mirroring scale flips
+//!                                   # the vertex order so the front side stays the front side
+//!
+//! [[mesh.keyframe]]                 # optional: the mesh moves; each key is a transform
+//! time = 0.0                        # applied after `transform` (scale, rotate, translate as
+//! translate = [0.0, 0.0, 0.0]       # above; what a key leaves out is the identity). Times in
+//! [[mesh.keyframe]]                 # seconds, increasing; translation and scale move
+//! time = 1.0                        # linearly, rotation by slerp along the shorter arc (to
+//! translate = [0.0, 2.0, 0.0]       # turn further, add keys less than 180° apart); the
+//! rotate = { axis = [0.0, 1.0, 0.0], degrees = 90.0 }
+//!                                   # pose holds before the first key and after the last;
+//!                                   # a key's scale keeps the signs of the first key's
+//!
+//! [[mesh]]                          # vertex animation: a numbered OBJ sequence, `{}` or
+//! path = "wave_{:04}.obj"           # `{:0N}` (zero-padded to N digits) standing for the number
+//! sequence = { first = 0, last = 59, fps = 24.0 }
+//!                                   # file `first + k` is the shape at time k / fps; vertices
+//!                                   # move linearly between files and hold outside them. Every
+//!                                   # file needs the same faces in the same order (and normals
+//!                                   # on all of them or none); materials come from the first.
+//!                                   # `transform` and keys apply to the sequence's shapes too
 //!
 //! [[material]]                      # define a material, or override fields of every material
 //! name = "light"                    # of that name loaded from the MTL files
@@ -76,7 +104,9 @@ use glam::Vec3;
 use serde::Deserialize;
 use toml::Spanned;
 
-use super::obj::{load_obj_mesh, read_text};
+use super::animation::toml::{CameraToml, MeshToml};
+use super::animation::{AnimatedScene, Animation};
+use super::obj::read_text;
 use super::{
     framing_camera, validate, BsdfKind, Camera, FilmSize, Location, Material, MaterialBsdf,
     MaterialLayer, MicrofacetModel, PointLight, RenderSettings, Scene, SceneError,
@@ -100,40 +130,9 @@ struct SceneFile {
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
-struct CameraToml {
-    position: [f32; 3],
-    look_at: [f32; 3],
-    up: Option<[f32; 3]>,
-    fov_y: f32,
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
 struct FilmToml {
     width: u32,
     height: u32,
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct MeshToml {
-    path: Spanned<String>,
-    material: Option<Spanned<String>>,
-    transform: Option<Spanned<TransformToml>>,
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct TransformToml {
-    scale: Option<Scale>,
-    translate: Option<[f32; 3]>,
-}
-
-#[derive(Deserialize)]
-#[serde(untagged, expecting = "a number or [sx, sy, sz]")]
-enum Scale {
-    Uniform(f32),
-    PerAxis([f32; 3]),
 }
 
 #[derive(Deserialize)]
@@ -299,7 +298,7 @@ impl MaterialToml {
     }
 }
 
-type Loc<'a> = dyn Fn(std::ops::Range<usize>) -> Location + 'a;
+type Loc<'a> = super::animation::toml::At<'a>;
 
 /// One validated layer; `material` names the material in error messages.
 fn layer_of(material: &str, k: &LayerKeys, at: &Loc) -> Result<MaterialLayer, SceneError> {
@@ -414,8 +413,14 @@ struct RenderToml {
     max_depth: Option<u32>,
 }
 
-/// Loads and validates a TOML scene file (see the module documentation for the format).
+/// Loads and validates a TOML scene file (see the module documentation for the format),
+/// posed at time 0.
 pub fn load_toml(path: &Path) -> Result<Scene, SceneError> {
+    load_toml_animated(path).map(|a| a.scene)
+}
+
+/// Loads and validates a TOML scene file and what moves in it.
+pub fn load_toml_animated(path: &Path) -> Result<AnimatedScene, SceneError> {
     let text = read_text(path)?;
     let file = path.display().to_string();
     let default_name = path
@@ -423,16 +428,27 @@ pub fn load_toml(path: &Path) -> Result<Scene, SceneError> {
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "scene".to_string());
     let dir = path.parent().unwrap_or(Path::new(""));
-    parse_toml(&text, &file, dir, &default_name)
+    parse_toml_animated(&text, &file, dir, &default_name)
 }
 
-/// Parses TOML scene text; `file` labels error messages, mesh paths are relative to `dir`.
+/// Parses TOML scene text posed at time 0; `file` labels error messages, mesh paths are
+/// relative to `dir`.
 pub fn parse_toml(
     text: &str,
     file: &str,
     dir: &Path,
     default_name: &str,
 ) -> Result<Scene, SceneError> {
+    parse_toml_animated(text, file, dir, default_name).map(|a| a.scene)
+}
+
+/// [`parse_toml`] with what moves in the scene.
+pub fn parse_toml_animated(
+    text: &str,
+    file: &str,
+    dir: &Path,
+    default_name: &str,
+) -> Result<AnimatedScene, SceneError> {
     let at_span = |span: std::ops::Range<usize>| Location::at_offset(file, text, span.start);
     let doc: SceneFile = toml::from_str(text).map_err(|e| SceneError::Syntax {
         at: match e.span() {
@@ -444,75 +460,21 @@ pub fn parse_toml(
 
     let mut triangles = Vec::new();
     let mut materials: Vec<Material> = Vec::new();
+    let mut animation = Animation::default();
     // (first triangle, end, material name) for per-mesh overrides, resolved at the end.
     let mut overrides = Vec::new();
     for mesh in &doc.mesh {
-        let at = at_span(mesh.path.span());
-        let rel = mesh.path.get_ref();
-        let full = dir.join(rel);
-        let is_obj = full
-            .extension()
-            .and_then(|e| e.to_str())
-            .is_some_and(|e| e.eq_ignore_ascii_case("obj"));
-        if !is_obj {
-            return Err(SceneError::Invalid {
-                at,
-                message: format!(
-                    "mesh '{rel}' is not an .obj file (only Wavefront OBJ is supported)"
-                ),
-            });
-        }
-        if !full.is_file() {
-            return Err(SceneError::MissingReference {
-                at,
-                what: "mesh",
-                name: rel.clone(),
-                path: full,
-            });
-        }
-        let loaded = load_obj_mesh(&full)?;
+        let loaded = mesh.load(dir, &at_span)?;
         let offset = materials.len() as u32;
         let start = triangles.len();
-        materials.extend(loaded.materials);
-        let (scale, translate) = match &mesh.transform {
-            None => (Vec3::ONE, Vec3::ZERO),
-            Some(t) => {
-                let tr = t.get_ref();
-                let scale = match tr.scale {
-                    None => Vec3::ONE,
-                    Some(Scale::Uniform(s)) => Vec3::splat(s),
-                    Some(Scale::PerAxis(s)) => s.into(),
-                };
-                let translate = tr.translate.map_or(Vec3::ZERO, Vec3::from);
-                if !scale.is_finite() || scale.cmpeq(Vec3::ZERO).any() || !translate.is_finite() {
-                    return Err(SceneError::Invalid {
-                        at: at_span(t.span()),
-                        message: format!(
-                            "transform of mesh '{rel}': scale {scale} must be finite and non-zero, translate {translate} finite"
-                        ),
-                    });
-                }
-                (scale, translate)
-            }
-        };
-        let mirror = scale.x * scale.y * scale.z < 0.0;
-        for mut t in loaded.triangles {
+        materials.extend(loaded.mesh.materials);
+        triangles.extend(loaded.mesh.triangles.into_iter().map(|mut t| {
             t.material += offset;
-            for p in &mut t.p {
-                *p = *p * scale + translate;
-            }
-            if let Some(n) = &mut t.n {
-                for v in n.iter_mut() {
-                    *v = (*v / scale).normalize_or_zero();
-                }
-            }
-            if mirror {
-                t.p.swap(1, 2);
-                if let Some(n) = &mut t.n {
-                    n.swap(1, 2);
-                }
-            }
-            triangles.push(t);
+            t
+        }));
+        if let Some(mut motion) = loaded.motion {
+            motion.range = start..triangles.len();
+            animation.meshes.push(motion);
         }
         if let Some(name) = &mesh.material {
             overrides.push((start, triangles.len(), name));
@@ -602,14 +564,9 @@ pub fn parse_toml(
     }
     match &doc.camera {
         Some(c) => {
-            let cam = c.get_ref();
-            scene.camera = Camera {
-                position: cam.position.into(),
-                look_at: cam.look_at.into(),
-                up: cam.up.map_or(Vec3::Y, Vec3::from),
-                fov_y: cam.fov_y,
-            };
-            validate::validate_camera(&scene.camera, &at_span(c.span()))?;
+            let (camera, keys) = c.get_ref().resolve(c.span(), &at_span)?;
+            scene.camera = camera;
+            animation.camera = keys;
         }
         None => {
             let bounds = scene.bounds();
@@ -619,5 +576,5 @@ pub fn parse_toml(
         }
     }
     validate::validate_scene(&scene, &whole)?;
-    Ok(scene)
+    Ok(AnimatedScene { scene, animation })
 }

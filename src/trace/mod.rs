@@ -43,6 +43,19 @@ pub trait Tracer {
     /// built again. Returns once the new geometry is in place.
     fn set_geometry(&mut self, triangles: &[GpuTriangle]) -> vk::Result<()>;
 
+    /// The next frame of a dynamic scene: `triangles` is the whole new soup (of the same
+    /// length as before), of which only the ranges `changed` differ from the last
+    /// geometry. Tracers that keep the triangles as they are update those ranges in
+    /// place; the others build again, as [`Tracer::set_geometry`] does.
+    fn update_geometry(
+        &mut self,
+        triangles: &[GpuTriangle],
+        changed: &[std::ops::Range<usize>],
+    ) -> vk::Result<()> {
+        let _ = changed;
+        self.set_geometry(triangles)
+    }
+
     /// Traces `ray_count` rays from `rays` into `hits` (one [`Hit`] per ray). The work
     /// starts after every point in `after` and the returned point marks it done; the
     /// tracer and the buffers must outlive that point.

@@ -7,7 +7,8 @@
 //! The structures are built when the tracer is created and on every [`RayQueryTracer::
 //! rebuild`] (dynamic scenes rebuild every frame), so the build time is part of the
 //! cost and is reported by [`RayQueryTracer::build_time`] (and in the GPU profile under
-//! `build-blas:…` / `build-tlas:…`). Ties in t are broken by the driver, not by the
+//! `build-blas:…` / `build-tlas:…`). A [`RayQueryTracer::refitting`] tracer refits its
+//! BLAS instead when a frame moves the triangles (`update-blas:…`). Ties in t are broken by the driver, not by the
 //! smaller triangle index; hit distances agree with brute force to rounding.
 
 use std::time::{Duration, Instant};
@@ -30,7 +31,8 @@ struct Push {
 struct Scene {
     tlas: AccelerationStructure,
     blas: AccelerationStructure,
-    _vertices: Buffer,
+    vertices: Buffer,
+    triangle_count: usize,
 }
 
 pub struct RayQueryTracer {
@@ -39,6 +41,9 @@ pub struct RayQueryTracer {
     occlusion: ComputePipeline,
     /// `None` for an empty scene: every ray misses.
     scene: Option<Scene>,
+    /// Dynamic scenes refit the BLAS (an update of the one built first) instead of
+    /// building it again.
+    refit: bool,
     build_time: Duration,
     /// The last submission that reads the scene, waited for before it is replaced.
     last_use: Option<TimelinePoint>,
@@ -70,6 +75,17 @@ fn vertices_of(triangles: &[GpuTriangle]) -> Vec<f32> {
 
 impl RayQueryTracer {
     pub fn new(gpu: &Gpu, triangles: &[GpuTriangle]) -> vk::Result<Self> {
+        Self::with_refit(gpu, triangles, false)
+    }
+
+    /// A tracer whose [`Tracer::update_geometry`] refits the BLAS built at creation (an
+    /// acceleration-structure update, where every device that has the extension allows
+    /// one) and builds the TLAS again, instead of building both again.
+    pub fn refitting(gpu: &Gpu, triangles: &[GpuTriangle]) -> vk::Result<Self> {
+        Self::with_refit(gpu, triangles, true)
+    }
+
+    fn with_refit(gpu: &Gpu, triangles: &[GpuTriangle], refit: bool) -> vk::Result<Self> {
         if let Some(reason) = unsupported_reason(gpu) {
             return Err(VkError::Usage(reason));
         }
@@ -89,6 +105,7 @@ impl RayQueryTracer {
             closest: pipeline(shaders::TRACE_RAY_QUERY)?,
             occlusion: pipeline(shaders::TRACE_RAY_QUERY__OCCLUSION)?,
             scene: None,
+            refit,
             build_time: Duration::ZERO,
             last_use: None,
         };
@@ -114,7 +131,11 @@ impl RayQueryTracer {
             )?;
             vertices.write(&positions)?;
             let mut rec = self.gpu.recorder(StreamKind::Main)?;
-            let blas = AccelerationStructure::build_triangles(
+            let build = match self.refit {
+                true => AccelerationStructure::build_triangles_updatable,
+                false => AccelerationStructure::build_triangles,
+            };
+            let blas = build(
                 &mut rec,
                 "ray-query:blas",
                 &vertices,
@@ -127,9 +148,39 @@ impl RayQueryTracer {
             self.scene = Some(Scene {
                 tlas,
                 blas,
-                _vertices: vertices,
+                vertices,
+                triangle_count: triangles.len(),
             });
         }
+        self.build_time = start.elapsed();
+        Ok(self.build_time)
+    }
+
+    /// Moves the triangles in `changed` to where `triangles` has them, refitting the
+    /// BLAS in place, and builds the TLAS again; returns the time taken (vertex upload,
+    /// update, TLAS build and the wait for them).
+    fn refit_geometry(
+        &mut self,
+        triangles: &[GpuTriangle],
+        changed: &[std::ops::Range<usize>],
+    ) -> vk::Result<Duration> {
+        if let Some(p) = self.last_use.take() {
+            self.gpu.wait(&p)?;
+        }
+        let start = Instant::now();
+        let scene = self.scene.as_mut().expect("checked by the caller");
+        for range in changed {
+            scene
+                .vertices
+                .write_at(range.start * 9, &vertices_of(&triangles[range.clone()]))?;
+        }
+        let mut rec = self.gpu.recorder(StreamKind::Main)?;
+        scene.blas.update_triangles(&mut rec, &scene.vertices)?;
+        let tlas =
+            AccelerationStructure::build_single_instance(&mut rec, "ray-query:tlas", &scene.blas)?;
+        let done = rec.submit(&[])?;
+        self.gpu.wait(&done)?;
+        scene.tlas = tlas;
         self.build_time = start.elapsed();
         Ok(self.build_time)
     }
@@ -155,6 +206,27 @@ impl Tracer for RayQueryTracer {
     /// A full BLAS + TLAS build, as a dynamic scene needs every frame.
     fn set_geometry(&mut self, triangles: &[GpuTriangle]) -> vk::Result<()> {
         self.rebuild(triangles).map(|_| ())
+    }
+
+    /// A refit where the tracer was made [`RayQueryTracer::refitting`] and the triangle
+    /// count is the same, else a full build.
+    fn update_geometry(
+        &mut self,
+        triangles: &[GpuTriangle],
+        changed: &[std::ops::Range<usize>],
+    ) -> vk::Result<()> {
+        let same_count = self
+            .scene
+            .as_ref()
+            .is_some_and(|s| s.triangle_count == triangles.len());
+        let in_range = changed
+            .iter()
+            .all(|r| r.start <= r.end && r.end <= triangles.len());
+        if self.refit && same_count && in_range {
+            self.refit_geometry(triangles, changed).map(|_| ())
+        } else {
+            self.rebuild(triangles).map(|_| ())
+        }
     }
 
     fn trace(

@@ -23,10 +23,13 @@ pub struct AccelerationStructure {
     pub(crate) raw: vk::AccelerationStructureKHR,
     address: vk::DeviceAddress,
     storage: Buffer,
-    _scratch: Buffer,
+    /// Build scratch, and update scratch too for an updatable structure.
+    scratch: Buffer,
     _instances: Option<Buffer>,
     top_level: bool,
     primitives: u32,
+    /// Built with ALLOW_UPDATE: [`AccelerationStructure::update_triangles`] may refit it.
+    updatable: bool,
 }
 
 impl std::fmt::Debug for AccelerationStructure {
@@ -58,26 +61,73 @@ impl AccelerationStructure {
         vertices: &Buffer,
         triangle_count: u32,
     ) -> Result<Self> {
-        let needed = triangle_count as u64 * 3 * VERTEX_STRIDE;
-        if vertices.size() < needed {
+        Self::build_triangles_with(rec, name, vertices, triangle_count, false)
+    }
+
+    /// [`Self::build_triangles`] with ALLOW_UPDATE, so that
+    /// [`Self::update_triangles`] can refit it when the vertices move.
+    pub fn build_triangles_updatable(
+        rec: &mut Recorder,
+        name: &str,
+        vertices: &Buffer,
+        triangle_count: u32,
+    ) -> Result<Self> {
+        Self::build_triangles_with(rec, name, vertices, triangle_count, true)
+    }
+
+    fn build_triangles_with(
+        rec: &mut Recorder,
+        name: &str,
+        vertices: &Buffer,
+        triangle_count: u32,
+        updatable: bool,
+    ) -> Result<Self> {
+        let geometry = triangle_geometry(name, vertices, triangle_count)?;
+        Self::build(rec, name, false, geometry, triangle_count, None, updatable)
+    }
+
+    /// Records an in-place update (a refit: the same triangles, moved) of a bottom-level
+    /// structure built by [`Self::build_triangles_updatable`], from `vertices` (the same
+    /// layout and count as its build's). The hierarchy keeps its topology, so it traces
+    /// slower the further the triangles moved from where it was built. The GPU must be
+    /// done with earlier uses of the structure; a barrier follows, as after a build.
+    pub fn update_triangles(&self, rec: &mut Recorder, vertices: &Buffer) -> Result<()> {
+        let name = self.storage.name().to_string();
+        if self.top_level || !self.updatable {
             return Err(VkError::Usage(format!(
-                "BLAS '{name}': {triangle_count} triangles need {needed} vertex bytes, \
-                 buffer '{}' has {}",
-                vertices.name(),
-                vertices.size()
+                "acceleration structure '{name}' was not built as an updatable BLAS"
             )));
         }
-        let triangles = vk::AccelerationStructureGeometryTrianglesDataKHR::default()
-            .vertex_format(vk::Format::R32G32B32_SFLOAT)
-            .vertex_data(const_address(vertices))
-            .vertex_stride(VERTEX_STRIDE)
-            .max_vertex((triangle_count * 3).saturating_sub(1))
-            .index_type(vk::IndexType::NONE_KHR);
-        let geometry = vk::AccelerationStructureGeometryKHR::default()
-            .geometry_type(vk::GeometryTypeKHR::TRIANGLES)
-            .geometry(vk::AccelerationStructureGeometryDataKHR { triangles })
-            .flags(vk::GeometryFlagsKHR::OPAQUE);
-        Self::build(rec, name, false, geometry, triangle_count, None)
+        let accel = self.gpu.0.accel.as_ref().expect("built with the extension");
+        let geometries = [triangle_geometry(&name, vertices, self.primitives)?];
+        let build_info = vk::AccelerationStructureBuildGeometryInfoKHR::default()
+            .ty(vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL)
+            .flags(build_flags(true))
+            .mode(vk::BuildAccelerationStructureModeKHR::UPDATE)
+            .src_acceleration_structure(self.raw)
+            .dst_acceleration_structure(self.raw)
+            .geometries(&geometries)
+            .scratch_data(vk::DeviceOrHostAddressKHR {
+                device_address: self
+                    .scratch
+                    .device_address()
+                    .next_multiple_of(accel.scratch_alignment),
+            });
+        let ranges =
+            [vk::AccelerationStructureBuildRangeInfoKHR::default()
+                .primitive_count(self.primitives)];
+        rec.begin_scope(&format!("update-blas:{name}"))?;
+        // SAFETY: recording; the structure (source and destination, allowed to be the
+        // same for an update), its scratch (sized for updates at creation) and the
+        // caller's vertices are alive; geometry and count are those of its build.
+        unsafe {
+            accel
+                .loader
+                .cmd_build_acceleration_structures(rec.raw_cmd(), &[build_info], &[&ranges])
+        };
+        rec.end_scope()?;
+        rec.memory_barrier(after_build_barrier());
+        Ok(())
     }
 
     /// Records the build of a top-level structure holding one instance of `blas` with
@@ -118,7 +168,7 @@ impl AccelerationStructure {
             .geometry_type(vk::GeometryTypeKHR::INSTANCES)
             .geometry(vk::AccelerationStructureGeometryDataKHR { instances: data })
             .flags(vk::GeometryFlagsKHR::OPAQUE);
-        Self::build(rec, name, true, geometry, 1, Some(instances))
+        Self::build(rec, name, true, geometry, 1, Some(instances), false)
     }
 
     fn build(
@@ -128,6 +178,7 @@ impl AccelerationStructure {
         geometry: vk::AccelerationStructureGeometryKHR<'_>,
         primitives: u32,
         instances: Option<Buffer>,
+        updatable: bool,
     ) -> Result<Self> {
         let gpu = rec.gpu().clone();
         let accel = gpu.0.accel.as_ref().ok_or_else(|| {
@@ -145,7 +196,7 @@ impl AccelerationStructure {
         let geometries = [geometry];
         let mut build_info = vk::AccelerationStructureBuildGeometryInfoKHR::default()
             .ty(ty)
-            .flags(vk::BuildAccelerationStructureFlagsKHR::PREFER_FAST_TRACE)
+            .flags(build_flags(updatable))
             .mode(vk::BuildAccelerationStructureModeKHR::BUILD)
             .geometries(&geometries);
         let mut sizes = vk::AccelerationStructureBuildSizesInfoKHR::default();
@@ -170,9 +221,13 @@ impl AccelerationStructure {
         )?;
         // Scratch: over-allocate by the alignment and round the address up.
         let align = accel.scratch_alignment;
+        let scratch_size = match updatable {
+            true => sizes.build_scratch_size.max(sizes.update_scratch_size),
+            false => sizes.build_scratch_size,
+        };
         let scratch = gpu.create_buffer(
             &format!("{name}:scratch"),
-            sizes.build_scratch_size + align,
+            scratch_size + align,
             MemoryKind::Device,
         )?;
         let scratch_address = scratch.device_address().next_multiple_of(align);
@@ -204,10 +259,11 @@ impl AccelerationStructure {
             raw,
             address,
             storage,
-            _scratch: scratch,
+            scratch,
             _instances: instances,
             top_level,
             primitives,
+            updatable,
         };
         build_info =
             build_info
@@ -233,17 +289,7 @@ impl AccelerationStructure {
                 .cmd_build_acceleration_structures(rec.raw_cmd(), &[build_info], &[&ranges])
         };
         rec.end_scope()?;
-        // Later builds (a TLAS over this BLAS) and kernels read the structure.
-        rec.memory_barrier(
-            vk::MemoryBarrier2::default()
-                .src_stage_mask(vk::PipelineStageFlags2::ACCELERATION_STRUCTURE_BUILD_KHR)
-                .src_access_mask(vk::AccessFlags2::ACCELERATION_STRUCTURE_WRITE_KHR)
-                .dst_stage_mask(
-                    vk::PipelineStageFlags2::ACCELERATION_STRUCTURE_BUILD_KHR
-                        | vk::PipelineStageFlags2::COMPUTE_SHADER,
-                )
-                .dst_access_mask(vk::AccessFlags2::ACCELERATION_STRUCTURE_READ_KHR),
-        );
+        rec.memory_barrier(after_build_barrier());
         Ok(built)
     }
 
@@ -260,6 +306,58 @@ impl AccelerationStructure {
     pub fn size(&self) -> u64 {
         self.storage.size()
     }
+}
+
+/// Fast trace, and ALLOW_UPDATE where the structure will be refitted (the flags of an
+/// update must be its build's).
+fn build_flags(updatable: bool) -> vk::BuildAccelerationStructureFlagsKHR {
+    let flags = vk::BuildAccelerationStructureFlagsKHR::PREFER_FAST_TRACE;
+    match updatable {
+        true => flags | vk::BuildAccelerationStructureFlagsKHR::ALLOW_UPDATE,
+        false => flags,
+    }
+}
+
+/// Later builds (a TLAS over this BLAS, an update) and kernels read the structure.
+fn after_build_barrier() -> vk::MemoryBarrier2<'static> {
+    vk::MemoryBarrier2::default()
+        .src_stage_mask(vk::PipelineStageFlags2::ACCELERATION_STRUCTURE_BUILD_KHR)
+        .src_access_mask(vk::AccessFlags2::ACCELERATION_STRUCTURE_WRITE_KHR)
+        .dst_stage_mask(
+            vk::PipelineStageFlags2::ACCELERATION_STRUCTURE_BUILD_KHR
+                | vk::PipelineStageFlags2::COMPUTE_SHADER,
+        )
+        .dst_access_mask(
+            vk::AccessFlags2::ACCELERATION_STRUCTURE_READ_KHR
+                | vk::AccessFlags2::ACCELERATION_STRUCTURE_WRITE_KHR,
+        )
+}
+
+/// The one opaque, non-indexed triangle geometry of a BLAS over `vertices`.
+fn triangle_geometry<'a>(
+    name: &str,
+    vertices: &Buffer,
+    triangle_count: u32,
+) -> Result<vk::AccelerationStructureGeometryKHR<'a>> {
+    let needed = triangle_count as u64 * 3 * VERTEX_STRIDE;
+    if vertices.size() < needed {
+        return Err(VkError::Usage(format!(
+            "BLAS '{name}': {triangle_count} triangles need {needed} vertex bytes, \
+             buffer '{}' has {}",
+            vertices.name(),
+            vertices.size()
+        )));
+    }
+    let triangles = vk::AccelerationStructureGeometryTrianglesDataKHR::default()
+        .vertex_format(vk::Format::R32G32B32_SFLOAT)
+        .vertex_data(const_address(vertices))
+        .vertex_stride(VERTEX_STRIDE)
+        .max_vertex((triangle_count * 3).saturating_sub(1))
+        .index_type(vk::IndexType::NONE_KHR);
+    Ok(vk::AccelerationStructureGeometryKHR::default()
+        .geometry_type(vk::GeometryTypeKHR::TRIANGLES)
+        .geometry(vk::AccelerationStructureGeometryDataKHR { triangles })
+        .flags(vk::GeometryFlagsKHR::OPAQUE))
 }
 
 impl Drop for AccelerationStructure {

@@ -244,6 +244,11 @@ impl Gpu {
 }
 
 impl Buffer {
+    /// The device the buffer lives on.
+    pub fn gpu(&self) -> &Gpu {
+        &self.gpu
+    }
+
     pub fn size(&self) -> u64 {
         self.size
     }
@@ -281,39 +286,7 @@ impl Buffer {
     /// Writes `data` at the start of the buffer: a copy into mapped memory, or through a
     /// staging buffer. The GPU must not be using the buffer. Waits for completion.
     pub fn write<T: bytemuck::Pod>(&self, data: &[T]) -> Result<()> {
-        let bytes: &[u8] = bytemuck::cast_slice(data);
-        if bytes.len() as u64 > self.size {
-            return Err(VkError::Usage(format!(
-                "write of {} bytes into buffer '{}' of {} bytes",
-                bytes.len(),
-                self.name,
-                self.size
-            )));
-        }
-        if bytes.is_empty() {
-            return Ok(());
-        }
-        let _span =
-            tracing::info_span!("upload", what = %self.name, bytes = bytes.len() as u64).entered();
-        if let Some(ptr) = self.allocation.as_ref().and_then(|a| a.mapped_ptr()) {
-            // SAFETY: the allocation is mapped, at least `size` bytes long, and not in use
-            // by the GPU (the caller's contract); the ranges cannot overlap.
-            unsafe {
-                std::ptr::copy_nonoverlapping(bytes.as_ptr(), ptr.as_ptr() as *mut u8, bytes.len())
-            };
-            return Ok(());
-        }
-        let mut staging =
-            self.gpu
-                .create_buffer("staging-upload", bytes.len() as u64, MemoryKind::Upload)?;
-        staging
-            .mapped()
-            .expect("upload memory is mapped")
-            .copy_from_slice(bytes);
-        let mut rec = self.gpu.recorder(super::StreamKind::Main)?;
-        rec.copy(&staging, 0, self, 0, bytes.len() as u64);
-        let point = rec.submit(&[])?;
-        self.gpu.wait(&point)
+        self.write_at(0, data)
     }
 
     /// Reads the whole buffer back as `T`s. Runs after all work already submitted to the
@@ -352,6 +325,78 @@ impl Buffer {
         self.gpu.wait(&point)?;
         bytemuck::cast_slice_mut::<T, u8>(&mut out)
             .copy_from_slice(&staging.mapped().expect("readback memory is mapped")[..bytes]);
+        Ok(out)
+    }
+}
+
+impl Buffer {
+    /// Writes `data` into the buffer from element `first` on (elements of `T`), leaving
+    /// the rest as it is: the in-place update of part of a table. The GPU must not be
+    /// using the buffer. Waits for completion.
+    pub fn write_at<T: bytemuck::Pod>(&self, first: usize, data: &[T]) -> Result<()> {
+        let bytes: &[u8] = bytemuck::cast_slice(data);
+        let offset = (first * size_of::<T>()) as u64;
+        if offset + bytes.len() as u64 > self.size {
+            return Err(VkError::Usage(format!(
+                "write of {} bytes at offset {offset} into buffer '{}' of {} bytes",
+                bytes.len(),
+                self.name,
+                self.size
+            )));
+        }
+        if bytes.is_empty() {
+            return Ok(());
+        }
+        let _span =
+            tracing::info_span!("upload", what = %self.name, bytes = bytes.len() as u64).entered();
+        if let Some(ptr) = self.allocation.as_ref().and_then(|a| a.mapped_ptr()) {
+            // SAFETY: the allocation is mapped and at least `size` bytes long, the range
+            // lies within it (checked above), and the GPU is not using the buffer (the
+            // caller's contract); the ranges cannot overlap.
+            unsafe {
+                std::ptr::copy_nonoverlapping(
+                    bytes.as_ptr(),
+                    (ptr.as_ptr() as *mut u8).add(offset as usize),
+                    bytes.len(),
+                )
+            };
+            return Ok(());
+        }
+        let mut staging =
+            self.gpu
+                .create_buffer("staging-upload", bytes.len() as u64, MemoryKind::Upload)?;
+        staging
+            .mapped()
+            .expect("upload memory is mapped")
+            .copy_from_slice(bytes);
+        let mut rec = self.gpu.recorder(super::StreamKind::Main)?;
+        rec.copy(&staging, 0, self, offset, bytes.len() as u64);
+        let point = rec.submit(&[])?;
+        self.gpu.wait(&point)
+    }
+
+    /// Reads the whole buffer back as `T`s once `point` is reached: for a buffer that only
+    /// work up to `point` writes (a copy of a film another stream keeps writing), so that
+    /// the read waits for nothing else. Falls back to [`Buffer::read`] where the buffer
+    /// is not host-visible.
+    pub fn read_after<T: bytemuck::Pod>(&self, point: &super::TimelinePoint) -> Result<Vec<T>> {
+        self.gpu.wait(point)?;
+        let Some(ptr) = self.allocation.as_ref().and_then(|a| a.mapped_ptr()) else {
+            return self.read();
+        };
+        let n = self.element_count::<T>();
+        let mut out = vec![T::zeroed(); n];
+        let bytes = n * size_of::<T>();
+        // SAFETY: mapped, host-coherent, at least `bytes` long; the work writing it ended
+        // at `point` (every submission ends with a host-visibility barrier), and the
+        // caller's contract is that nothing later writes it.
+        unsafe {
+            std::ptr::copy_nonoverlapping(
+                ptr.as_ptr() as *const u8,
+                bytemuck::cast_slice_mut::<T, u8>(&mut out).as_mut_ptr(),
+                bytes,
+            )
+        };
         Ok(out)
     }
 }

@@ -572,7 +572,17 @@ impl Recorder {
 
     /// Ends recording and submits: the submission waits for this stream's previous one
     /// and for every point in `waits`, and signals the returned point when done.
-    pub fn submit(mut self, waits: &[&TimelinePoint]) -> Result<TimelinePoint> {
+    pub fn submit(self, waits: &[&TimelinePoint]) -> Result<TimelinePoint> {
+        self.submit_signalling(waits, None)
+    }
+
+    /// [`Recorder::submit`] that also signals the binary semaphore `binary` (a swapchain
+    /// image's "rendered" semaphore, which presenting waits for).
+    pub(crate) fn submit_signalling(
+        mut self,
+        waits: &[&TimelinePoint],
+        binary: Option<vk::Semaphore>,
+    ) -> Result<TimelinePoint> {
         while !self.open_scopes.is_empty() {
             self.end_scope()?;
         }
@@ -617,10 +627,17 @@ impl Recorder {
                     .stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS),
             );
         }
-        let signal = [vk::SemaphoreSubmitInfo::default()
+        let mut signal = vec![vk::SemaphoreSubmitInfo::default()
             .semaphore(stream.timeline.raw)
             .value(value)
             .stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)];
+        if let Some(semaphore) = binary {
+            signal.push(
+                vk::SemaphoreSubmitInfo::default()
+                    .semaphore(semaphore)
+                    .stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS),
+            );
+        }
         let cmds = [vk::CommandBufferSubmitInfo::default().command_buffer(self.cmd)];
         let submit = vk::SubmitInfo2::default()
             .wait_semaphore_infos(&wait_infos)

@@ -2,6 +2,7 @@
 //! profiler log. [`Gpu`] is a cheap, cloneable handle to it.
 
 use std::collections::VecDeque;
+use std::ffi::CStr;
 use std::mem::ManuallyDrop;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
@@ -108,6 +109,8 @@ pub(crate) struct GpuInner {
     /// Present where the device offers VK_KHR/EXT_calibrated_timestamps.
     pub(crate) calibrator: Option<Calibrator>,
     pub(crate) buffer_access: BufferAccess,
+    /// Opened with VK_KHR_swapchain ([`Gpu::new_for_presentation`]).
+    pub(crate) present: bool,
 }
 
 /// The device handle every other object holds.
@@ -131,17 +134,33 @@ impl Gpu {
         let instance = Instance::new(desc.instance)?;
         let devices = physical::enumerate(&instance)?;
         let info = physical::select(&devices, desc.device.as_deref())?;
-        let from_env = std::env::var("SPLITRAY_BUFFER_ACCESS").ok();
-        let buffer_access = match (desc.buffer_access, from_env.as_deref()) {
-            (Some(access), _) => access,
-            (None, None | Some("")) => BufferAccess::for_device(&info),
-            (None, Some(s)) => BufferAccess::parse(s).ok_or_else(|| {
-                VkError::Usage(format!(
-                    "SPLITRAY_BUFFER_ACCESS={s}: expected `descriptors` or `addresses`"
-                ))
-            })?,
-        };
-        Self::open(instance, info, desc.placement, buffer_access)
+        let buffer_access = buffer_access_for(desc, &info)?;
+        Self::open(instance, info, desc.placement, buffer_access, false)
+    }
+
+    /// [`Gpu::new`] for a device that also presents to windows: the instance gets the
+    /// window system's `surface_extensions` (see `vk::surface_extensions`) and the device
+    /// VK_KHR_swapchain, which it must offer.
+    pub fn new_for_presentation(desc: &GpuDesc, surface_extensions: &[&CStr]) -> Result<Self> {
+        let _span = tracing::info_span!("open device").entered();
+        let instance = Instance::with_extensions(desc.instance, surface_extensions)?;
+        let devices = physical::enumerate(&instance)?;
+        let info = physical::select(&devices, desc.device.as_deref())?;
+        // SAFETY: a plain query on a physical device of this instance.
+        let extensions = unsafe { instance.raw.enumerate_device_extension_properties(info.raw) }
+            .call("vkEnumerateDeviceExtensionProperties")?;
+        let has_swapchain = extensions.iter().any(|e| {
+            e.extension_name_as_c_str()
+                .is_ok_and(|n| n == khr::swapchain::NAME)
+        });
+        if !has_swapchain {
+            return Err(VkError::MissingFeature {
+                device: info.name.clone(),
+                what: "VK_KHR_swapchain (to present to a window)".into(),
+            });
+        }
+        let buffer_access = buffer_access_for(desc, &info)?;
+        Self::open(instance, info, desc.placement, buffer_access, true)
     }
 
     fn open(
@@ -149,6 +168,7 @@ impl Gpu {
         info: PhysicalDeviceInfo,
         placement: StreamPlacement,
         buffer_access: BufferAccess,
+        present: bool,
     ) -> Result<Self> {
         let mapping = StreamMapping::plan(&info, placement);
         let per_family = mapping.queues_per_family();
@@ -165,6 +185,9 @@ impl Gpu {
         // them all; elsewhere the device is opened exactly as without them.
         let ray_query = info.capabilities.ray_query;
         let mut extensions = vec![khr::push_descriptor::NAME.as_ptr()];
+        if present {
+            extensions.push(khr::swapchain::NAME.as_ptr());
+        }
         if let Some(calibration) = info.calibration {
             extensions.push(calibration.name().as_ptr());
         }
@@ -295,6 +318,7 @@ impl Gpu {
             timeline: Mutex::new(None),
             calibrator,
             buffer_access,
+            present,
         }));
         for s in &gpu.0.streams {
             gpu.set_object_name(s.timeline.raw, &format!("timeline:{}", s.kind.name()));
@@ -315,6 +339,11 @@ impl Gpu {
     /// How kernels with a descriptor twin take their buffers on this device.
     pub fn buffer_access(&self) -> BufferAccess {
         self.0.buffer_access
+    }
+
+    /// Whether the device was opened to present to windows ([`Gpu::new_for_presentation`]).
+    pub fn presents(&self) -> bool {
+        self.0.present
     }
 
     pub fn stream_mapping(&self) -> &StreamMapping {
@@ -509,5 +538,20 @@ impl Drop for GpuInner {
             ManuallyDrop::drop(&mut self.allocator);
             self.raw.destroy_device(None);
         }
+    }
+}
+
+/// How kernels with a descriptor twin take their buffers: the description's choice, else
+/// `SPLITRAY_BUFFER_ACCESS`, else the device's default ([`BufferAccess::for_device`]).
+fn buffer_access_for(desc: &GpuDesc, info: &PhysicalDeviceInfo) -> Result<BufferAccess> {
+    let from_env = std::env::var("SPLITRAY_BUFFER_ACCESS").ok();
+    match (desc.buffer_access, from_env.as_deref()) {
+        (Some(access), _) => Ok(access),
+        (None, None | Some("")) => Ok(BufferAccess::for_device(info)),
+        (None, Some(s)) => BufferAccess::parse(s).ok_or_else(|| {
+            VkError::Usage(format!(
+                "SPLITRAY_BUFFER_ACCESS={s}: expected `descriptors` or `addresses`"
+            ))
+        }),
     }
 }

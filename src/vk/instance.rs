@@ -69,6 +69,12 @@ pub fn validation_layer_available() -> bool {
 
 impl Instance {
     pub fn new(desc: InstanceDesc) -> Result<Arc<Self>> {
+        Self::with_extensions(desc, &[])
+    }
+
+    /// [`Instance::new`] with `required` instance extensions enabled too (a window
+    /// system's surface extensions); a loader that lacks one is an error naming it.
+    pub fn with_extensions(desc: InstanceDesc, required: &[&CStr]) -> Result<Arc<Self>> {
         let desc = desc.with_env();
         let validation = desc.validation || desc.sync_validation;
         // SAFETY: loading libvulkan runs its initialisers; this is the documented way in.
@@ -97,6 +103,19 @@ impl Instance {
         let mut extensions = Vec::new();
         if has_debug_utils {
             extensions.push(ext::debug_utils::NAME.as_ptr());
+        }
+        for name in required {
+            let offered = available_ext
+                .iter()
+                .any(|e| e.extension_name_as_c_str().is_ok_and(|n| n == *name));
+            if !offered {
+                return Err(VkError::Usage(format!(
+                    "the Vulkan loader offers no {}: this system's Vulkan cannot present \
+                     to its window system",
+                    name.to_string_lossy()
+                )));
+            }
+            extensions.push(name.as_ptr());
         }
 
         let log = Box::new(ValidationLog::default());

@@ -3,7 +3,8 @@
 //! Above it, the engine speaks in safe types: [`Gpu`] (device, allocator, streams),
 //! [`Buffer`], [`ComputePipeline`], [`Recorder`] (command recording) and
 //! [`TimelinePoint`] (cross-stream order), plus the [`ProfileLog`] of GPU times, and,
-//! where the device offers ray queries, [`AccelerationStructure`].
+//! where the device offers ray queries, [`AccelerationStructure`]; with the `window`
+//! feature, a window's `Surface` and `Swapchain` for previews.
 
 mod accel;
 mod buffer;
@@ -18,6 +19,8 @@ mod profile_tree;
 mod profiler;
 mod reflect;
 mod stream;
+#[cfg(feature = "window")]
+mod swapchain;
 mod validation;
 
 pub use accel::{AccelerationStructure, VERTEX_STRIDE};
@@ -36,6 +39,8 @@ pub use pipeline::{
 pub use profile_tree::{ProfileNode, ProfileTree};
 pub use profiler::{GpuBatch, KernelTime, ProfileLog, ProfileRecord, ScopeInfo};
 pub use stream::{QueueSlot, StreamKind, StreamMapping, StreamPlacement, TimelinePoint};
+#[cfg(feature = "window")]
+pub use swapchain::{surface_extensions, PixelOrder, PresentTarget, Presented, Surface, Swapchain};
 pub use validation::{ValidationMessage, SUPPRESSED};
 
 /// Deliberately breaks a valid-usage rule so tests can prove the validation layer and

@@ -2,6 +2,7 @@
 //! validation error or warning fails it.
 #![allow(dead_code)]
 
+pub mod cli;
 pub mod reference;
 
 use splitray::vk::{BufferAccess, Gpu, GpuDesc, InstanceDesc, StreamPlacement};

@@ -93,6 +93,14 @@ fn resumed_options(
         if spp == 0 {
             bail!("--spp must be at least 1");
         }
+        let held = header.passes as u64 * header.samples_per_pass as u64;
+        if header.shard.is_whole() && u64::from(spp) <= held {
+            bail!(
+                "{}: it holds {held} spp already, so --spp {spp} adds nothing: ask for more \
+                 than {held}",
+                path.display()
+            );
+        }
         options.spp = spp;
         options.time_limit = None;
     } else if let (None, Some(limit)) = (args.time, header.options.time_limit) {

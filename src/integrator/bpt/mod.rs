@@ -21,7 +21,7 @@ pub mod technique_images;
 use crate::bidir::{Connector, Counters, CpuScene, PinholeCamera, TechniqueCounts, WalkSettings};
 use crate::film::FilmSums;
 use crate::integrator::{
-    check_film_size, Integrator, IntegratorError, IntegratorStats, NamedImage,
+    check_film_size, Integrator, IntegratorError, IntegratorStats, NamedImage, SceneFrame,
 };
 use crate::scene::{CameraFrame, Scene};
 
@@ -220,6 +220,22 @@ impl Integrator for BptIntegrator {
                 ),
             ),
         ]
+    }
+
+    /// The CPU scene (its BVH built again, as the CPU BVH must be) and the camera; the
+    /// scene's lights move with their triangles.
+    fn set_frame(&mut self, frame: &SceneFrame<'_>) -> Result<(), IntegratorError> {
+        if (frame.camera.width, frame.camera.height) != (self.camera.width(), self.camera.height())
+        {
+            return Err(IntegratorError::Usage(
+                "a frame cannot change the film size".to_string(),
+            ));
+        }
+        if frame.geometry_changed() {
+            self.scene = CpuScene::new(frame.scene);
+        }
+        self.camera = PinholeCamera::new(&frame.camera);
+        Ok(())
     }
 
     fn extra_images(&mut self) -> Result<Vec<NamedImage>, IntegratorError> {

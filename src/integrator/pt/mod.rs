@@ -30,19 +30,21 @@
 //! unsorted active list, and compaction keeps the order. So the same seed gives the same
 //! image on the same device, and sorting on or off gives a bit-identical film.
 
+mod frame;
 pub mod gpu;
 pub mod lights;
 pub mod materials;
 
+use std::sync::Arc;
 use std::time::Instant;
 
 use glam::Vec3;
 
 use self::gpu::{PathState, PtMaterial, PtParams, FLAG_BSDF, FLAG_NEE, FLAG_NORMALS, FLAG_SORTED};
 pub use self::lights::LightTable;
-use super::{check_film_size, Integrator, IntegratorError, IntegratorStats};
+use super::{check_film_size, Integrator, IntegratorError, IntegratorStats, SceneFrame};
 use crate::bsdf::BsdfParams;
-use crate::film::FilmSums;
+use crate::film::{DeviceFilm, FilmSums};
 use crate::primitives::compact::Kept;
 use crate::primitives::{Compact, RadixSort, Tuning};
 use crate::scene::{CameraFrame, Scene};
@@ -329,7 +331,8 @@ pub struct PtIntegrator<'t> {
     pipelines: Pipelines,
     scene: SceneBuffers,
     wave: Wavefront,
-    accum: Buffer,
+    /// Per pixel Σ L (rgb) and samples (w): the film, shared with previews.
+    accum: Arc<Buffer>,
     accum2: Buffer,
     params: PtParams,
     pixels: usize,
@@ -337,6 +340,9 @@ pub struct PtIntegrator<'t> {
     passes_per_chunk: u32,
     pixels_per_chunk: usize,
     nee_on: bool,
+    /// The light table on the GPU, as the host last computed it (a new frame uploads it
+    /// only where it changed).
+    light_table: LightTable,
     passes: u32,
     rays_traced: u64,
 }
@@ -381,13 +387,14 @@ impl<'t> PtIntegrator<'t> {
             pipelines: Pipelines::new(gpu)?,
             scene: SceneBuffers::new(gpu, scene)?,
             wave: Wavefront::new(gpu, chunk, options.sort)?,
-            accum: gpu.zeroed::<[f32; 4]>("pt-accum", pixels)?,
+            accum: Arc::new(gpu.zeroed::<[f32; 4]>("pt-accum", pixels)?),
             accum2: gpu.zeroed::<[f32; 4]>("pt-accum2", pixels)?,
             params,
             pixels,
             passes_per_chunk: passes_per_chunk as u32,
             pixels_per_chunk,
             nee_on: options.strategy != Strategy::Bsdf && !scene.lights.lights.is_empty(),
+            light_table: scene.lights.clone(),
             passes: 0,
             rays_traced: 0,
         })
@@ -448,7 +455,7 @@ impl<'t> PtIntegrator<'t> {
             &self.pipelines.finish,
             &[
                 (&self.wave.paths).into(),
-                (&self.accum).into(),
+                (&*self.accum).into(),
                 (&self.accum2).into(),
             ],
             &self.params,
@@ -630,6 +637,23 @@ impl Integrator for PtIntegrator<'_> {
         }
     }
 
+    fn set_frame(&mut self, frame: &SceneFrame<'_>) -> Result<(), IntegratorError> {
+        if (frame.camera.width, frame.camera.height) != (self.params.width, self.params.height) {
+            return Err(IntegratorError::Usage(
+                "a frame cannot change the film size".to_string(),
+            ));
+        }
+        Ok(self.move_to_frame(frame)?)
+    }
+
+    fn device_film(&self) -> Option<DeviceFilm> {
+        Some(DeviceFilm {
+            sums: self.accum.clone(),
+            width: self.params.width,
+            height: self.params.height,
+        })
+    }
+
     fn settings(&self) -> Vec<(String, String)> {
         let o = &self.options;
         vec![
@@ -690,6 +714,13 @@ impl Tracer for BorrowedTracer<'_> {
     }
     fn set_geometry(&mut self, triangles: &[crate::trace::GpuTriangle]) -> vk::Result<()> {
         self.0.set_geometry(triangles)
+    }
+    fn update_geometry(
+        &mut self,
+        triangles: &[crate::trace::GpuTriangle],
+        changed: &[std::ops::Range<usize>],
+    ) -> vk::Result<()> {
+        self.0.update_geometry(triangles, changed)
     }
     fn trace(
         &mut self,

@@ -1443,6 +1443,30 @@ impl Tracer for PdacrtTracer {
         Ok(())
     }
 
+    /// Nothing to rebuild: the changed ranges are written over the old triangles in
+    /// place, and the scene box is computed again from all of them (as a new tracer
+    /// computes it, so a frame traces as a fresh tracer would).
+    fn update_geometry(
+        &mut self,
+        triangles: &[GpuTriangle],
+        changed: &[std::ops::Range<usize>],
+    ) -> vk::Result<()> {
+        if triangles.len() != self.triangle_count as usize
+            || changed
+                .iter()
+                .any(|r| r.start > r.end || r.end > triangles.len())
+        {
+            return self.set_geometry(triangles);
+        }
+        self.gpu.wait_idle()?;
+        for range in changed {
+            self.triangles
+                .write_at(range.start, &triangles[range.clone()])?;
+        }
+        (self.scene_min, self.scene_max, self.eps) = scene_box(triangles);
+        Ok(())
+    }
+
     fn trace(
         &mut self,
         rays: &Buffer,

@@ -1,0 +1,215 @@
+//! `splitray render --frames A..B [--fps F]`: a numbered image sequence of an animated
+//! scene. Frame k shows the scene at time k / F and is written, as soon as it is done, to
+//! the output path with `_` and the frame number before the extension (`-o shot.exr`
+//! gives `shot_0000.exr`, `shot_0001.exr`, … and a PNG preview beside each), the number
+//! zero-padded to 4 digits or to as many as the last frame needs.
+//!
+//! Options that belong to one image are refused with the sequence: checkpoints and
+//! resuming (a stopped sequence continues with the frames left: `--frames K..B`),
+//! shards (a render farm splits a sequence by giving each job its own frame range),
+//! `--reference`, `--bdpt-techniques`, `--preview` and `--display-server`. `--time` limits each frame; `--stats` writes
+//! one JSON file with every frame's statistics.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use anyhow::{anyhow, bail};
+use splitray::film::ImageFiles;
+use splitray::render::frames::{
+    check_frames, frame_path, render_frames, Frame, FrameRange, FramesControl, DEFAULT_FPS,
+};
+use splitray::render::{RenderError, RenderStats, Shard};
+use splitray::vk::Gpu;
+
+use super::super::render_files::{write_stats, RenderFiles};
+use super::super::signals::{self, StopSignals};
+use super::options::render_options;
+use super::{
+    gpu_desc, output_path, print_summary, progress_bar, show_progress, RenderArgs, DEFAULT_SCENE,
+};
+
+/// One frame's line of the `--stats` file.
+#[derive(serde::Serialize)]
+struct FrameStats {
+    frame: u32,
+    /// Scene time in seconds.
+    time: f32,
+    /// Triangles uploaded again for the frame.
+    changed_triangles: usize,
+    #[serde(flatten)]
+    stats: RenderStats,
+}
+
+/// Options that make no sense for a sequence, and why.
+fn refuse_single_image_options(args: &RenderArgs) -> anyhow::Result<()> {
+    if args.checkpoint.is_some() || args.resume.is_some() {
+        bail!(
+            "--checkpoint and --resume work on one image, not with --frames: a stopped \
+             sequence continues with the frames it has left (--frames K..B)"
+        );
+    }
+    if args.shard.is_some() {
+        bail!(
+            "--shard splits one image, not with --frames: give each job of a render farm \
+             its own frame range instead"
+        );
+    }
+    if args.reference.is_some() {
+        bail!("--reference compares one image: it cannot be used with --frames");
+    }
+    if args.preview || args.display_server.is_some() {
+        bail!(
+            "--preview and --display-server watch one image converge: they cannot be used \
+             with --frames"
+        );
+    }
+    if args.bdpt_techniques.is_some() {
+        bail!("--bdpt-techniques writes the technique images of one image: it cannot be used with --frames");
+    }
+    Ok(())
+}
+
+pub(super) fn run(args: &RenderArgs, spec: &str) -> anyhow::Result<ExitCode> {
+    refuse_single_image_options(args)?;
+    let signals = StopSignals::install()?;
+    let mut timeline = super::super::timeline::TimelineOutput::start(args.timeline.as_deref())?;
+    let scene_spec = args.scene.as_deref().unwrap_or(DEFAULT_SCENE);
+    let animated = splitray::scene::load_animated(scene_spec)?;
+    let range = FrameRange::parse(spec, args.fps.unwrap_or(DEFAULT_FPS))
+        .map_err(|e| anyhow!("--frames: {e}"))?;
+    let options = render_options(args, &animated.scene, None)?;
+    check_frames(&animated, &options, &range)?;
+    if !animated.is_animated() {
+        eprintln!(
+            "note: nothing moves in scene '{}': every frame is the same image",
+            animated.scene.name
+        );
+    }
+    let base = output_path(args, &animated.scene.name, Shard::WHOLE)?;
+    // The first frame's files (and the stats file) before the GPU: a path that cannot be
+    // written fails at once. Each later frame's files are created before its render.
+    let files = RenderFiles::create(
+        &frame_path(&base, range.first, &range),
+        args.stats.as_deref(),
+        None,
+    )?;
+    let gpu = Gpu::new(&gpu_desc(args))?;
+    if let Some(t) = timeline.as_mut() {
+        t.attach(&gpu)?;
+    }
+
+    let RenderFiles { image, stats, .. } = files;
+    let mut next_image = Some(image);
+    let mut frame_stats = Vec::new();
+    let name = &animated.scene.name;
+    let (w, h) = (options.width, options.height);
+    let bar = progress_bar(&options, &format!("{name} {w}x{h}"));
+    let pixels = w as f64 * h as f64;
+    let mut frame_done = |frame: Frame| -> Result<(), RenderError> {
+        bar.suspend(|| -> Result<(), RenderError> {
+            let image = next_image.take().expect("created for each frame");
+            write_frame(&gpu, &frame, image, args.profile)?;
+            if frame.index + 1 < range.end {
+                next_image = Some(ImageFiles::create(frame_path(
+                    &base,
+                    frame.index + 1,
+                    &range,
+                ))?);
+            }
+            Ok(())
+        })?;
+        frame_stats.push(FrameStats {
+            frame: frame.index,
+            time: frame.time,
+            changed_triangles: frame.changed_triangles,
+            stats: frame.output.stats,
+        });
+        Ok(())
+    };
+    let result = render_frames(
+        &gpu,
+        &animated,
+        &options,
+        &range,
+        FramesControl {
+            progress: &mut |k, p| {
+                let label = format!("{name} {w}x{h} frame {k} ({}..{})", range.first, range.end);
+                show_progress(&bar, &label, p, pixels, options.time_limit)
+            },
+            stop: &|| signals.received().is_some(),
+            frame_done: &mut frame_done,
+        },
+    );
+    bar.finish_and_clear();
+    let run = result?;
+    if let Some(file) = stats {
+        write_stats(file, &serde_json::json!({ "frames": frame_stats }))?;
+    }
+    if let Some(t) = timeline {
+        t.finish(&super::super::timeline::command_line())?;
+    }
+    let done = range.first..range.first + run.frames;
+    match signals.received() {
+        Some(signal) => {
+            eprintln!(
+                "{}: the sequence stopped after {} frame(s) ({done:?}); `--frames {}..{}` renders the rest",
+                signals::name(signal),
+                run.frames,
+                done.end,
+                range.end
+            );
+            Ok(ExitCode::from(signals::exit_status(signal)))
+        }
+        None => {
+            println!(
+                "wrote frames {}..{} ({} at {} fps) as {}",
+                range.first,
+                range.end,
+                run.frames,
+                range.fps,
+                display_pattern(&base, &range)
+            );
+            Ok(ExitCode::SUCCESS)
+        }
+    }
+}
+
+/// Writes one frame's EXR and PNG, unless the device reported validation messages.
+fn write_frame(
+    gpu: &Gpu,
+    frame: &Frame,
+    image: ImageFiles,
+    profile: bool,
+) -> Result<(), RenderError> {
+    let messages = gpu.validation_messages();
+    if !messages.is_empty() {
+        return Err(RenderError::Options(format!(
+            "{} validation message(s) (see the log above); frame {} was not written",
+            messages.len(),
+            frame.index
+        )));
+    }
+    let written = image.write(&frame.output.film, &frame.output.metadata)?;
+    print!("frame {} (t = {} s): ", frame.index, frame.time);
+    print_summary(&frame.output, profile);
+    println!(
+        "wrote {} and {}",
+        written.exr.display(),
+        written.png.display()
+    );
+    Ok(())
+}
+
+/// `out/shot_{0000..0011}.exr` for messages.
+fn display_pattern(base: &Path, range: &FrameRange) -> String {
+    let first = frame_path(base, range.first, range);
+    let last = frame_path(base, range.end - 1, range);
+    if first == last {
+        return first.display().to_string();
+    }
+    format!(
+        "{} … {}",
+        first.display(),
+        PathBuf::from(last.file_name().unwrap_or_default()).display()
+    )
+}

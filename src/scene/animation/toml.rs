@@ -1,0 +1,373 @@
+//! The `[[mesh]]` and `[camera]` tables of TOML scene files, with their animation keys
+//! (the format is documented in [`crate::scene::toml_file`]).
+
+use std::ops::Range;
+use std::path::Path;
+
+use glam::{Quat, Vec3};
+use serde::Deserialize;
+use toml::Spanned;
+
+use super::sequence::{load_sequence, SequencePattern};
+use super::{pose_keyed, Keyframes, MeshMotion, Motion, Transform};
+use crate::scene::obj::{load_obj_mesh, ObjMesh};
+use crate::scene::{validate, Camera, Location, SceneError};
+
+/// Maps a byte range of the scene file to its place (file:line:col).
+pub type At<'a> = dyn Fn(Range<usize>) -> Location + 'a;
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MeshToml {
+    pub path: Spanned<String>,
+    pub material: Option<Spanned<String>>,
+    transform: Option<Spanned<TransformToml>>,
+    #[serde(default)]
+    keyframe: Vec<Spanned<KeyframeToml>>,
+    sequence: Option<Spanned<SequenceToml>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TransformToml {
+    scale: Option<Scale>,
+    rotate: Option<RotationToml>,
+    translate: Option<[f32; 3]>,
+}
+
+#[derive(Deserialize)]
+#[serde(untagged, expecting = "a number or [sx, sy, sz]")]
+enum Scale {
+    Uniform(f32),
+    PerAxis([f32; 3]),
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RotationToml {
+    axis: Option<[f32; 3]>,
+    degrees: Option<f32>,
+    /// [x, y, z, w]
+    quaternion: Option<[f32; 4]>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct KeyframeToml {
+    time: f32,
+    scale: Option<Scale>,
+    rotate: Option<RotationToml>,
+    translate: Option<[f32; 3]>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SequenceToml {
+    first: u32,
+    last: u32,
+    fps: f64,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraToml {
+    position: Option<[f32; 3]>,
+    look_at: Option<[f32; 3]>,
+    up: Option<[f32; 3]>,
+    fov_y: Option<f32>,
+    #[serde(default)]
+    keyframe: Vec<Spanned<CameraKeyToml>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CameraKeyToml {
+    time: f32,
+    position: Option<[f32; 3]>,
+    look_at: Option<[f32; 3]>,
+    up: Option<[f32; 3]>,
+    fov_y: Option<f32>,
+}
+
+/// A `[[mesh]]` entry loaded: its triangles posed at time 0 and its materials (indices
+/// local to the mesh), and how it moves (`range` still to be set by the caller).
+pub struct LoadedMesh {
+    pub mesh: ObjMesh,
+    pub motion: Option<MeshMotion>,
+}
+
+/// The transform of `scale`, `rotate` and `translate` (each the identity where left
+/// out); refuses a part that is not finite, a zero scale, and a zero rotation axis or
+/// quaternion.
+fn transform_of(
+    scale: Option<&Scale>,
+    rotate: Option<&RotationToml>,
+    translate: Option<[f32; 3]>,
+) -> Result<Transform, String> {
+    let scale = match scale {
+        None => Vec3::ONE,
+        Some(Scale::Uniform(s)) => Vec3::splat(*s),
+        Some(Scale::PerAxis(s)) => Vec3::from(*s),
+    };
+    let translate = translate.map_or(Vec3::ZERO, Vec3::from);
+    if !scale.is_finite() || scale.cmpeq(Vec3::ZERO).any() || !translate.is_finite() {
+        return Err(format!(
+            "scale {scale} must be finite and non-zero, translate {translate} finite"
+        ));
+    }
+    let rotate = match rotate {
+        None => Quat::IDENTITY,
+        Some(r) => rotation_of(r)?,
+    };
+    Ok(Transform {
+        translate,
+        rotate,
+        scale,
+    })
+}
+
+fn rotation_of(r: &RotationToml) -> Result<Quat, String> {
+    match (r.axis, r.degrees, r.quaternion) {
+        (Some(axis), Some(degrees), None) => {
+            let axis = Vec3::from(axis);
+            if !axis.is_finite() || axis.length_squared() <= f32::MIN_POSITIVE {
+                return Err(format!("rotate: axis {axis} must be finite and non-zero"));
+            }
+            if !degrees.is_finite() {
+                return Err(format!("rotate: degrees {degrees} is not finite"));
+            }
+            Ok(Quat::from_axis_angle(
+                axis.normalize(),
+                degrees.to_radians(),
+            ))
+        }
+        (None, None, Some(q)) => {
+            let q = Quat::from_array(q);
+            if !q.is_finite() || q.length_squared() <= f32::MIN_POSITIVE {
+                return Err(format!(
+                    "rotate: quaternion {q} must be finite and non-zero"
+                ));
+            }
+            Ok(q.normalize())
+        }
+        _ => Err(
+            "rotate needs either axis = [x, y, z] and degrees = a, or quaternion = [x, y, z, w]"
+                .to_string(),
+        ),
+    }
+}
+
+impl MeshToml {
+    /// Loads the mesh (one OBJ, or every file of a sequence) and its motion; mesh paths
+    /// are relative to `dir`.
+    pub fn load(&self, dir: &Path, at: &At) -> Result<LoadedMesh, SceneError> {
+        let rel = self.path.get_ref();
+        let path_at = at(self.path.span());
+        let invalid = |span: Range<usize>, message: String| SceneError::Invalid {
+            at: at(span),
+            message: format!("mesh '{rel}': {message}"),
+        };
+        let is_obj = Path::new(rel)
+            .extension()
+            .and_then(|e| e.to_str())
+            .is_some_and(|e| e.eq_ignore_ascii_case("obj"));
+        if !is_obj {
+            return Err(SceneError::Invalid {
+                at: path_at,
+                message: format!(
+                    "mesh '{rel}' is not an .obj file (only Wavefront OBJ is supported)"
+                ),
+            });
+        }
+        let pattern = SequencePattern::parse(rel).map_err(|m| invalid(self.path.span(), m))?;
+        let (mesh, sequence) = match (&pattern, &self.sequence) {
+            (Some(pattern), Some(s)) => {
+                let seq = s.get_ref();
+                let (mesh, sequence) = load_sequence(
+                    dir,
+                    pattern,
+                    rel,
+                    (seq.first, seq.last, seq.fps),
+                    &at(s.span()),
+                )?;
+                (mesh, Some(sequence))
+            }
+            (Some(_), None) => {
+                return Err(invalid(
+                    self.path.span(),
+                    "a numbered path needs sequence = { first = N, last = M, fps = F }".to_string(),
+                ))
+            }
+            (None, Some(s)) => {
+                return Err(invalid(
+                    s.span(),
+                    "'sequence' needs a numbered path, e.g. path = \"wave_{:04}.obj\"".to_string(),
+                ))
+            }
+            (None, None) => {
+                let full = dir.join(rel);
+                if !full.is_file() {
+                    return Err(SceneError::MissingReference {
+                        at: path_at,
+                        what: "mesh",
+                        name: rel.clone(),
+                        path: full,
+                    });
+                }
+                (load_obj_mesh(&full)?, None)
+            }
+        };
+        let base = match &self.transform {
+            None => None,
+            Some(t) => {
+                let tr = t.get_ref();
+                Some(
+                    transform_of(tr.scale.as_ref(), tr.rotate.as_ref(), tr.translate)
+                        .map_err(|m| invalid(t.span(), format!("transform: {m}")))?,
+                )
+            }
+        };
+        let keys = self.keys(&invalid)?;
+
+        let rest = mesh.triangles;
+        let mut triangles = rest.clone();
+        let key0 = keys.as_ref().map(|k| k.sample(0.0));
+        let file0 = sequence.as_ref().map(|s| (s, s.segment(0.0)));
+        pose_keyed(&rest, file0, base.as_ref(), key0.as_ref(), &mut triangles);
+        let moves = keys.is_some() || sequence.is_some();
+        Ok(LoadedMesh {
+            mesh: ObjMesh {
+                triangles,
+                materials: mesh.materials,
+            },
+            motion: moves.then(|| MeshMotion {
+                name: rel.clone(),
+                range: 0..0,
+                motion: Motion::Keyed {
+                    rest,
+                    base,
+                    keys,
+                    sequence,
+                },
+            }),
+        })
+    }
+
+    /// The `[[mesh.keyframe]]` track: times increasing, and every key's scale with the
+    /// same signs as the first key's (else the mesh would pass through zero size and its
+    /// winding would flip mid-animation).
+    fn keys(
+        &self,
+        invalid: &dyn Fn(Range<usize>, String) -> SceneError,
+    ) -> Result<Option<Keyframes<Transform>>, SceneError> {
+        if self.keyframe.is_empty() {
+            return Ok(None);
+        }
+        let mut keys = Vec::with_capacity(self.keyframe.len());
+        for (i, k) in self.keyframe.iter().enumerate() {
+            let key = k.get_ref();
+            let t = transform_of(key.scale.as_ref(), key.rotate.as_ref(), key.translate)
+                .map_err(|m| invalid(k.span(), format!("keyframe {i}: {m}")))?;
+            if let Some((_, first)) = keys.first() {
+                let first: &Transform = first;
+                if t.scale.signum() != first.scale.signum() {
+                    return Err(invalid(
+                        k.span(),
+                        format!(
+                            "keyframe {i}: scale {} has other signs than keyframe 0's {} \
+                             (a scale that changes sign passes through zero size)",
+                            t.scale, first.scale
+                        ),
+                    ));
+                }
+            }
+            keys.push((key.time, t));
+        }
+        Keyframes::new(keys).map(Some).map_err(|e| {
+            let span = match e {
+                super::KeyError::NonFiniteTime { index, .. }
+                | super::KeyError::NotIncreasing { index, .. } => self.keyframe[index].span(),
+                super::KeyError::Empty => self.path.span(),
+            };
+            invalid(span, format!("[[mesh.keyframe]]: {e}"))
+        })
+    }
+}
+
+impl CameraToml {
+    /// The camera at time 0 and its keyframe track, if it has keys. `[camera]`'s own
+    /// fields are the defaults of every key; without keys it must give position, look_at
+    /// and fov_y (up defaults to +y). Every key's camera is validated.
+    pub fn resolve(
+        &self,
+        span: Range<usize>,
+        at: &At,
+    ) -> Result<(Camera, Option<Keyframes<Camera>>), SceneError> {
+        let camera_at = at(span);
+        let err = |at: Location, message: String| SceneError::Camera { at, message };
+        let complete = |position: Option<[f32; 3]>,
+                        look_at: Option<[f32; 3]>,
+                        up: Option<[f32; 3]>,
+                        fov_y: Option<f32>,
+                        at: &Location,
+                        what: &str|
+         -> Result<Camera, SceneError> {
+            let missing = |key: &str| {
+                err(
+                    at.clone(),
+                    format!("{what} needs '{key}' (in the key or in [camera])"),
+                )
+            };
+            let camera = Camera {
+                position: position.ok_or_else(|| missing("position"))?.into(),
+                look_at: look_at.ok_or_else(|| missing("look_at"))?.into(),
+                up: up.map_or(Vec3::Y, Vec3::from),
+                fov_y: fov_y.ok_or_else(|| missing("fov_y"))?,
+            };
+            validate::validate_camera(&camera, at).map_err(|e| match e {
+                SceneError::Camera { at, message } if what != "[camera]" => SceneError::Camera {
+                    at,
+                    message: format!("{what}: {message}"),
+                },
+                e => e,
+            })?;
+            Ok(camera)
+        };
+        if self.keyframe.is_empty() {
+            let camera = complete(
+                self.position,
+                self.look_at,
+                self.up,
+                self.fov_y,
+                &camera_at,
+                "[camera]",
+            )?;
+            return Ok((camera, None));
+        }
+        let mut keys = Vec::with_capacity(self.keyframe.len());
+        for (i, k) in self.keyframe.iter().enumerate() {
+            let key = k.get_ref();
+            let camera = complete(
+                key.position.or(self.position),
+                key.look_at.or(self.look_at),
+                key.up.or(self.up),
+                key.fov_y.or(self.fov_y),
+                &at(k.span()),
+                &format!("camera keyframe {i}"),
+            )?;
+            keys.push((key.time, camera));
+        }
+        let track = Keyframes::new(keys).map_err(|e| {
+            let span = match e {
+                super::KeyError::NonFiniteTime { index, .. }
+                | super::KeyError::NotIncreasing { index, .. } => self.keyframe[index].span(),
+                super::KeyError::Empty => 0..0,
+            };
+            SceneError::Invalid {
+                at: at(span),
+                message: format!("[[camera.keyframe]]: {e}"),
+            }
+        })?;
+        Ok((track.sample(0.0), Some(track)))
+    }
+}
