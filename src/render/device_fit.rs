@@ -21,11 +21,52 @@ pub struct PlannedBuffer {
     pub bytes: u64,
 }
 
-/// The largest buffers `options` makes for `scene` that live through the integrator's
-/// passes (the AOV pass's own film buffers come and go before it, and are no larger).
-pub fn planned_buffers(scene: &Scene, options: &RenderOptions) -> Vec<PlannedBuffer> {
-    let triangles = scene.triangles.len() as u64;
-    let pixels = options.width as u64 * options.height as u64;
+/// What a render is, for the messages: its scene's name, triangle count and film size.
+#[derive(Clone, Debug)]
+pub struct RenderSize<'a> {
+    pub scene: &'a str,
+    pub triangles: u64,
+    pub width: u32,
+    pub height: u32,
+}
+
+impl RenderSize<'_> {
+    fn describe(&self) -> String {
+        format!(
+            "scene '{}' at {}x{} ({} triangles)",
+            self.scene, self.width, self.height, self.triangles
+        )
+    }
+}
+
+/// What one device allows: the most bytes one buffer holds (and the limit that sets it)
+/// and its device-local memory.
+#[derive(Clone, Debug)]
+pub struct DeviceCapacity {
+    pub device: String,
+    pub max_buffer: u64,
+    pub max_buffer_limit: &'static str,
+    pub memory: u64,
+}
+
+impl DeviceCapacity {
+    pub fn of(gpu: &Gpu) -> Self {
+        let (max_buffer, max_buffer_limit) = gpu.max_buffer_bytes();
+        DeviceCapacity {
+            device: gpu.info().name.clone(),
+            max_buffer,
+            max_buffer_limit,
+            memory: gpu.info().limits.device_local_bytes,
+        }
+    }
+}
+
+/// The largest buffers a render of `size` with `integrator` makes that live through the
+/// integrator's passes (the AOV pass's own film buffers come and go before it, and are
+/// no larger).
+pub fn planned_buffers(size: &RenderSize<'_>, integrator: IntegratorKind) -> Vec<PlannedBuffer> {
+    let triangles = size.triangles;
+    let pixels = size.width as u64 * size.height as u64;
     let vec4 = 16;
     let triangle_bytes = triangles * size_of::<GpuTriangle>() as u64;
     let mut buffers = vec![
@@ -38,7 +79,7 @@ pub fn planned_buffers(scene: &Scene, options: &RenderOptions) -> Vec<PlannedBuf
             bytes: pixels * vec4,
         },
     ];
-    let gpu_film = match options.integrator {
+    let gpu_film = match integrator {
         IntegratorKind::Pt => vec!["pt-accum", "pt-accum2"],
         IntegratorKind::Bpt | IntegratorKind::Light => vec![],
         _ => vec!["accum"],
@@ -66,46 +107,132 @@ pub fn planned_buffers(scene: &Scene, options: &RenderOptions) -> Vec<PlannedBuf
 /// Refuses a render whose buffers cannot exist on `gpu`, naming the buffer (or the
 /// largest ones) and the sizes.
 pub fn check(gpu: &Gpu, scene: &Scene, options: &RenderOptions) -> Result<(), RenderError> {
-    let buffers = planned_buffers(scene, options);
-    let (limit, which) = gpu.max_buffer_bytes();
+    let size = RenderSize {
+        scene: &scene.name,
+        triangles: scene.triangles.len() as u64,
+        width: options.width,
+        height: options.height,
+    };
+    let buffers = planned_buffers(&size, options.integrator);
+    fits(&size, &buffers, &DeviceCapacity::of(gpu)).map_err(RenderError::Options)
+}
+
+/// Whether `buffers` fit `device`: each within its largest buffer, all together within its
+/// memory; else the message naming the buffers and the sizes.
+pub fn fits(
+    size: &RenderSize<'_>,
+    buffers: &[PlannedBuffer],
+    device: &DeviceCapacity,
+) -> Result<(), String> {
+    let limit = device.max_buffer;
     let too_large: Vec<String> = buffers
         .iter()
         .filter(|b| b.bytes > limit)
         .map(|b| format!("'{}' of {} bytes ({})", b.name, b.bytes, fmt_bytes(b.bytes)))
         .collect();
     if !too_large.is_empty() {
-        return Err(RenderError::Options(format!(
-            "scene '{}' at {}x{} ({} triangles) needs {}: more than one buffer can hold on \
-             device '{}', {limit} bytes ({}, its {which})",
-            scene.name,
-            options.width,
-            options.height,
-            scene.triangles.len(),
+        return Err(format!(
+            "{} needs {}: more than one buffer can hold on device '{}', {limit} bytes ({}, \
+             its {})",
+            size.describe(),
             too_large.join(", "),
-            gpu.info().name,
-            fmt_bytes(limit)
-        )));
+            device.device,
+            fmt_bytes(limit),
+            device.max_buffer_limit
+        ));
     }
     let total: u64 = buffers.iter().map(|b| b.bytes).sum();
-    let memory = gpu.info().limits.device_local_bytes;
-    if total > memory {
+    if total > device.memory {
         let list: Vec<String> = buffers
             .iter()
             .filter(|b| b.bytes > 0)
-            .map(|b| format!("{} {}", b.name, fmt_bytes(b.bytes)))
+            .map(|b| format!("'{}' {}", b.name, fmt_bytes(b.bytes)))
             .collect();
-        return Err(RenderError::Options(format!(
-            "scene '{}' at {}x{} ({} triangles) needs {} ({}) in GPU buffers, more than \
-             device '{}' has: {} of device-local memory",
-            scene.name,
-            options.width,
-            options.height,
-            scene.triangles.len(),
+        return Err(format!(
+            "{} needs {total} bytes ({}: {}) in GPU buffers, more than device '{}' has: {} \
+             bytes ({}) of device-local memory",
+            size.describe(),
             fmt_bytes(total),
             list.join(", "),
-            gpu.info().name,
-            fmt_bytes(memory)
-        )));
+            device.device,
+            device.memory,
+            fmt_bytes(device.memory)
+        ));
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn device(max_buffer: u64, memory: u64) -> DeviceCapacity {
+        DeviceCapacity {
+            device: "test device".into(),
+            max_buffer,
+            max_buffer_limit: "maxBufferSize",
+            memory,
+        }
+    }
+
+    fn size(triangles: u64, side: u32) -> RenderSize<'static> {
+        RenderSize {
+            scene: "big",
+            triangles,
+            width: side,
+            height: side,
+        }
+    }
+
+    #[test]
+    fn a_triangle_buffer_past_the_largest_buffer_is_named_with_its_size() {
+        let big = size(100_000_000, 64);
+        let buffers = planned_buffers(&big, IntegratorKind::Primary);
+        let err = fits(&big, &buffers, &device(2 << 30, 1 << 40)).unwrap_err();
+        let bytes = (100_000_000 * size_of::<GpuTriangle>()).to_string();
+        for part in [
+            "scene 'big' at 64x64 (100000000 triangles)",
+            "'triangles' of",
+            "'shade-triangles' of",
+            &bytes,
+            "2147483648 bytes",
+            "maxBufferSize",
+            "test device",
+        ] {
+            assert!(err.contains(part), "missing {part:?} in: {err}");
+        }
+        assert!(!err.contains("aov-normal"), "{err}");
+    }
+
+    #[test]
+    fn buffers_past_the_device_memory_together_are_listed_with_the_total() {
+        // Each buffer fits one buffer; together they do not fit the memory.
+        let big = size(20_000_000, 8192);
+        let buffers = planned_buffers(&big, IntegratorKind::Pt);
+        let total: u64 = buffers.iter().map(|b| b.bytes).sum();
+        let err = fits(&big, &buffers, &device(2 << 30, total - 1)).unwrap_err();
+        for part in [
+            total.to_string(),
+            (total - 1).to_string(),
+            "'pt-accum'".into(),
+            "'triangles'".into(),
+            "device-local memory".into(),
+        ] {
+            assert!(err.contains(&part), "missing {part:?} in: {err}");
+        }
+        assert!(fits(&big, &buffers, &device(2 << 30, total)).is_ok());
+    }
+
+    #[test]
+    fn the_buffers_grow_with_the_film_and_the_scene() {
+        let b = planned_buffers(&size(1000, 100), IntegratorKind::Pt);
+        let bytes = |name: &str| b.iter().find(|p| p.name == name).map(|p| p.bytes);
+        assert_eq!(bytes("triangles"), Some(48_000));
+        assert_eq!(bytes("pt-accum"), Some(160_000));
+        assert_eq!(bytes("pt-accum2"), Some(160_000));
+        assert_eq!(bytes("triangle-material"), Some(4000));
+        // The CPU integrators keep their film on the host.
+        let cpu = planned_buffers(&size(1000, 100), IntegratorKind::Bpt);
+        assert!(cpu.iter().all(|p| !p.name.contains("accum")));
+    }
 }
