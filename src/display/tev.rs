@@ -92,7 +92,7 @@ fn tile_values<const N: usize>(image: &[[f32; N]], width: u32, tile: Tile) -> Ve
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct TevReport {
     pub address: String,
-    /// Connections made (more than one: the listener went away and came back).
+    /// Connections the listener accepted (more than one: it went away and came back).
     pub connections: u32,
     /// UpdateImage packets sent.
     pub updates: u64,
@@ -252,6 +252,10 @@ impl Sender {
                 return;
             }
         };
+        // Counted as soon as the listener accepted: one that goes away during the
+        // introduction was still reached, and the summary must say it went away.
+        let reconnection = self.warned || self.report.connections > 0;
+        self.report.connections += 1;
         let mut connection = Connection {
             client: TevClient::wrap(stream),
             sent: None,
@@ -260,11 +264,10 @@ impl Sender {
             self.lost(&e);
             return;
         }
-        if self.warned || self.report.connections > 0 {
+        if reconnection {
             eprintln!("display server {}: connected", self.address);
         }
         self.warned = false;
-        self.report.connections += 1;
         self.connection = Some(connection);
     }
 
