@@ -84,6 +84,8 @@ pub struct RenderOptions {
     pub reference: Option<std::sync::Arc<Vec<[f32; 3]>>>,
     /// `bpt`, `light`: keep one image per technique (s, t) ([`Integrator::extra_images`]).
     pub bdpt_techniques: bool,
+    /// `cbpt`: population sizes, batch size, where the combination runs.
+    pub cbpt: integrator::cbpt::CbptSettings,
 }
 
 impl RenderOptions {
@@ -127,6 +129,7 @@ impl RenderOptions {
             time_limit: None,
             reference: None,
             bdpt_techniques: false,
+            cbpt: Default::default(),
         };
         if options.width == 0
             || options.height == 0
@@ -526,6 +529,18 @@ fn integrator_on(
                 },
             ))
         }
+        IntegratorKind::Cbpt => Box::new(integrator::cbpt::CbptIntegrator::new(
+            scene,
+            &camera,
+            &integrator::cbpt::CbptOptions {
+                seed: options.seed,
+                max_depth: options.max_depth,
+                rr_depth: options.rr_depth,
+                settings: options.cbpt,
+                pipelined: true,
+            },
+            Some((gpu, tracer)),
+        )?),
         kind => {
             let triangle_material: Vec<u32> = scene.triangles.iter().map(|t| t.material).collect();
             let materials: Vec<GpuMaterial> = scene

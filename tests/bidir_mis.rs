@@ -6,7 +6,6 @@
 //! make a path sum to 1, and each equals n_s p_s / Σ n_j p_j from explicit products.
 mod common;
 
-use glam::Vec3;
 use splitray::bidir::connect::Sample;
 use splitray::bidir::densities::path_densities;
 use splitray::bidir::lights::Lights;
@@ -16,7 +15,6 @@ use splitray::bidir::random::PathSampler;
 use splitray::bidir::vertex::{Vertex, NO_TRIANGLE};
 use splitray::bidir::walk::{camera_subpath, light_subpath};
 use splitray::bidir::{Connector, Counters, CpuScene, PinholeCamera, WalkSettings};
-use splitray::scene::{builtin, MaterialBsdf, MaterialLayer, PointLight, Scene};
 
 /// A synthetic path x0..xk: per segment its squared length and the |cos| at both ends,
 /// per interior vertex its solid-angle densities in both walk directions.
@@ -283,58 +281,9 @@ fn recursive_weights_equal_the_brute_force_balance_heuristic_on_random_paths() {
     assert!(checked > 30_000 && with_delta > 5_000);
 }
 
-/// The Cornell box with a mirror tall block, a short block of mixed diffuse and mirror
-/// layers, tilted shading normals on the floor, and a point light beside the area light.
-fn tricky_scene() -> Scene {
-    let mut scene = builtin("cornell-box").unwrap();
-    let layer = |kind: &str, r: f32, weight: f32| MaterialLayer {
-        kind: splitray::scene::BsdfKind::from_name(kind).unwrap(),
-        reflectance: Vec3::splat(r),
-        roughness: 0.3,
-        distribution: splitray::scene::MicrofacetModel::Ggx,
-        ior: 1.5,
-        weight,
-    };
-    let mirror = scene.materials.len() as u32;
-    let mut m = scene.materials[0].clone();
-    m.name = "mirror".into();
-    m.bsdf = Some(MaterialBsdf {
-        layers: vec![layer("mirror", 0.9, 1.0)],
-    });
-    scene.materials.push(m.clone());
-    m.name = "mixed".into();
-    m.bsdf = Some(MaterialBsdf {
-        layers: vec![
-            layer("lambert", 0.7, 0.5),
-            layer("mirror", 0.9, 0.3),
-            layer("conductor", 0.8, 0.2),
-        ],
-    });
-    scene.materials.push(m);
-    // Triangles 10..20 are the short block, 20..30 the tall one (scene::builtin).
-    for (i, t) in scene.triangles.iter_mut().enumerate() {
-        match i {
-            10..20 => t.material = mirror + 1,
-            20..30 => t.material = mirror,
-            _ => {}
-        }
-        let ng = t.geometric_normal();
-        if ng.y > 0.9 && t.centroid().y < 1.0 {
-            // Floor: vertex normals tilted differently at each corner.
-            let tilt = |k: usize| (ng + Vec3::new(0.2 * k as f32 - 0.2, 0.0, 0.15)).normalize();
-            t.n = Some([tilt(0), tilt(1), tilt(2)]);
-        }
-    }
-    scene.point_lights.push(PointLight {
-        position: Vec3::new(278.0, 400.0, 279.0),
-        intensity: Vec3::splat(3e4),
-    });
-    scene
-}
-
 #[test]
 fn weights_of_traced_paths_equal_the_oracle() {
-    let scene = tricky_scene();
+    let scene = common::scenes::tricky_cornell_box();
     let cpu = CpuScene::new(&scene);
     let camera = PinholeCamera::new(&scene.camera.frame(12, 12));
     for counts in [

@@ -78,15 +78,19 @@ fn merged_shards_equal_one_render_of_the_same_passes() {
     let scene = builtin("cornell-box").unwrap();
     let dir = tempfile::tempdir().unwrap();
     const PASSES: u32 = 8;
-    // `bpt` and `light` splat light-tracing samples: each shard normalises its splats by
-    // its own passes' light subpaths, so merged shards still hold one render's passes.
+    // `bpt`, `light` and `cbpt` splat light-tracing samples: each shard normalises its
+    // splats by its own passes' light subpaths, so merged shards still hold one render's
+    // passes.
     for kind in [
         IntegratorKind::Pt,
         IntegratorKind::Ao,
         IntegratorKind::Bpt,
         IntegratorKind::Light,
+        IntegratorKind::Cbpt,
     ] {
-        let opts = options(&scene, kind, PASSES, 7);
+        // A pass of cbpt holds four samples per pixel.
+        let per_pass = if kind == IntegratorKind::Cbpt { 4 } else { 1 };
+        let opts = options(&scene, kind, PASSES * per_pass, 7);
         let whole = render(&gpu, &scene, &opts, Shard::WHOLE);
         let shards: Vec<RenderOutput> = (0..3)
             .map(|i| render(&gpu, &scene, &opts, Shard::new(i, 3).unwrap()))
@@ -97,7 +101,12 @@ fn merged_shards_equal_one_render_of_the_same_passes() {
             .collect();
         assert_eq!(blocks, [(0, 2), (2, 3), (5, 3)], "{kind}");
         // Shard 0 is the first block of the one-process render, bit for bit.
-        let first_block = render(&gpu, &scene, &options(&scene, kind, 2, 7), Shard::WHOLE);
+        let first_block = render(
+            &gpu,
+            &scene,
+            &options(&scene, kind, 2 * per_pass, 7),
+            Shard::WHOLE,
+        );
         assert!(
             shards[0].sums == first_block.sums,
             "{kind}: shard 0 differs"
@@ -111,7 +120,10 @@ fn merged_shards_equal_one_render_of_the_same_passes() {
         let merged = merge_parts(&paths).unwrap();
         assert_eq!(merged.record.passes.to_string(), "0..8", "{kind}");
         assert_eq!(merged.record.fingerprint, whole.record.fingerprint);
-        assert_eq!((merged.sums.passes, merged.metadata.spp), (PASSES, PASSES));
+        assert_eq!(
+            (merged.sums.passes, merged.metadata.spp),
+            (PASSES, PASSES * per_pass)
+        );
         assert!(merged.missing_shards.is_empty());
 
         // The EXRs lose only the rounding of each part's mean and standard error to f32
@@ -142,11 +154,14 @@ fn merged_shards_equal_one_render_of_the_same_passes() {
         );
         check_stderr(&merged.sums, &whole.sums, kind);
         assert!(merged.film.stderr == merged.sums.stderr(), "{kind}");
-        if matches!(kind, IntegratorKind::Pt | IntegratorKind::Bpt) {
+        if matches!(
+            kind,
+            IntegratorKind::Pt | IntegratorKind::Bpt | IntegratorKind::Cbpt
+        ) {
             let other = render(
                 &gpu,
                 &scene,
-                &options(&scene, kind, PASSES, 8),
+                &options(&scene, kind, PASSES * per_pass, 8),
                 Shard::WHOLE,
             );
             z_test(&merged.sums, &other.sums);

@@ -33,6 +33,8 @@ pub struct BdptBenchOptions {
     pub seed: u64,
     /// Mean RGB of a reference image of this film size, and where it came from.
     pub reference: Option<(Arc<Vec<[f32; 3]>>, String)>,
+    /// The tracer of the GPU integrators (`None`: the scene's, else the default).
+    pub tracer: Option<crate::trace::TracerKind>,
 }
 
 impl Default for BdptBenchOptions {
@@ -50,6 +52,7 @@ impl Default for BdptBenchOptions {
             max_depth: -1,
             seed: 0,
             reference: None,
+            tracer: None,
         }
     }
 }
@@ -172,7 +175,8 @@ impl Contestant {
         // Warm-up (lavapipe compiles each kernel at its first dispatch), then an empty
         // film: the measured passes continue from pass 1.
         integrator.render_passes(0, 1)?;
-        let empty = FilmSums::new(options.width, options.height, 1, true);
+        let per_pass = integrator.samples_per_pass();
+        let empty = FilmSums::new(options.width, options.height, per_pass, true);
         integrator.restore(&empty)?;
         Ok(Self {
             kind: options.integrator,
@@ -200,7 +204,8 @@ impl Contestant {
         let t = start.elapsed().as_secs_f64().max(1e-9);
         self.seconds += t;
         self.passes += passes;
-        self.samples.push(passes as f64 * pixels / t);
+        let per_pass = self.integrator.samples_per_pass() as f64;
+        self.samples.push(passes as f64 * per_pass * pixels / t);
         self.rays
             .push((self.integrator.stats().rays_traced - rays0) as f64 / t);
         let basic = counter(self.integrator.as_ref(), "basic_contributions") - basic0;
@@ -239,7 +244,7 @@ pub fn run(
             Some(u32::MAX),
             Some(options.seed),
             Some(kind),
-            None,
+            options.tracer,
         )?;
         o.max_depth = options.max_depth;
         contestants.push(Contestant::new(gpu, scene, &o)?);
@@ -255,7 +260,10 @@ pub fn run(
     let mut rows = Vec::new();
     for c in &mut contestants {
         let mean = c.integrator.sums()?.mean();
-        let bidirectional = matches!(c.kind, IntegratorKind::Bpt | IntegratorKind::Light);
+        let bidirectional = matches!(
+            c.kind,
+            IntegratorKind::Bpt | IntegratorKind::Light | IntegratorKind::Cbpt
+        );
         rows.push(BdptRow {
             integrator: c.kind.name().to_string(),
             seconds: c.seconds,

@@ -2,6 +2,7 @@
 //! compares against references measured in the same run.
 
 pub mod bdpt;
+pub mod cbpt;
 pub mod dynamic;
 pub mod host;
 pub mod primitives;

@@ -43,15 +43,41 @@ impl Sample {
     }
 }
 
-/// A connection endpoint's BSDF towards the other endpoint.
-struct Endpoint {
+/// A connection endpoint's BSDF towards the other endpoint: CBPT's shading tuple
+/// (f_s, p, p*) of a linking vertex (§3.1), which its GPU kernels compute.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Endpoint {
     /// f |wi·ns| (light subpaths: the adjoint, times the shading-normal correction).
-    f: Vec3,
+    pub f: Vec3,
     /// Solid-angle density of sampling the direction to the other endpoint.
-    pdf_fwd: f32,
+    pub pdf_fwd: f32,
     /// Solid-angle density of sampling the direction to this vertex's predecessor,
     /// arriving from the other endpoint.
-    pdf_rev: f32,
+    pub pdf_rev: f32,
+}
+
+/// The unit direction from `from` to `to` and their squared distance; `None` when they
+/// coincide.
+pub fn segment(from: Vec3, to: Vec3) -> Option<(Vec3, f32)> {
+    let d = to - from;
+    let dist2 = d.length_squared();
+    positive(dist2).then(|| (d / dist2.sqrt(), dist2))
+}
+
+/// The BSDF of surface vertex `v` towards the unit direction `dir` (`mode`: radiance on
+/// camera subpaths, importance on light subpaths).
+pub fn endpoint(scene: &CpuScene, v: &Vertex, dir: Vec3, mode: TransportMode) -> Endpoint {
+    let bsdf = scene.bsdf(v.material);
+    let (wo, wi) = (v.frame.to_local(v.wo), v.frame.to_local(dir));
+    let mut f = bsdf.eval(wo, wi, mode) * wi.z.abs();
+    if mode == TransportMode::Importance {
+        f *= shading_normal_correction(v.wo, dir, v.ns, v.ng, mode);
+    }
+    Endpoint {
+        f,
+        pdf_fwd: bsdf.pdf(wo, wi, mode),
+        pdf_rev: bsdf.pdf(wi, wo, mode),
+    }
 }
 
 /// The techniques of one scene, camera and set of counts.
@@ -71,19 +97,8 @@ impl<'a> Connector<'a> {
         &self.settings.counts
     }
 
-    /// BSDF of surface vertex `v` towards the unit direction `dir`.
     fn endpoint(&self, v: &Vertex, dir: Vec3, mode: TransportMode) -> Endpoint {
-        let bsdf = self.scene.bsdf(v.material);
-        let (wo, wi) = (v.frame.to_local(v.wo), v.frame.to_local(dir));
-        let mut f = bsdf.eval(wo, wi, mode) * wi.z.abs();
-        if mode == TransportMode::Importance {
-            f *= shading_normal_correction(v.wo, dir, v.ns, v.ng, mode);
-        }
-        Endpoint {
-            f,
-            pdf_fwd: bsdf.pdf(wo, wi, mode),
-            pdf_rev: bsdf.pdf(wi, wo, mode),
-        }
+        endpoint(self.scene, v, dir, mode)
     }
 
     /// s = 0: camera vertex `j` lies on an emitter facing the previous vertex.
@@ -144,20 +159,31 @@ impl<'a> Connector<'a> {
         c: &mut Counters,
     ) -> Option<Sample> {
         let z = &camera[j];
-        let to = light.p - z.p;
-        let dist2 = to.length_squared();
-        if !positive(dist2) {
-            return None;
-        }
-        let dir = to / dist2.sqrt();
+        let (dir, _) = segment(z.p, light.p)?;
         c.basic_contributions += 1;
+        let e = self.endpoint(z, dir, TransportMode::Radiance);
+        let sample = self.weigh_light_point(light, camera, j, &e)?;
+        self.visible(z, light, c).then_some(sample)
+    }
+
+    /// s = 1 from camera vertex `j`'s BSDF towards the light point, `e` (evaluated by
+    /// [`Connector::endpoint`] or by CBPT's kernels): the sample as if unoccluded, `None`
+    /// when it carries nothing.
+    pub fn weigh_light_point(
+        &self,
+        light: &Vertex,
+        camera: &[Vertex],
+        j: usize,
+        e: &Endpoint,
+    ) -> Option<Sample> {
+        let z = &camera[j];
+        let (dir, dist2) = segment(z.p, light.p)?;
         let cos_light = light.abs_cos(dir);
         let le = if light.delta || light.ng.dot(-dir) > 0.0 {
             light.le
         } else {
             Vec3::ZERO
         };
-        let e = self.endpoint(z, dir, TransportMode::Radiance);
         let value = z.beta * e.f * le * (cos_light / (dist2 * light.pdf_fwd));
         if value == Vec3::ZERO {
             return None;
@@ -184,7 +210,7 @@ impl<'a> Connector<'a> {
             camera_fwd,
             camera_partial,
         );
-        self.visible(z, light, c).then_some(Sample {
+        Some(Sample {
             s: 1,
             t: j as u32 + 1,
             value,
@@ -206,15 +232,29 @@ impl<'a> Connector<'a> {
         if !y.connectible || !z.connectible || self.counts().connection <= 0.0 {
             return None;
         }
-        let to = y.p - z.p;
-        let dist2 = to.length_squared();
-        if !positive(dist2) {
-            return None;
-        }
-        let dir = to / dist2.sqrt();
+        let (dir, _) = segment(z.p, y.p)?;
         c.basic_contributions += 1;
         let ez = self.endpoint(z, dir, TransportMode::Radiance);
         let ey = self.endpoint(y, -dir, TransportMode::Importance);
+        let sample = self.weigh_connection(light, i, camera, j, &ez, &ey)?;
+        self.visible(z, y, c).then_some(sample)
+    }
+
+    /// s ≥ 2, t ≥ 2 from the two endpoints' BSDFs towards each other, `ez` (camera
+    /// vertex `j`, radiance) and `ey` (light vertex `i`, importance), evaluated by
+    /// [`Connector::endpoint`] or by CBPT's kernels: the sample as if unoccluded, `None`
+    /// when it carries nothing.
+    pub fn weigh_connection(
+        &self,
+        light: &[Vertex],
+        i: usize,
+        camera: &[Vertex],
+        j: usize,
+        ez: &Endpoint,
+        ey: &Endpoint,
+    ) -> Option<Sample> {
+        let (y, z) = (&light[i], &camera[j]);
+        let (dir, dist2) = segment(z.p, y.p)?;
         let value = y.beta * ey.f * ez.f * z.beta / dist2;
         if value == Vec3::ZERO {
             return None;
@@ -227,7 +267,7 @@ impl<'a> Connector<'a> {
             ey.pdf_fwd * z.abs_cos(dir) / dist2,
             z.mis.partial(counts.camera_vertex(j, false), ez.pdf_rev),
         );
-        self.visible(z, y, c).then_some(Sample {
+        Some(Sample {
             s: i as u32 + 1,
             t: j as u32 + 1,
             value,

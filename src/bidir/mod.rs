@@ -10,6 +10,8 @@
 //! - [`connect`]: one technique (s, t) evaluated — contribution and MIS weight;
 //! - [`techniques`]: all techniques of a pair of subpaths;
 //! - [`mis`]: the recursive balance heuristic (dVCM/dVC) and its technique counts;
+//! - [`combinatorial`]: CBPT's counts (populations of camera and light paths combined
+//!   exhaustively, light tracing without direct lighting);
 //! - [`oracle`], [`densities`]: the brute-force balance heuristic from explicit
 //!   densities, and those densities read off real subpaths;
 //! - [`random`]: the counter-based random numbers of `glsl/common/random.glsl`.
@@ -19,6 +21,7 @@
 //! vertex i is xᵢ, camera subpath vertex j is x_{k−j}.
 
 pub mod camera;
+pub mod combinatorial;
 pub mod connect;
 pub mod densities;
 pub mod lights;

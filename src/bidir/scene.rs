@@ -21,6 +21,10 @@ use crate::integrator::pt::PtScene;
 use crate::scene::Scene;
 use crate::trace::{CpuBvh, Hit, Ray};
 
+/// The fraction of a shadow ray's length it tests (1 − 1e-4: it ends just short of the
+/// far end, which lies on a surface).
+pub const SHADOW_RAY_REACH: f32 = 1.0 - 1e-4;
+
 /// Where a ray met a surface.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SurfaceHit {
@@ -132,20 +136,27 @@ impl CpuScene {
         p + ng * eps
     }
 
-    /// Whether the segment between two points is free. Each end on a surface (its
-    /// geometric normal non-zero) is moved off it towards the other end; a point in space
-    /// (the pinhole, a point light: zero normal) stays where it is.
+    /// Whether the segment between two points is free: its [`CpuScene::shadow_ray`]
+    /// exists and hits nothing.
     pub fn unoccluded(&self, a: Vec3, a_ng: Vec3, b: Vec3, b_ng: Vec3) -> bool {
+        self.shadow_ray(a, a_ng, b, b_ng)
+            .is_some_and(|ray| !self.bvh.occluded(&ray))
+    }
+
+    /// The ray that tests the segment between two points. Each end on a surface (its
+    /// geometric normal non-zero) is moved off it towards the other end; a point in space
+    /// (the pinhole, a point light: zero normal) stays where it is; the ray stops
+    /// [`SHADOW_RAY_REACH`] of the way. `None` when the ends coincide.
+    pub fn shadow_ray(&self, a: Vec3, a_ng: Vec3, b: Vec3, b_ng: Vec3) -> Option<Ray> {
         let dir = b - a;
         let from = self.offset(a, a_ng, dir);
         let to = self.offset(b, b_ng, -dir);
         let d = to - from;
         let reach = d.length();
         if !positive(reach) {
-            return false;
+            return None;
         }
-        let ray = Ray::new(from, d / reach, 0.0, reach * (1.0 - 1e-4));
-        !self.bvh.occluded(&ray)
+        Some(Ray::new(from, d / reach, 0.0, reach * SHADOW_RAY_REACH))
     }
 }
 

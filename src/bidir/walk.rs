@@ -65,7 +65,15 @@ impl WalkSettings {
     }
 }
 
-/// Traces the camera subpath of `pixel` into `path` (cleared first).
+/// Where on the film a camera subpath starts: a pixel and a point in it, in [0, 1)².
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FilmPoint {
+    pub pixel: u32,
+    pub jitter: [f32; 2],
+}
+
+/// Traces the camera subpath of `pixel` into `path` (cleared first), jittered within the
+/// pixel by the sampler's [`dims::CAMERA_JITTER`] dimensions.
 pub fn camera_subpath(
     scene: &CpuScene,
     camera: &PinholeCamera,
@@ -75,15 +83,31 @@ pub fn camera_subpath(
     path: &mut Vec<Vertex>,
     counters: &mut Counters,
 ) {
-    path.clear();
-    if settings.camera_vertices() < 2 {
-        return;
-    }
     let jitter = [
         sampler.get(dims::CAMERA_JITTER),
         sampler.get(dims::CAMERA_JITTER + 1),
     ];
-    let dir = camera.ray_direction(pixel, jitter);
+    let film = FilmPoint { pixel, jitter };
+    camera_subpath_at(scene, camera, settings, sampler, film, path, counters);
+}
+
+/// Traces the camera subpath through `film` into `path` (cleared first): for callers
+/// that choose film positions themselves (CBPT's stratified image positions); the
+/// sampler's jitter dimensions are then unused.
+pub fn camera_subpath_at(
+    scene: &CpuScene,
+    camera: &PinholeCamera,
+    settings: &WalkSettings,
+    sampler: &PathSampler,
+    film: FilmPoint,
+    path: &mut Vec<Vertex>,
+    counters: &mut Counters,
+) {
+    path.clear();
+    if settings.camera_vertices() < 2 {
+        return;
+    }
+    let dir = camera.ray_direction(film.pixel, film.jitter);
     let pdf_dir = camera.pdf_direction(dir);
     path.push(Vertex::camera(
         camera.position(),

@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use anyhow::Context;
 use clap::{Args, Subcommand};
 use splitray::bench::bdpt::{self as bdpt_bench, BdptBenchOptions};
+use splitray::bench::cbpt::{self as cbpt_bench, CbptBenchOptions};
 use splitray::bench::dynamic::{self, Contender, DynamicBenchOptions};
 use splitray::bench::primitives::{self, PrimitivesBenchOptions};
 use splitray::bench::pt::{self as pt_bench, PtBenchOptions};
@@ -90,6 +91,49 @@ enum BenchCommand {
         #[arg(long, default_value_t = 0)]
         seed: u64,
         /// A converged image of this film size (EXR): relative MSE of each film.
+        #[arg(long, value_name = "REF.exr")]
+        reference: Option<PathBuf>,
+        /// Also write the report as JSON.
+        #[arg(long, value_name = "OUT.json")]
+        json: Option<PathBuf>,
+    },
+    /// CBPT's measurements (§6 of the paper): combination throughput of the GPU and of
+    /// every CPU core (Table 1), batch sizes (Fig. 6), basic contributions/s of cbpt
+    /// and bpt (Table 3), a step's parts pipelined and synchronous (Algorithm 2) and,
+    /// with --reference, relative MSE at equal time against bpt and pt.
+    Cbpt {
+        /// A built-in scene, a scene .toml or an .obj.
+        scene: String,
+        #[arg(long, default_value_t = 160)]
+        width: u32,
+        #[arg(long, default_value_t = 120)]
+        height: u32,
+        /// Comma-separated tracers whose visibility throughput is measured; the first
+        /// serves every other measurement.
+        #[arg(long, value_delimiter = ',', default_value = "pdacrt,cpu-bvh")]
+        tracers: Vec<TracerKind>,
+        /// Steps per measured block.
+        #[arg(long, default_value_t = 6)]
+        steps: u32,
+        /// Alternating blocks (runs) per comparison.
+        #[arg(long, default_value_t = 3)]
+        rounds: u32,
+        /// Comma-separated batch sizes (segments, multiples of 32) of the sweep.
+        #[arg(
+            long,
+            value_delimiter = ',',
+            default_value = "1024,4096,16384,65536,262144,1048576"
+        )]
+        batches: Vec<u32>,
+        /// Seconds each integrator renders for the equal-time comparison.
+        #[arg(long, default_value_t = 30.0)]
+        time: f64,
+        /// Mitsuba's max_depth (-1 = unbounded, Russian roulette from depth 5).
+        #[arg(long, default_value_t = -1, allow_hyphen_values = true)]
+        max_depth: i32,
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+        /// A converged image of this film size (EXR): relative MSE at equal time.
         #[arg(long, value_name = "REF.exr")]
         reference: Option<PathBuf>,
         /// Also write the report as JSON.
@@ -229,7 +273,8 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     let scene = match &args.what {
         BenchCommand::Trace { scene, .. }
         | BenchCommand::Pt { scene, .. }
-        | BenchCommand::Bdpt { scene, .. } => Some(splitray::scene::load(scene)?),
+        | BenchCommand::Bdpt { scene, .. }
+        | BenchCommand::Cbpt { scene, .. } => Some(splitray::scene::load(scene)?),
         BenchCommand::Primitives { .. } | BenchCommand::Dynamic { .. } => None,
     };
     let animated = match &args.what {
@@ -238,6 +283,13 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     };
     let reference = match &args.what {
         BenchCommand::Bdpt {
+            reference: Some(path),
+            width,
+            height,
+            time,
+            ..
+        }
+        | BenchCommand::Cbpt {
             reference: Some(path),
             width,
             height,
@@ -329,6 +381,43 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
                     integrators: integrators.clone(),
                     seconds: *time,
                     rounds: *rounds,
+                    max_depth: *max_depth,
+                    seed: *seed,
+                    reference,
+                    tracer: None,
+                },
+            )?;
+            print!("{report}");
+            write_json(json, &report)?;
+        }
+        BenchCommand::Cbpt {
+            width,
+            height,
+            tracers,
+            steps,
+            rounds,
+            batches,
+            time,
+            max_depth,
+            seed,
+            json,
+            ..
+        } => {
+            let scene = scene.expect("loaded above");
+            if let Some(b) = batches.iter().find(|b| **b == 0 || **b % 32 != 0) {
+                anyhow::bail!("--batches: {b} is not a positive multiple of 32");
+            }
+            let report = cbpt_bench::run(
+                &gpu,
+                &scene,
+                &CbptBenchOptions {
+                    width: *width,
+                    height: *height,
+                    tracers: tracers.clone(),
+                    steps: *steps,
+                    rounds: *rounds,
+                    batches: batches.clone(),
+                    seconds: *time,
                     max_depth: *max_depth,
                     seed: *seed,
                     reference,

@@ -57,7 +57,8 @@ pub struct RenderArgs {
     /// What to compute along the rays: primary (eye-light shading), ao (ambient
     /// occlusion), shadow (one point light), reflection (one mirror bounce), path
     /// (7 diffuse bounces), pt (physically based path tracing), bpt (bidirectional path
-    /// tracing on the CPU) or light (light tracing on the CPU).
+    /// tracing on the CPU), light (light tracing on the CPU) or cbpt (combinatorial BPT:
+    /// CPU path populations, GPU combination).
     #[arg(long)]
     integrator: Option<IntegratorKind>,
     /// Render for this many seconds instead (stops after the pass during which the time
@@ -157,6 +158,24 @@ pub struct RenderArgs {
     /// the render.
     #[arg(long, value_name = "HOST:PORT")]
     display_server: Option<String>,
+    /// cbpt: N_C, the most camera paths per step, or `auto` to choose it (and N_L) by
+    /// Equation 4 of the CBPT paper from measured BPT and CBPT times (default 2000).
+    #[arg(long, value_name = "N|auto")]
+    cbpt_nc: Option<splitray::integrator::cbpt::CameraPaths>,
+    /// cbpt: N_L, light paths per step, each linked to every camera path (default 15).
+    #[arg(long, value_name = "N")]
+    cbpt_nl: Option<u32>,
+    /// cbpt: N_T, light paths light-traced per step (default 1500; 0: no light tracing,
+    /// and no paths that only light tracing samples, such as point-light caustics).
+    #[arg(long, value_name = "N")]
+    cbpt_nt: Option<u32>,
+    /// cbpt: linking segments per GPU batch, a multiple of 32 (default 131072).
+    #[arg(long, value_name = "SEGMENTS")]
+    cbpt_batch: Option<u32>,
+    /// cbpt: where the linking segments are evaluated: gpu (default; visibility through
+    /// --tracer) or cpu (every core, the CPU BVH).
+    #[arg(long, value_name = "gpu|cpu")]
+    cbpt_combine: Option<splitray::integrator::cbpt::Combination>,
 }
 
 /// The output path (default `out/<scene>.exr`, `out/<scene>.shard-I-of-N.exr` for a

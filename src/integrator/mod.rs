@@ -15,6 +15,7 @@
 
 pub mod aov;
 pub mod bpt;
+pub mod cbpt;
 mod eye;
 pub mod frame;
 pub mod gpu_types;
@@ -142,6 +143,8 @@ pub enum IntegratorKind {
     Bpt,
     /// Light tracing on the CPU ([`light_tracer`]).
     Light,
+    /// Combinatorial BPT: CPU populations, GPU combination ([`cbpt`]).
+    Cbpt,
 }
 
 impl IntegratorKind {
@@ -178,6 +181,11 @@ impl IntegratorKind {
             IntegratorKind::Light,
             "light tracing on the CPU: light subpaths splatted to the camera",
         ),
+        (
+            IntegratorKind::Cbpt,
+            "combinatorial BPT: path populations sampled on the CPU, every camera path \
+             linked to every light path on the GPU in double-buffered batches",
+        ),
     ];
 
     /// Whether the integrator renders animated scenes ([`Integrator::set_frame`]).
@@ -205,6 +213,7 @@ impl IntegratorKind {
             Self::Pt => "pt",
             Self::Bpt => "bpt",
             Self::Light => "light",
+            Self::Cbpt => "cbpt",
         }
     }
 }

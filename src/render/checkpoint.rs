@@ -57,6 +57,8 @@ pub struct SavedOptions {
     pub sort_materials: bool,
     pub strategy: String,
     pub time_limit: Option<f64>,
+    #[serde(default)]
+    pub cbpt: crate::integrator::cbpt::CbptSettings,
 }
 
 impl SavedOptions {
@@ -74,6 +76,7 @@ impl SavedOptions {
             sort_materials: options.sort_materials,
             strategy: format!("{:?}", options.strategy).to_lowercase(),
             time_limit: options.time_limit,
+            cbpt: options.cbpt,
         }
     }
 
@@ -96,6 +99,7 @@ impl SavedOptions {
             // Technique images are not saved in a checkpoint: a resumed render cannot
             // write them (the command line refuses the combination).
             bdpt_techniques: false,
+            cbpt: self.cbpt,
         })
     }
 }

@@ -289,6 +289,38 @@ impl Buffer {
         self.write_at(0, data)
     }
 
+    /// Copies `out.len()` elements from byte `offset` of a host-visible buffer (a
+    /// readback buffer) with no GPU synchronisation at all: the caller has waited for the
+    /// timeline point of the work that wrote them (every submission ends with a host
+    /// barrier). Unlike [`Buffer::read`], it never waits on a stream, so a thread can
+    /// read one batch's results while the GPU computes the next.
+    pub fn read_mapped_into<T: bytemuck::Pod>(&self, offset: u64, out: &mut [T]) -> Result<()> {
+        let bytes = std::mem::size_of_val(out);
+        if offset + bytes as u64 > self.size {
+            return Err(VkError::Usage(format!(
+                "read of {bytes} bytes at {offset} from buffer '{}' of {} bytes",
+                self.name, self.size
+            )));
+        }
+        let Some(ptr) = self.allocation.as_ref().and_then(|a| a.mapped_ptr()) else {
+            return Err(VkError::Usage(format!(
+                "buffer '{}' is not host-visible",
+                self.name
+            )));
+        };
+        // SAFETY: mapped, host-coherent (gpu-allocator's host locations), the range lies
+        // within the allocation (checked above), the caller has waited for the writes,
+        // and `out` is a distinct host allocation.
+        unsafe {
+            std::ptr::copy_nonoverlapping(
+                (ptr.as_ptr() as *const u8).add(offset as usize),
+                bytemuck::cast_slice_mut::<T, u8>(out).as_mut_ptr(),
+                bytes,
+            )
+        };
+        Ok(())
+    }
+
     /// Reads the whole buffer back as `T`s. Runs after all work already submitted to the
     /// main stream; work on other streams must be waited for first.
     pub fn read<T: bytemuck::Pod>(&self) -> Result<Vec<T>> {

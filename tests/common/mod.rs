@@ -4,6 +4,7 @@
 
 pub mod cli;
 pub mod reference;
+pub mod scenes;
 
 use splitray::vk::{BufferAccess, Gpu, GpuDesc, InstanceDesc, StreamPlacement};
 

@@ -61,6 +61,7 @@ pub(super) fn render_options(
     if let Some(path) = &args.reference {
         options.reference = Some(std::sync::Arc::new(read_reference(path, &options)?));
     }
+    cbpt_settings(args, &mut options.cbpt)?;
     if let Some(dir) = &args.bdpt_techniques {
         if resume.is_some() {
             bail!("--bdpt-techniques cannot be used with --resume: a checkpoint keeps the image's sums, not the technique images'");
@@ -132,4 +133,27 @@ fn read_reference(path: &Path, options: &RenderOptions) -> anyhow::Result<Vec<[f
         );
     }
     Ok(film.mean_rgb_buffer())
+}
+
+/// `--cbpt-*` on top of the scene's or the checkpoint's CBPT settings.
+fn cbpt_settings(
+    args: &RenderArgs,
+    settings: &mut splitray::integrator::cbpt::CbptSettings,
+) -> anyhow::Result<()> {
+    if let Some(n) = args.cbpt_nc {
+        settings.camera_paths = n;
+    }
+    if let Some(n) = args.cbpt_nl {
+        settings.light_paths = n;
+    }
+    if let Some(n) = args.cbpt_nt {
+        settings.light_traced = n;
+    }
+    if let Some(n) = args.cbpt_batch {
+        settings.batch = n;
+    }
+    if let Some(c) = args.cbpt_combine {
+        settings.combination = c;
+    }
+    settings.check().map_err(|e| anyhow!(e))
 }

@@ -1,0 +1,53 @@
+//! Scenes several tests share.
+
+use glam::Vec3;
+use splitray::scene::{builtin, MaterialBsdf, MaterialLayer, PointLight, Scene};
+
+/// The Cornell box with a mirror tall block, a short block of mixed diffuse and mirror
+/// layers, tilted shading normals on the floor, and a point light beside the area light.
+pub fn tricky_cornell_box() -> Scene {
+    let mut scene = builtin("cornell-box").unwrap();
+    let layer = |kind: &str, r: f32, weight: f32| MaterialLayer {
+        kind: splitray::scene::BsdfKind::from_name(kind).unwrap(),
+        reflectance: Vec3::splat(r),
+        roughness: 0.3,
+        distribution: splitray::scene::MicrofacetModel::Ggx,
+        ior: 1.5,
+        weight,
+    };
+    let mirror = scene.materials.len() as u32;
+    let mut m = scene.materials[0].clone();
+    m.name = "mirror".into();
+    m.bsdf = Some(MaterialBsdf {
+        layers: vec![layer("mirror", 0.9, 1.0)],
+    });
+    scene.materials.push(m.clone());
+    m.name = "mixed".into();
+    m.bsdf = Some(MaterialBsdf {
+        layers: vec![
+            layer("lambert", 0.7, 0.5),
+            layer("mirror", 0.9, 0.3),
+            layer("conductor", 0.8, 0.2),
+        ],
+    });
+    scene.materials.push(m);
+    // Triangles 10..20 are the short block, 20..30 the tall one (scene::builtin).
+    for (i, t) in scene.triangles.iter_mut().enumerate() {
+        match i {
+            10..20 => t.material = mirror + 1,
+            20..30 => t.material = mirror,
+            _ => {}
+        }
+        let ng = t.geometric_normal();
+        if ng.y > 0.9 && t.centroid().y < 1.0 {
+            // Floor: vertex normals tilted differently at each corner.
+            let tilt = |k: usize| (ng + Vec3::new(0.2 * k as f32 - 0.2, 0.0, 0.15)).normalize();
+            t.n = Some([tilt(0), tilt(1), tilt(2)]);
+        }
+    }
+    scene.point_lights.push(PointLight {
+        position: Vec3::new(278.0, 400.0, 279.0),
+        intensity: Vec3::splat(3e4),
+    });
+    scene
+}
