@@ -81,7 +81,8 @@ pub fn planned_buffers(size: &RenderSize<'_>, integrator: IntegratorKind) -> Vec
     ];
     let gpu_film = match integrator {
         IntegratorKind::Pt => vec!["pt-accum", "pt-accum2"],
-        IntegratorKind::Bpt | IntegratorKind::Light => vec![],
+        // Films on the host; cbpt's GPU buffers are batch-sized.
+        IntegratorKind::Bpt | IntegratorKind::Light | IntegratorKind::Cbpt => vec![],
         _ => vec!["accum"],
     };
     if !gpu_film.is_empty() {
@@ -231,8 +232,15 @@ mod tests {
         assert_eq!(bytes("pt-accum"), Some(160_000));
         assert_eq!(bytes("pt-accum2"), Some(160_000));
         assert_eq!(bytes("triangle-material"), Some(4000));
-        // The CPU integrators keep their film on the host.
-        let cpu = planned_buffers(&size(1000, 100), IntegratorKind::Bpt);
-        assert!(cpu.iter().all(|p| !p.name.contains("accum")));
+        // The CPU integrators (and cbpt, which combines on the CPU) keep their film on
+        // the host.
+        for kind in [
+            IntegratorKind::Bpt,
+            IntegratorKind::Light,
+            IntegratorKind::Cbpt,
+        ] {
+            let host = planned_buffers(&size(1000, 100), kind);
+            assert!(host.iter().all(|p| !p.name.contains("accum")), "{kind}");
+        }
     }
 }
