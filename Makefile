@@ -3,6 +3,9 @@
 
 CARGO ?= cargo
 SCENE ?= cornell-box
+# Bidirectional path tracing with a light vertex cache, resampled connections and
+# material sorting where it pays (README: the integrators), for a fixed time.
+RENDER_FLAGS ?= --integrator cis-lbdpt --width 256 --height 256 --time 20
 
 .PHONY: deps build render test slurm-test lint bench clean
 
@@ -15,7 +18,7 @@ build: deps
 
 render: build
 	@mkdir -p out
-	./target/release/splitray render $(SCENE) -o out/$(SCENE).exr --stats out/$(SCENE).stats.json
+	./target/release/splitray render $(SCENE) $(RENDER_FLAGS) -o out/$(SCENE).exr --stats out/$(SCENE).stats.json
 
 # Every GPU test opens its device with VK_LAYER_KHRONOS_validation and fails on any
 # validation error or warning (tests/common/mod.rs); SPLITRAY_VALIDATION turns it on for

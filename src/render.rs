@@ -82,8 +82,11 @@ pub struct RenderOptions {
     /// A reference image (mean RGB per pixel, this film's size): the render reports its
     /// relative MSE against it as it goes.
     pub reference: Option<std::sync::Arc<Vec<[f32; 3]>>>,
-    /// `bpt`, `light`: keep one image per technique (s, t) ([`Integrator::extra_images`]).
+    /// `bpt`, `light`, `lvc-bdpt`, `cis-lbdpt`: keep one image per technique (s, t)
+    /// ([`Integrator::extra_images`]).
     pub bdpt_techniques: bool,
+    /// `lvc-bdpt`, `cis-lbdpt`: connections, candidates, streams, sorting.
+    pub lvc: integrator::lvc::options::LvcSettings,
     /// `cbpt`: population sizes, batch size, where the combination runs.
     pub cbpt: integrator::cbpt::CbptSettings,
 }
@@ -129,6 +132,7 @@ impl RenderOptions {
             time_limit: None,
             reference: None,
             bdpt_techniques: false,
+            lvc: Default::default(),
             cbpt: Default::default(),
         };
         if options.width == 0
@@ -528,6 +532,27 @@ fn integrator_on(
                     ..Default::default()
                 },
             ))
+        }
+        IntegratorKind::LvcBdpt | IntegratorKind::CisLbdpt => {
+            let variant = match options.integrator {
+                IntegratorKind::CisLbdpt => integrator::lvc::Variant::CisLbdpt,
+                _ => integrator::lvc::Variant::LvcBdpt,
+            };
+            let mut lvc = options
+                .lvc
+                .options(variant, integrator::lvc::sort_pays(gpu));
+            lvc.seed = options.seed;
+            lvc.max_depth = options.max_depth;
+            lvc.rr_depth = options.rr_depth;
+            lvc.spp = options.spp;
+            lvc.technique_images = options.bdpt_techniques;
+            Box::new(integrator::lvc::LvcIntegrator::new(
+                gpu,
+                tracer,
+                &integrator::pt::PtScene::new(scene),
+                &camera,
+                &lvc,
+            )?)
         }
         IntegratorKind::Cbpt => Box::new(integrator::cbpt::CbptIntegrator::new(
             scene,

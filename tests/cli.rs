@@ -162,6 +162,80 @@ fn bpt_render_writes_technique_images_and_its_counters() {
     assert_eq!(stats["counters"]["non_finite_dropped"], 0);
 }
 
+/// `--bdpt-techniques` for the GPU integrators: one EXR per technique, summing to the
+/// image; the header and stats name the integrator and its cache.
+#[test]
+fn lvc_renders_write_technique_images_that_sum_to_the_image() {
+    for integrator in ["lvc-bdpt", "cis-lbdpt"] {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::create_dir(dir.path().join("tech")).unwrap();
+        let out = splitray(
+            &[
+                "render",
+                "cornell-box",
+                "-o",
+                "img.exr",
+                "--width",
+                "12",
+                "--height",
+                "10",
+                "--spp",
+                "2",
+                "--integrator",
+                integrator,
+                "--connections",
+                "2",
+                "--streams",
+                "1",
+                "--bdpt-techniques",
+                "tech",
+                "--stats",
+                "stats.json",
+            ],
+            dir.path(),
+        );
+        assert!(out.status.success(), "{integrator}: {}", text(&out));
+        let (film, meta) = splitray::film::read_exr(dir.path().join("img.exr")).unwrap();
+        assert_eq!(meta.integrator, integrator);
+        let mut sum = vec![[0.0f64; 3]; film.pixel_count()];
+        let mut names = Vec::new();
+        for entry in std::fs::read_dir(dir.path().join("tech")).unwrap() {
+            let path = entry.unwrap().path();
+            names.push(path.file_name().unwrap().to_string_lossy().into_owned());
+            let (t, _) = splitray::film::read_exr(&path).unwrap();
+            assert_eq!((t.width(), t.height()), (12, 10));
+            for (p, s) in sum.iter_mut().enumerate() {
+                for (c, v) in t.mean_rgb(p).iter().enumerate() {
+                    s[c] += *v as f64;
+                }
+            }
+        }
+        // Emitter hits (at 12×10 no camera ray need meet the light itself: any length),
+        // direct lighting, connections and light tracing all appear.
+        for name in ["s0_t", "s1_t2.exr", "s2_t2.exr", "s2_t1.exr"] {
+            assert!(
+                names.iter().any(|n| n.starts_with(name)),
+                "{integrator}: {names:?}"
+            );
+        }
+        for (p, s) in sum.iter().enumerate() {
+            let want = film.mean_rgb(p);
+            for c in 0..3 {
+                let w = want[c] as f64;
+                assert!(
+                    (s[c] - w).abs() <= 1e-4 * w.abs().max(1e-3),
+                    "{integrator}, pixel {p}: techniques sum to {}, the image is {w}",
+                    s[c]
+                );
+            }
+        }
+        let stats: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(dir.path().join("stats.json")).unwrap()).unwrap();
+        assert!(stats["counters"]["cache_vertices"].as_u64().unwrap() > 0);
+        assert_eq!(stats["counters"]["camera_paths"], 12 * 10 * 2);
+    }
+}
+
 #[test]
 fn default_output_goes_to_out_folder() {
     let dir = tempfile::tempdir().unwrap();
@@ -278,8 +352,13 @@ fn bad_input_gives_a_clear_error_and_no_output() {
     );
     assert_fails(
         d,
+        &["bench", "bdpt", "cornell-box", "--streams", "1,2"],
+        &["--streams", "2 streams"],
+    );
+    assert_fails(
+        d,
         &["render", "--bdpt-techniques", ".", "-o", "a.exr"],
-        &["--bdpt-techniques", "bpt or light"],
+        &["--bdpt-techniques", "bpt, light, lvc-bdpt or cis-lbdpt"],
     );
     // clap's own usage errors exit with 2; an unknown integrator is one of them.
     let out = splitray(&["render", "--integrator", "bogus"], d);

@@ -35,6 +35,8 @@ fn grouping_and_restoring_passes_leaves_the_film_bit_identical() {
         IntegratorKind::Path,
         IntegratorKind::Bpt,
         IntegratorKind::Light,
+        IntegratorKind::LvcBdpt,
+        IntegratorKind::CisLbdpt,
     ] {
         let mut whole = integrator(&gpu, &scene, kind);
         whole.render_passes(0, 6).unwrap();

@@ -3,10 +3,14 @@
 //! Every integrator gets the same time, in [`BdptBenchOptions::rounds`] slices taken in
 //! turn (the order rotates every round), so that a change of load on a shared machine
 //! hits them alike. Each slice renders whole passes until its time is up and continues
-//! the integrator's film, so the films at the end are equal-time renders. Reported per
+//! the integrator's film, so the films at the end are equal-time renders; an integrator
+//! that batches passes (`passes_per_call`) gets as many per call as the time left holds
+//! at its latest rate. Reported per
 //! integrator: samples/s, Mrays/s and, for `bpt` and `light`, CBPT's throughput measure
 //! (basic contributions f_{i,j} per second, §6.2) — medians over the slices — and,
-//! given a reference, the relative MSE of the final film and its ratio to `pt`'s.
+//! given a reference, the relative MSE of the final film and its ratio to `pt`'s. Then
+//! the light-vertex-cache integrators at equal samples per pixel, with one stream and
+//! three, sorted or not ([`super::lvc`]).
 
 use std::fmt;
 use std::sync::Arc;
@@ -35,6 +39,8 @@ pub struct BdptBenchOptions {
     pub reference: Option<(Arc<Vec<[f32; 3]>>, String)>,
     /// The tracer of the GPU integrators (`None`: the scene's, else the default).
     pub tracer: Option<crate::trace::TracerKind>,
+    /// The equal-spp comparison of `lvc-bdpt` and `cis-lbdpt` (passes 0: none).
+    pub equal_spp: super::lvc::SppPlan,
 }
 
 impl Default for BdptBenchOptions {
@@ -46,6 +52,8 @@ impl Default for BdptBenchOptions {
                 IntegratorKind::Pt,
                 IntegratorKind::Bpt,
                 IntegratorKind::Light,
+                IntegratorKind::LvcBdpt,
+                IntegratorKind::CisLbdpt,
             ],
             seconds: 30.0,
             rounds: 10,
@@ -53,6 +61,7 @@ impl Default for BdptBenchOptions {
             seed: 0,
             reference: None,
             tracer: None,
+            equal_spp: Default::default(),
         }
     }
 }
@@ -87,6 +96,8 @@ pub struct BdptBenchReport {
     pub rounds: u32,
     pub reference: Option<String>,
     pub rows: Vec<BdptRow>,
+    /// `lvc-bdpt` and `cis-lbdpt` at equal spp, with 1 and 3 streams.
+    pub equal_spp: Vec<super::lvc::SppRow>,
 }
 
 impl BdptBenchReport {
@@ -149,7 +160,11 @@ impl fmt::Display for BdptBenchReport {
                 }
             }
         }
-        Ok(())
+        let mse = |k: &str| self.rows.iter().find(|r| r.integrator == k)?.relative_mse;
+        if let (Some(cis), Some(lvc)) = (mse("cis-lbdpt"), mse("lvc-bdpt")) {
+            writeln!(f, "relative MSE cis-lbdpt / lvc-bdpt: {:.3}", cis / lvc)?;
+        }
+        super::lvc::write_equal_spp(f, &self.equal_spp)
     }
 }
 
@@ -158,6 +173,8 @@ struct Contestant {
     kind: IntegratorKind,
     integrator: Box<dyn Integrator>,
     next_pass: u32,
+    /// Seconds per pass of the latest call, which sizes the next one.
+    pass_seconds: Option<f64>,
     seconds: f64,
     passes: u32,
     samples: Vec<f64>,
@@ -182,6 +199,7 @@ impl Contestant {
             kind: options.integrator,
             integrator,
             next_pass: 1,
+            pass_seconds: None,
             seconds: 0.0,
             passes: 0,
             samples: Vec::new(),
@@ -197,9 +215,18 @@ impl Contestant {
         let start = Instant::now();
         let mut passes = 0u32;
         while passes == 0 || start.elapsed().as_secs_f64() < slice {
-            self.integrator.render_passes(self.next_pass, 1)?;
-            self.next_pass += 1;
-            passes += 1;
+            // As many passes per call as fit in the time left by the latest call's rate
+            // (at least one, at most what the integrator batches), so that integrators
+            // that batch passes into one wavefront do so without overrunning the slice.
+            let left = slice - start.elapsed().as_secs_f64();
+            let count = self.pass_seconds.map_or(1, |t| {
+                ((left / t.max(1e-9)).floor() as u32).clamp(1, self.integrator.passes_per_call())
+            });
+            let call = Instant::now();
+            self.integrator.render_passes(self.next_pass, count)?;
+            self.pass_seconds = Some(call.elapsed().as_secs_f64() / count as f64);
+            self.next_pass += count;
+            passes += count;
         }
         let t = start.elapsed().as_secs_f64().max(1e-9);
         self.seconds += t;
@@ -277,6 +304,21 @@ pub fn run(
                 .and_then(|(r, _)| relative_mse(&mean, r)),
         });
     }
+    let mut base = RenderOptions::resolve(
+        scene,
+        Some(options.width),
+        Some(options.height),
+        None,
+        Some(options.seed),
+        None,
+        None,
+    )?;
+    base.max_depth = options.max_depth;
+    let equal_spp = if options.equal_spp.passes > 0 {
+        super::lvc::equal_spp(gpu, scene, &base, &options.integrators, &options.equal_spp)?
+    } else {
+        Vec::new()
+    };
     Ok(BdptBenchReport {
         date: super::today(),
         device: device_description(gpu),
@@ -291,5 +333,6 @@ pub fn run(
         rounds,
         reference: options.reference.as_ref().map(|(_, name)| name.clone()),
         rows,
+        equal_spp,
     })
 }

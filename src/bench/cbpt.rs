@@ -581,6 +581,7 @@ pub fn run(
                 seed: options.seed,
                 reference: Some(reference.clone()),
                 tracer: Some(options.tracers[0]),
+                equal_spp: Default::default(),
             },
         )?),
         None => None,

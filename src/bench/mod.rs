@@ -5,6 +5,7 @@ pub mod bdpt;
 pub mod cbpt;
 pub mod dynamic;
 pub mod host;
+pub mod lvc;
 pub mod primitives;
 pub mod pt;
 pub mod trace;

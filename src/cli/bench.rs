@@ -7,6 +7,7 @@ use clap::{Args, Subcommand};
 use splitray::bench::bdpt::{self as bdpt_bench, BdptBenchOptions};
 use splitray::bench::cbpt::{self as cbpt_bench, CbptBenchOptions};
 use splitray::bench::dynamic::{self, Contender, DynamicBenchOptions};
+use splitray::bench::lvc::{SortSetting, SppPlan};
 use splitray::bench::primitives::{self, PrimitivesBenchOptions};
 use splitray::bench::pt::{self as pt_bench, PtBenchOptions};
 use splitray::bench::trace::{self, TraceBenchOptions};
@@ -68,16 +69,23 @@ enum BenchCommand {
         json: Option<PathBuf>,
     },
     /// Integrators at equal wall time, taken in turns: samples/s, Mrays/s, basic
-    /// contributions/s (bpt, light) and, with --reference, relative MSE.
+    /// contributions/s (bpt, light) and, with --reference, relative MSE; then lvc-bdpt
+    /// and cis-lbdpt at equal spp with 1 and 3 streams: time, per-stream busy time and
+    /// overlap, per-kernel GPU time.
     Bdpt {
-        /// A built-in scene, a scene .toml or an .obj.
-        scene: String,
+        /// Built-in scenes, scene .toml or .obj files, each benchmarked in turn.
+        #[arg(required = true, num_args = 1..)]
+        scenes: Vec<String>,
         #[arg(long, default_value_t = 160)]
         width: u32,
         #[arg(long, default_value_t = 120)]
         height: u32,
         /// Comma-separated integrators to compare.
-        #[arg(long, value_delimiter = ',', default_value = "pt,bpt,light")]
+        #[arg(
+            long,
+            value_delimiter = ',',
+            default_value = "pt,bpt,light,lvc-bdpt,cis-lbdpt"
+        )]
         integrators: Vec<IntegratorKind>,
         /// Seconds each integrator renders.
         #[arg(long, default_value_t = 30.0)]
@@ -90,10 +98,24 @@ enum BenchCommand {
         max_depth: i32,
         #[arg(long, default_value_t = 0)]
         seed: u64,
-        /// A converged image of this film size (EXR): relative MSE of each film.
+        /// A converged image of this film size (EXR): relative MSE of each film. Once per
+        /// scene, in the scenes' order (all or none).
         #[arg(long, value_name = "REF.exr")]
-        reference: Option<PathBuf>,
-        /// Also write the report as JSON.
+        reference: Vec<PathBuf>,
+        /// Passes of the equal-spp comparison of lvc-bdpt and cis-lbdpt (0: none).
+        #[arg(long, default_value_t = 4)]
+        spp: u32,
+        /// Rounds of the equal-spp comparison (the median is reported).
+        #[arg(long, default_value_t = 3)]
+        spp_rounds: u32,
+        /// Stream counts of the equal-spp comparison (each 1 or 3).
+        #[arg(long, value_delimiter = ',', default_value = "1,3")]
+        streams: Vec<u32>,
+        /// Material sorting in the equal-spp comparison: default (each integrator's
+        /// choice on the device), on, off; several compare them (e.g. on,off).
+        #[arg(long, value_delimiter = ',', default_value = "default")]
+        sort: Vec<SortSetting>,
+        /// Also write the reports as JSON (a list, one per scene).
         #[arg(long, value_name = "OUT.json")]
         json: Option<PathBuf>,
     },
@@ -273,23 +295,50 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     let scene = match &args.what {
         BenchCommand::Trace { scene, .. }
         | BenchCommand::Pt { scene, .. }
-        | BenchCommand::Bdpt { scene, .. }
         | BenchCommand::Cbpt { scene, .. } => Some(splitray::scene::load(scene)?),
-        BenchCommand::Primitives { .. } | BenchCommand::Dynamic { .. } => None,
+        BenchCommand::Bdpt { .. }
+        | BenchCommand::Primitives { .. }
+        | BenchCommand::Dynamic { .. } => None,
     };
     let animated = match &args.what {
         BenchCommand::Dynamic { scene, .. } => Some(splitray::scene::load_animated(scene)?),
         _ => None,
     };
-    let reference = match &args.what {
+    let bdpt_inputs = match &args.what {
         BenchCommand::Bdpt {
-            reference: Some(path),
+            scenes,
+            reference,
             width,
             height,
             time,
+            streams,
             ..
+        } => {
+            if time.is_nan() || *time <= 0.0 {
+                anyhow::bail!("--time must be a positive number of seconds");
+            }
+            if let Some(s) = streams.iter().find(|s| !matches!(s, 1 | 3)) {
+                anyhow::bail!("--streams: {s} streams; the kernels run on 1 or 3");
+            }
+            if !reference.is_empty() && reference.len() != scenes.len() {
+                anyhow::bail!(
+                    "--reference: {} given for {} scenes (one per scene, in order, or none)",
+                    reference.len(),
+                    scenes.len()
+                );
+            }
+            let mut inputs = Vec::new();
+            for (k, name) in scenes.iter().enumerate() {
+                let r = reference.get(k);
+                let r = r.map(|p| read_reference(p, *width, *height)).transpose()?;
+                inputs.push((splitray::scene::load(name)?, r));
+            }
+            inputs
         }
-        | BenchCommand::Cbpt {
+        _ => Vec::new(),
+    };
+    let cbpt_reference = match &args.what {
+        BenchCommand::Cbpt {
             reference: Some(path),
             width,
             height,
@@ -368,27 +417,40 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             rounds,
             max_depth,
             seed,
+            spp,
+            spp_rounds,
+            streams,
+            sort,
             json,
             ..
         } => {
-            let scene = scene.expect("loaded above");
-            let report = bdpt_bench::run(
-                &gpu,
-                &scene,
-                &BdptBenchOptions {
-                    width: *width,
-                    height: *height,
-                    integrators: integrators.clone(),
-                    seconds: *time,
-                    rounds: *rounds,
-                    max_depth: *max_depth,
-                    seed: *seed,
-                    reference,
-                    tracer: None,
-                },
-            )?;
-            print!("{report}");
-            write_json(json, &report)?;
+            let mut reports = Vec::new();
+            for (scene, reference) in bdpt_inputs {
+                let report = bdpt_bench::run(
+                    &gpu,
+                    &scene,
+                    &BdptBenchOptions {
+                        width: *width,
+                        height: *height,
+                        integrators: integrators.clone(),
+                        seconds: *time,
+                        rounds: *rounds,
+                        max_depth: *max_depth,
+                        seed: *seed,
+                        reference,
+                        tracer: None,
+                        equal_spp: SppPlan {
+                            passes: *spp,
+                            rounds: *spp_rounds,
+                            streams: streams.clone(),
+                            sort: sort.clone(),
+                        },
+                    },
+                )?;
+                print!("{report}");
+                reports.push(report);
+            }
+            write_json(json, &reports)?;
         }
         BenchCommand::Cbpt {
             width,
@@ -420,7 +482,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
                     seconds: *time,
                     max_depth: *max_depth,
                     seed: *seed,
-                    reference,
+                    reference: cbpt_reference,
                 },
             )?;
             print!("{report}");

@@ -33,7 +33,7 @@ pub enum Command {
     Info(info::InfoArgs),
     /// Render a scene to an EXR (linear HDR, with AOVs) and a PNG preview beside it; or
     /// one shard of it (--shard), or continue a checkpoint (--resume).
-    Render(render::RenderArgs),
+    Render(Box<render::RenderArgs>),
     /// Merge the shards of one image (`render --shard I/N`) into one EXR, weighted by
     /// their samples, with the merged standard error.
     Merge(merge::MergeArgs),

@@ -57,24 +57,44 @@ pub struct RenderArgs {
     /// What to compute along the rays: primary (eye-light shading), ao (ambient
     /// occlusion), shadow (one point light), reflection (one mirror bounce), path
     /// (7 diffuse bounces), pt (physically based path tracing), bpt (bidirectional path
-    /// tracing on the CPU), light (light tracing on the CPU) or cbpt (combinatorial BPT:
-    /// CPU path populations, GPU combination).
+    /// tracing on the CPU), light (light tracing on the CPU), lvc-bdpt (bidirectional
+    /// path tracing with a light vertex cache on the GPU), cis-lbdpt (the same with
+    /// material sorting and resampled connections) or cbpt (combinatorial BPT: CPU path
+    /// populations, GPU combination).
     #[arg(long)]
     integrator: Option<IntegratorKind>,
     /// Render for this many seconds instead (stops after the pass during which the time
     /// ran out; with --spp, at most that many passes).
     #[arg(long, value_name = "SECONDS")]
     time: Option<f64>,
-    /// pt, bpt, light: maximum path depth as in Mitsuba (1 = emitters seen directly, 2 = direct
+    /// pt, bpt, light, lvc-bdpt, cis-lbdpt: maximum path depth as in Mitsuba (1 = emitters seen directly, 2 = direct
     /// light, -1 = unbounded; default: the scene's, else -1).
     #[arg(long, allow_hyphen_values = true)]
     max_depth: Option<i32>,
-    /// pt, bpt, light: Russian roulette from this depth on (default: Mitsuba's 5).
+    /// pt, bpt, light, lvc-bdpt, cis-lbdpt: Russian roulette from this depth on (default: Mitsuba's 5).
     #[arg(long)]
     rr_depth: Option<u32>,
-    /// pt: do not sort paths by material before shading (same image, other speed).
-    #[arg(long)]
+    /// pt, lvc-bdpt, cis-lbdpt: do not sort paths by material before shading (same image,
+    /// other speed).
+    #[arg(long, conflicts_with = "sort")]
     no_sort: bool,
+    /// lvc-bdpt, cis-lbdpt: sort paths by material before shading (cis-lbdpt's default
+    /// where it pays: on GPUs, not on CPU devices such as lavapipe).
+    #[arg(long)]
+    sort: bool,
+    /// lvc-bdpt, cis-lbdpt: connections (shadow rays) to light-vertex-cache vertices per
+    /// camera vertex, N (default 5, at most 16).
+    #[arg(long, value_name = "N")]
+    connections: Option<u32>,
+    /// cis-lbdpt: candidate cache vertices per camera vertex, M, that the N connections
+    /// are resampled from (default 10, at most 16).
+    #[arg(long, value_name = "M")]
+    candidates: Option<u32>,
+    /// lvc-bdpt, cis-lbdpt: streams for the direct-lighting, connection and next-bounce
+    /// kernels: 3 (default; concurrent where the device has several queues) or 1 (the
+    /// same image).
+    #[arg(long, value_name = "1|3")]
+    streams: Option<u32>,
     /// pt: estimators: mis (default), nee (light sampling only) or bsdf (BSDF sampling only).
     #[arg(long)]
     strategy: Option<splitray::integrator::pt::Strategy>,
@@ -133,7 +153,7 @@ pub struct RenderArgs {
     /// SPLITRAY_SHARD_COUNT set to its completions).
     #[arg(long, value_name = "I/N|auto")]
     shard: Option<String>,
-    /// bpt, light: also write one MIS-weighted EXR per technique (s, t) into this
+    /// bpt, light, lvc-bdpt, cis-lbdpt: also write one MIS-weighted EXR per technique (s, t) into this
     /// (existing) folder, `s{S}_t{T}.exr` (`longer.exr`: paths of more than 8
     /// segments); they sum to the image.
     #[arg(long, value_name = "DIR")]
@@ -471,8 +491,16 @@ fn print_summary(result: &RenderOutput, profile: bool) {
 /// Refuses `--bdpt-techniques` for other integrators and a folder that is missing or not
 /// writable, before anything is rendered.
 pub(super) fn check_technique_dir(dir: &Path, integrator: IntegratorKind) -> anyhow::Result<()> {
-    if !matches!(integrator, IntegratorKind::Bpt | IntegratorKind::Light) {
-        bail!("--bdpt-techniques needs --integrator bpt or light, not {integrator}");
+    if !matches!(
+        integrator,
+        IntegratorKind::Bpt
+            | IntegratorKind::Light
+            | IntegratorKind::LvcBdpt
+            | IntegratorKind::CisLbdpt
+    ) {
+        bail!(
+            "--bdpt-techniques needs --integrator bpt, light, lvc-bdpt or cis-lbdpt, not {integrator}"
+        );
     }
     if !dir.is_dir() {
         bail!(

@@ -10,7 +10,9 @@
 //! The ray workloads of the PDACRT paper's Tables 1–2 are integrators too ([`eye`]):
 //! `primary` (eye-light shading), `ao` (8 ambient-occlusion rays per hit), `shadow` (one
 //! point light), `reflection` (one mirror bounce) and `path` (7 diffuse bounces). `pt` is
-//! the physically based wavefront path tracer of [`pt`]. First-hit AOVs (depth, triangle
+//! the physically based wavefront path tracer of [`pt`]; `bpt` and `light` the CPU
+//! bidirectional integrators of [`bpt`]; `lvc-bdpt` and `cis-lbdpt` the GPU
+//! light-vertex-cache ones of [`lvc`]. First-hit AOVs (depth, triangle
 //! id, normal) come from one pass of pixel-centre rays for every integrator ([`aov`]).
 
 pub mod aov;
@@ -20,6 +22,7 @@ mod eye;
 pub mod frame;
 pub mod gpu_types;
 pub mod light_tracer;
+pub mod lvc;
 pub mod pt;
 
 use std::collections::BTreeMap;
@@ -143,6 +146,10 @@ pub enum IntegratorKind {
     Bpt,
     /// Light tracing on the CPU ([`light_tracer`]).
     Light,
+    /// Light-vertex-cache BPT on the GPU, uniform connections ([`lvc`]).
+    LvcBdpt,
+    /// CIS-LBDPT on the GPU: material sorting, resampled connections ([`lvc`]).
+    CisLbdpt,
     /// Combinatorial BPT: CPU populations, GPU combination ([`cbpt`]).
     Cbpt,
 }
@@ -182,6 +189,14 @@ impl IntegratorKind {
             "light tracing on the CPU: light subpaths splatted to the camera",
         ),
         (
+            IntegratorKind::LvcBdpt,
+            "bidirectional path tracing on the GPU with a light vertex cache: N uniform connections",
+        ),
+        (
+            IntegratorKind::CisLbdpt,
+            "LVC-BDPT with material sorting and N connections resampled from M candidates",
+        ),
+        (
             IntegratorKind::Cbpt,
             "combinatorial BPT: path populations sampled on the CPU, every camera path \
              linked to every light path on the GPU in double-buffered batches",
@@ -213,6 +228,8 @@ impl IntegratorKind {
             Self::Pt => "pt",
             Self::Bpt => "bpt",
             Self::Light => "light",
+            Self::LvcBdpt => "lvc-bdpt",
+            Self::CisLbdpt => "cis-lbdpt",
             Self::Cbpt => "cbpt",
         }
     }

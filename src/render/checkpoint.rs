@@ -59,6 +59,9 @@ pub struct SavedOptions {
     pub time_limit: Option<f64>,
     #[serde(default)]
     pub cbpt: crate::integrator::cbpt::CbptSettings,
+    /// Absent in checkpoints of integrators that have none.
+    #[serde(default)]
+    pub lvc: crate::integrator::lvc::options::LvcSettings,
 }
 
 impl SavedOptions {
@@ -77,6 +80,7 @@ impl SavedOptions {
             strategy: format!("{:?}", options.strategy).to_lowercase(),
             time_limit: options.time_limit,
             cbpt: options.cbpt,
+            lvc: options.lvc,
         }
     }
 
@@ -100,6 +104,7 @@ impl SavedOptions {
             // write them (the command line refuses the combination).
             bdpt_techniques: false,
             cbpt: self.cbpt,
+            lvc: self.lvc,
         })
     }
 }

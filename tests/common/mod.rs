@@ -3,6 +3,7 @@
 #![allow(dead_code)]
 
 pub mod cli;
+pub mod lvc_dump;
 pub mod reference;
 pub mod scenes;
 

@@ -54,6 +54,19 @@ pub(super) fn render_options(
     }
     if args.no_sort {
         options.sort_materials = false;
+        options.lvc.sort = Some(false);
+    }
+    if args.sort {
+        options.lvc.sort = Some(true);
+    }
+    if args.connections.is_some() {
+        options.lvc.connections = args.connections;
+    }
+    if args.candidates.is_some() {
+        options.lvc.candidates = args.candidates;
+    }
+    if args.streams.is_some() {
+        options.lvc.streams = args.streams;
     }
     if let Some(s) = args.strategy {
         options.strategy = s;

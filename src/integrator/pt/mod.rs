@@ -226,7 +226,11 @@ impl Pipelines {
 }
 
 /// Uploads `data`, or one zeroed element when it is empty (bindings need a buffer).
-fn upload_or_dummy<T: bytemuck::Pod>(gpu: &Gpu, name: &str, data: &[T]) -> vk::Result<Buffer> {
+pub(crate) fn upload_or_dummy<T: bytemuck::Pod>(
+    gpu: &Gpu,
+    name: &str,
+    data: &[T],
+) -> vk::Result<Buffer> {
     if data.is_empty() {
         gpu.upload(name, &[T::zeroed()])
     } else {
@@ -234,20 +238,21 @@ fn upload_or_dummy<T: bytemuck::Pod>(gpu: &Gpu, name: &str, data: &[T]) -> vk::R
     }
 }
 
-/// The scene as the shading kernels read it.
-struct SceneBuffers {
-    triangles: Buffer,
-    triangle_material: Buffer,
-    materials: Buffer,
-    bsdfs: Buffer,
-    normals: Buffer,
-    lights: Buffer,
-    light_cdf: Buffer,
-    tri_pmf: Buffer,
+/// The scene as the shading kernels read it (`pt`'s and the light-vertex-cache
+/// integrators').
+pub struct SceneBuffers {
+    pub(crate) triangles: Buffer,
+    pub(crate) triangle_material: Buffer,
+    pub(crate) materials: Buffer,
+    pub(crate) bsdfs: Buffer,
+    pub(crate) normals: Buffer,
+    pub(crate) lights: Buffer,
+    pub(crate) light_cdf: Buffer,
+    pub(crate) tri_pmf: Buffer,
 }
 
 impl SceneBuffers {
-    fn new(gpu: &Gpu, scene: &PtScene) -> vk::Result<Self> {
+    pub(crate) fn new(gpu: &Gpu, scene: &PtScene) -> vk::Result<Self> {
         Ok(Self {
             triangles: gpu.upload("pt-triangles", &scene.triangles)?,
             triangle_material: gpu.upload("pt-triangle-material", &scene.triangle_material)?,

@@ -1,0 +1,176 @@
+#version 460
+//! variant resampled: LVC_RESAMPLE
+// Camera pass, stream 1 (Algorithm 8, line 7): connections (s >= 2, t >= 2) of the camera
+// vertex to vertices of its pass's light vertex cache, written to slots i N + k (k < N)
+// of the connections' shadow rays and contributions (bound from slot P.base of the
+// buffers that direct lighting's slots start). Two variants: uniform (the default
+// build) and resampled (LVC_RESAMPLE).
+//
+// Uniform (LVC-BDPT, Davidovic et al. 2014): N vertices drawn uniformly with replacement
+// from the |C_q| vertices of pass q's N_L light paths. Each estimates
+// (1/N_L) sum over the cache of the connection's contribution, so it is scaled by
+// |C_q| / (N N_L).
+//
+// Resampled (CIS-LBDPT, thesis 4.4.3, as Talbot et al. 2005's resampled importance
+// sampling): M candidates drawn uniformly (density q = 1 / |C_q|), each one's unoccluded
+// contribution g (both BSDFs, the geometry term, the MIS weight) evaluated, its
+// luminance taken as the target p^; then N of them drawn with replacement in proportion
+// to p^, each weighted by (1 / p^(y)) (1 / M) sum_m p^(y_m) / q(y_m), so that
+// g(y) V(y) (sum_m p^_m / p^(y)) |C_q| / (M N N_L) is unbiased wherever p^ > 0 when g > 0
+// (luminance of a non-negative RGB value with positive weights). Only those N are traced.
+// Keeping the best N instead would be biased. With M = N = 1 the sum over p^ is p^(y)
+// itself, the weight exactly 1 and the result bit for bit the uniform one.
+//
+// The MIS weight is the path's alone, as if the selection were uniform (count
+// C.count_connection = N N_L / E|C_q|), so the weights of a path's techniques sum to 1.
+#extension GL_EXT_control_flow_attributes : require
+#include "grid.glsl"
+#include "geometry.glsl"
+#include "random.glsl"
+#include "bsdf.glsl"
+#include "lvc.glsl"
+
+layout(push_constant) uniform Push { LvcPush P; };
+layout(std430, set = 0, binding = 0) readonly buffer Constants { LvcConstants C; };
+layout(std430, set = 0, binding = 1) readonly buffer Active { uint live_ids[]; };
+layout(std430, set = 0, binding = 2) readonly buffer Order { uint order[]; };
+layout(std430, set = 0, binding = 3) readonly buffer Vertices { LvcVertex vertices[]; };
+layout(std430, set = 0, binding = 4) readonly buffer Triangles { Triangle triangles[]; };
+layout(std430, set = 0, binding = 5) readonly buffer Bsdfs { BsdfParams bsdfs[]; };
+layout(std430, set = 0, binding = 6) readonly buffer Cache { LvcVertex cache[]; };
+layout(std430, set = 0, binding = 7) readonly buffer CacheIndex { uint cache_index[]; };
+layout(std430, set = 0, binding = 8) readonly buffer PathOffset { uint path_offset[]; };
+layout(std430, set = 0, binding = 9) writeonly buffer ShadowRays { Ray shadow_rays[]; };
+layout(std430, set = 0, binding = 10) writeonly buffer Contributions { Contribution contrib[]; };
+
+#include "lvc_surface.glsl"
+#include "lvc_bsdf.glsl"
+#include "lvc_random.glsl"
+
+#ifdef LVC_RESAMPLE
+// Most candidates (M) per camera vertex (src/integrator/lvc/options.rs).
+const uint MAX_CANDIDATES = 16u;
+shared uint candidate_slot[WORKGROUP_SIZE * MAX_CANDIDATES];
+shared vec4 candidate_value[WORKGROUP_SIZE * MAX_CANDIDATES];   // g, MIS weight
+shared float candidate_target[WORKGROUP_SIZE * MAX_CANDIDATES];
+#endif
+
+// The unoccluded, MIS-weighted contribution of connecting camera vertex z (index j) to
+// cache vertex y (src/bidir/connect.rs `Connector::connect`); zero when the path would
+// be too long or nothing is carried.
+vec3 connection(LvcVertex z, vec3 z_ng, EndpointBsdf zb, LvcVertex y, out float weight) {
+    weight = 0.0;
+    uint i = y.depth;
+    uint j = z.depth;
+    if ((y.flags & VERTEX_CONNECTIBLE) == 0u || !depth_allows(C, i + j + 1u)) return vec3(0.0);
+    vec3 y_ng = triangle_normal(y.triangle);
+    vec3 to = y.p - z.p;
+    float dist2 = dot(to, to);
+    if (!(dist2 > 0.0)) return vec3(0.0);
+    vec3 dir = to / sqrt(dist2);
+    // Both endpoints through one copy of the BSDF code: a loop that stays a loop halves
+    // the kernel, whose compilation took most of the integrator's on lavapipe.
+    Endpoint ez, ey;
+    [[dont_unroll]] for (uint side = 0u; side < 2u; ++side) {
+        bool light = side == 1u;
+        EndpointBsdf b = light ? endpoint_bsdf(y) : zb;
+        Endpoint e = endpoint_eval_with(b, light ? y : z, light ? y_ng : z_ng,
+                                        light ? -dir : dir,
+                                        light ? TRANSPORT_IMPORTANCE : TRANSPORT_RADIANCE);
+        if (light) ey = e; else ez = e;
+    }
+    vec3 value = y.beta * ey.f * ez.f * z.beta / dist2;
+    if (value == vec3(0.0)) return vec3(0.0);
+    float light_rev = ez.pdf_fwd * abs_cos(y_ng, dir) / dist2;
+    float light_partial = mis_partial(y, count_light_vertex(C, i), ey.pdf_rev);
+    float camera_fwd = ey.pdf_fwd * abs_cos(z_ng, dir) / dist2;
+    float camera_partial = mis_partial(z, count_camera_vertex(C, j, false), ez.pdf_rev);
+    weight = mis_balance((light_rev * light_partial + camera_fwd * camera_partial)
+                         / C.count_connection);
+    return value * weight;
+}
+
+// Slot `slot` gets the connection to cache vertex `k` of contribution g (times `scale`).
+void emit(uint slot, LvcVertex z, vec3 z_ng, uint k, vec3 g, float weight, float scale) {
+    LvcVertex y = cache[k];
+    Ray r;
+    if (g == vec3(0.0) || !shadow_ray(z.p, z_ng, y.p, triangle_normal(y.triangle),
+                                      C.ray_epsilon, r)) return;
+    shadow_rays[slot] = r;
+    contrib[slot] = Contribution(g * scale, technique_code(y.depth + 1u, z.depth + 1u), weight,
+                                 k, 0u, 0u);
+}
+
+void main() {
+    uint jj = linear_invocation_id();
+    if (jj >= P.active_count) return;
+    uint i = (C.flags & LVC_FLAG_SORTED) != 0u ? order[jj] : jj;
+    uint n = C.connections;
+    uint first = i * n;
+    for (uint k = 0u; k < n; ++k) {
+        shadow_rays[first + k] = no_ray();
+        contrib[first + k] = Contribution(vec3(0.0), CONTRIBUTION_NONE, 0.0, CONTRIBUTION_NONE,
+                                          0u, 0u);
+    }
+    LvcVertex z = vertices[i];
+    uint need = VERTEX_VALID | VERTEX_CONNECTIBLE;
+    if ((z.flags & need) != need || !(C.count_connection > 0.0)) return;
+    uint c = live_ids[i];
+    uint pixel = P.pixel_offset + c % P.pixel_count;
+    uint pass_in_chunk = c / P.pixel_count;
+    uint pass = P.first_pass + pass_in_chunk;
+    uint start = path_offset[pass_in_chunk * C.light_paths];
+    uint size = path_offset[(pass_in_chunk + 1u) * C.light_paths] - start;
+    if (size == 0u) return;
+    uint j = z.depth;
+    vec3 z_ng = triangle_normal(z.triangle);
+    EndpointBsdf zb = endpoint_bsdf(z);
+
+#ifndef LVC_RESAMPLE
+    float scale = float(size) / (float(n) * float(C.light_paths));
+    for (uint k = 0u; k < n; ++k) {
+        uint pick = uniform_index(pixel, pass, select_dim(j, k), C.seed, size);
+        uint slot = cache_index[start + pick];
+        float weight;
+        vec3 g = connection(z, z_ng, zb, cache[slot], weight);
+        emit(first + k, z, z_ng, slot, g, weight, scale);
+    }
+#else
+    // The candidates live in shared memory, each invocation its own MAX_CANDIDATES
+    // entries (function-local arrays indexed in loops blow up some drivers' compilers).
+    uint m_count = min(C.candidates, MAX_CANDIDATES);
+    uint own = gl_LocalInvocationIndex * MAX_CANDIDATES;
+    float total = 0.0;
+    for (uint m = 0u; m < m_count; ++m) {
+        uint pick = uniform_index(pixel, pass, select_dim(j, m), C.seed, size);
+        uint slot = cache_index[start + pick];
+        float weight;
+        vec3 g = connection(z, z_ng, zb, cache[slot], weight);
+        float target = max(lvc_luminance(g), 0.0);
+        candidate_slot[own + m] = slot;
+        candidate_value[own + m] = vec4(g, weight);
+        candidate_target[own + m] = target;
+        total += target;
+    }
+    if (!(total > 0.0)) return;
+    float scale = float(size) / (float(m_count) * float(n) * float(C.light_paths));
+    for (uint k = 0u; k < n; ++k) {
+        // The first candidate whose running sum exceeds u * total (the last one with a
+        // non-zero target when rounding leaves u * total at the very end).
+        float u = random01(pixel, pass, select_dim(j, DIM_RESAMPLE + k), C.seed) * total;
+        uint chosen = 0u;
+        float running = 0.0;
+        for (uint m = 0u; m < m_count; ++m) {
+            float target = candidate_target[own + m];
+            if (target > 0.0) {
+                chosen = m;
+                running += target;
+                if (u < running) break;
+            }
+        }
+        float ris = total / candidate_target[own + chosen];
+        vec4 g = candidate_value[own + chosen];
+        emit(first + k, z, z_ng, candidate_slot[own + chosen], g.rgb * ris, g.a, scale);
+    }
+#endif
+}

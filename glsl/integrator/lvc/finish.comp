@@ -1,0 +1,35 @@
+#version 460
+// A chunk's pass estimates into the film: per pixel of the chunk and pass, its camera
+// path's radiance plus the light-tracing splats that landed on it in that pass (already
+// divided by the pass's light paths); the film sum gets the estimate (w counts samples),
+// the second-moment sum its square (for standard errors). One invocation per pixel adds
+// the passes in order, so the sums do not depend on scheduling.
+#include "grid.glsl"
+#include "geometry.glsl"
+#include "lvc.glsl"
+
+layout(push_constant) uniform Push { LvcPush P; };
+layout(std430, set = 0, binding = 0) readonly buffer Constants { LvcConstants C; };
+layout(std430, set = 0, binding = 1) readonly buffer Radiance { vec4 radiance[]; };
+layout(std430, set = 0, binding = 2) readonly buffer FixedFilm { uint fixed_film[]; };
+layout(std430, set = 0, binding = 3) buffer Accum { vec4 accum[]; };
+layout(std430, set = 0, binding = 4) buffer Accum2 { vec4 accum2[]; };
+
+#include "lvc_fixed.glsl"
+
+void main() {
+    uint i = linear_invocation_id();
+    if (i >= P.pixel_count) return;
+    uint pixel = P.pixel_offset + i;
+    uint pixels = C.width * C.height;
+    uint passes = P.path_count / P.pixel_count;
+    vec4 sum = accum[pixel];
+    vec4 sum2 = accum2[pixel];
+    for (uint q = 0u; q < passes; ++q) {
+        vec3 l = radiance[q * P.pixel_count + i].rgb + fixed_value(q * pixels + pixel);
+        sum += vec4(l, 1.0);
+        sum2 += vec4(l * l, 0.0);
+    }
+    accum[pixel] = sum;
+    accum2[pixel] = sum2;
+}

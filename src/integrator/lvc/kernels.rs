@@ -1,0 +1,84 @@
+//! The integrators' pipelines: one per kernel of `glsl/integrator/lvc/`, and `pt`'s
+//! material-key and gather kernels (which take `pt`'s push constants).
+
+use super::gpu::LvcPush;
+use super::options::Variant;
+use crate::integrator::pt::gpu::PtParams;
+use crate::shaders::{self, Kernel};
+use crate::vk::{self, ComputePipeline, Gpu};
+
+pub const WORKGROUP: u32 = 64;
+
+pub struct Kernels {
+    pub light_generate: ComputePipeline,
+    pub light_shade: ComputePipeline,
+    pub light_store: ComputePipeline,
+    pub light_index: ComputePipeline,
+    pub light_connect: ComputePipeline,
+    pub splat: ComputePipeline,
+    pub camera_generate: ComputePipeline,
+    pub camera_vertex: ComputePipeline,
+    pub camera_direct: ComputePipeline,
+    /// Uniform connections (LVC-BDPT) or resampled ones (CIS-LBDPT): only the variant's
+    /// is built (a driver that compiles at pipeline creation pays for one).
+    pub camera_connect: ComputePipeline,
+    pub camera_bounce: ComputePipeline,
+    pub camera_accumulate: ComputePipeline,
+    pub finish: ComputePipeline,
+    /// `pt`'s: the material key of each live path's hit and the identity order.
+    pub sort_keys: ComputePipeline,
+    /// `pt`'s: survivors' rays and ids to the front of the other list.
+    pub gather: ComputePipeline,
+}
+
+impl Kernels {
+    pub fn new(gpu: &Gpu, variant: Variant) -> vk::Result<Self> {
+        let lvc = |kernel: Kernel, bindings| {
+            vk::compute_pipeline(
+                gpu,
+                kernel,
+                bindings,
+                size_of::<LvcPush>() as u32,
+                &[WORKGROUP],
+            )
+        };
+        let pt = |kernel: Kernel, bindings| {
+            vk::compute_pipeline(
+                gpu,
+                kernel,
+                bindings,
+                size_of::<PtParams>() as u32,
+                &[WORKGROUP],
+            )
+        };
+        Ok(Self {
+            light_generate: lvc(shaders::INTEGRATOR_LVC_LIGHT_GENERATE, 7)?,
+            light_shade: lvc(shaders::INTEGRATOR_LVC_LIGHT_SHADE, 15)?,
+            light_store: lvc(shaders::INTEGRATOR_LVC_LIGHT_STORE, 4)?,
+            light_index: lvc(shaders::INTEGRATOR_LVC_LIGHT_INDEX, 3)?,
+            light_connect: lvc(shaders::INTEGRATOR_LVC_LIGHT_CONNECT, 6)?,
+            splat: lvc(shaders::INTEGRATOR_LVC_SPLAT, 4)?,
+            camera_generate: lvc(shaders::INTEGRATOR_LVC_CAMERA_GENERATE, 5)?,
+            camera_vertex: lvc(shaders::INTEGRATOR_LVC_CAMERA_VERTEX, 13)?,
+            camera_direct: lvc(shaders::INTEGRATOR_LVC_CAMERA_DIRECT, 10)?,
+            camera_connect: match variant {
+                Variant::LvcBdpt => lvc(shaders::INTEGRATOR_LVC_CAMERA_CONNECT, 11)?,
+                Variant::CisLbdpt => lvc(shaders::INTEGRATOR_LVC_CAMERA_CONNECT__RESAMPLED, 11)?,
+            },
+            camera_bounce: lvc(shaders::INTEGRATOR_LVC_CAMERA_BOUNCE, 9)?,
+            camera_accumulate: lvc(shaders::INTEGRATOR_LVC_CAMERA_ACCUMULATE, 7)?,
+            finish: lvc(shaders::INTEGRATOR_LVC_FINISH, 5)?,
+            sort_keys: pt(shaders::INTEGRATOR_PT_SORT_KEYS, 5)?,
+            gather: pt(shaders::INTEGRATOR_PT_GATHER, 5)?,
+        })
+    }
+}
+
+/// `pt`'s push constants for its sort-key and gather kernels, which read only the live
+/// count.
+pub fn pt_params(active_count: u32) -> PtParams {
+    PtParams {
+        active_count,
+        ..Default::default()
+    }
+}

@@ -1,0 +1,139 @@
+//! The per-path buffers of a wavefront of paths, shared by the light pass and the camera
+//! pass (which run one after the other), and the shadow-ray buffers that the camera
+//! pass fills with one direct-lighting and N connection rays per path, and light tracing
+//! with one ray per cache vertex of a batch.
+
+use super::gpu::{Contribution, LvcVertex, WalkState};
+use crate::primitives::compact::Kept;
+use crate::primitives::{Compact, RadixSort, SortScratch, Tuning};
+use crate::trace::{Hit, Ray};
+use crate::vk::{self, Buffer, Gpu, MemoryKind, Recorder};
+
+/// Slots the connections' region may start after the direct-lighting slots (it starts
+/// at a storage-buffer offset the device can bind: up to 2 KiB of 32-byte slots).
+const ALIGNMENT_SLACK: usize = 64;
+
+pub struct Wavefront {
+    /// Paths it holds.
+    pub capacity: u32,
+    /// Shadow rays it holds: (1 + N) per path, and room for the connections' region to
+    /// start at an aligned offset.
+    pub shadow_capacity: u32,
+    /// Two of the ray and active lists: compaction gathers survivors from one into the
+    /// other.
+    pub rays: [Buffer; 2],
+    pub active: [Buffer; 2],
+    pub hits: Buffer,
+    /// Per path (by id): the walk's state.
+    pub paths: Buffer,
+    pub keys: Buffer,
+    pub order: Buffer,
+    /// Per live path: the vertex it reached this bounce.
+    pub vertices: Buffer,
+    /// Light pass: the vertex goes to the cache.
+    pub stored: Buffer,
+    pub alive: Buffer,
+    pub kept: Buffer,
+    pub kept_vertices: Buffer,
+    /// Camera pass: per live path its emitter hit, per path (by id) its radiance.
+    pub emitted: Buffer,
+    pub radiance: Buffer,
+    pub shadow_rays: Buffer,
+    pub shadow_hits: Buffer,
+    pub contributions: Buffer,
+    /// The two counts of a light bounce (vertices marked, paths alive), or the
+    /// survivors of a camera bounce, on the device and for the host.
+    pub count_marked: Buffer,
+    pub count_alive: Buffer,
+    pub counts_readback: Buffer,
+    pub compact: Compact,
+    compact_scratch: Buffer,
+    pub sorter: Option<(RadixSort, SortScratch)>,
+}
+
+impl Wavefront {
+    /// Buffers for `capacity` paths with `connections` connection rays each.
+    pub fn new(gpu: &Gpu, capacity: u32, connections: u32, sort: bool) -> vk::Result<Self> {
+        let c = capacity.max(1) as usize;
+        let shadow = (1 + connections as usize) * c + ALIGNMENT_SLACK;
+        let tuning = Tuning::for_device(gpu.info());
+        let compact = Compact::new(gpu, &tuning)?;
+        let compact_scratch = gpu.create_buffer(
+            "lvc-compact-scratch",
+            compact.scratch_bytes(c as u32),
+            MemoryKind::Device,
+        )?;
+        let sorter = if sort {
+            let sort = RadixSort::new(gpu, &tuning)?;
+            let scratch = sort.alloc_scratch(gpu, c as u32)?;
+            Some((sort, scratch))
+        } else {
+            None
+        };
+        Ok(Self {
+            capacity: c as u32,
+            shadow_capacity: shadow as u32,
+            rays: [
+                gpu.zeroed::<Ray>("lvc-rays-0", c)?,
+                gpu.zeroed::<Ray>("lvc-rays-1", c)?,
+            ],
+            active: [
+                gpu.zeroed::<u32>("lvc-active-0", c)?,
+                gpu.zeroed::<u32>("lvc-active-1", c)?,
+            ],
+            hits: gpu.zeroed::<Hit>("lvc-hits", c)?,
+            paths: gpu.zeroed::<WalkState>("lvc-paths", c)?,
+            keys: gpu.zeroed::<u32>("lvc-keys", c)?,
+            order: gpu.zeroed::<u32>("lvc-order", c)?,
+            vertices: gpu.zeroed::<LvcVertex>("lvc-vertices", c)?,
+            stored: gpu.zeroed::<u32>("lvc-stored", c)?,
+            alive: gpu.zeroed::<u32>("lvc-alive", c)?,
+            kept: gpu.zeroed::<u32>("lvc-kept", c)?,
+            kept_vertices: gpu.zeroed::<u32>("lvc-kept-vertices", c)?,
+            emitted: gpu.zeroed::<Contribution>("lvc-emitted", c)?,
+            radiance: gpu.zeroed::<[f32; 4]>("lvc-radiance", c)?,
+            shadow_rays: gpu.zeroed::<Ray>("lvc-shadow-rays", shadow)?,
+            shadow_hits: gpu.zeroed::<Hit>("lvc-shadow-hits", shadow)?,
+            contributions: gpu.zeroed::<Contribution>("lvc-contributions", shadow)?,
+            count_marked: gpu.zeroed::<u32>("lvc-count-marked", 1)?,
+            count_alive: gpu.zeroed::<u32>("lvc-count-alive", 1)?,
+            counts_readback: gpu.create_buffer("lvc-counts", 8, MemoryKind::Readback)?,
+            compact,
+            compact_scratch,
+            sorter,
+        })
+    }
+
+    /// Records the compaction of the first `n` of `flags` into `out` (indices of the
+    /// kept items, in order) with their count in `count`.
+    pub fn record_compact(
+        &self,
+        rec: &mut Recorder,
+        n: u32,
+        flags: &Buffer,
+        out: &Buffer,
+        count: &Buffer,
+    ) -> vk::Result<()> {
+        self.compact.record(
+            rec,
+            n,
+            flags.into(),
+            Kept::Indices,
+            out.into(),
+            count.into(),
+            &self.compact_scratch,
+        )
+    }
+
+    /// Records the copy of the two counts to the host-visible buffer.
+    pub fn record_counts_readback(&self, rec: &mut Recorder) {
+        rec.copy(&self.count_marked, 0, &self.counts_readback, 0, 4);
+        rec.copy(&self.count_alive, 0, &self.counts_readback, 4, 4);
+    }
+
+    /// (vertices marked, paths alive) as the last readback left them, each at most `n`.
+    pub fn read_counts(&self, n: u32) -> vk::Result<(u32, u32)> {
+        let c = self.counts_readback.read::<u32>()?;
+        Ok((c[0].min(n), c[1].min(n)))
+    }
+}
