@@ -19,6 +19,19 @@ use crate::vk::{fmt_bytes, Gpu};
 pub struct PlannedBuffer {
     pub name: &'static str,
     pub bytes: u64,
+    /// Its kernels take it through one storage binding (maxStorageBufferRange), not by
+    /// address.
+    pub one_binding: bool,
+}
+
+impl PlannedBuffer {
+    fn by_address(name: &'static str, bytes: u64) -> Self {
+        PlannedBuffer {
+            name,
+            bytes,
+            one_binding: false,
+        }
+    }
 }
 
 /// What a render is, for the messages: its scene's name, triangle count and film size.
@@ -44,6 +57,8 @@ impl RenderSize<'_> {
 #[derive(Clone, Debug)]
 pub struct DeviceCapacity {
     pub device: String,
+    /// maxStorageBufferRange.
+    pub binding: u64,
     pub max_buffer: u64,
     pub max_buffer_limit: &'static str,
     pub memory: u64,
@@ -54,6 +69,7 @@ impl DeviceCapacity {
         let (max_buffer, max_buffer_limit) = gpu.max_buffer_bytes();
         DeviceCapacity {
             device: gpu.info().name.clone(),
+            binding: gpu.info().limits.max_storage_buffer_range,
             max_buffer,
             max_buffer_limit,
             memory: gpu.info().limits.device_local_bytes,
@@ -70,14 +86,8 @@ pub fn planned_buffers(size: &RenderSize<'_>, integrator: IntegratorKind) -> Vec
     let vec4 = 16;
     let triangle_bytes = triangles * size_of::<GpuTriangle>() as u64;
     let mut buffers = vec![
-        PlannedBuffer {
-            name: "triangles",
-            bytes: triangle_bytes,
-        },
-        PlannedBuffer {
-            name: "aov-normal",
-            bytes: pixels * vec4,
-        },
+        PlannedBuffer::by_address("triangles", triangle_bytes),
+        PlannedBuffer::by_address("aov-normal", pixels * vec4),
     ];
     let gpu_film = match integrator {
         IntegratorKind::Pt => vec!["pt-accum", "pt-accum2"],
@@ -87,20 +97,33 @@ pub fn planned_buffers(size: &RenderSize<'_>, integrator: IntegratorKind) -> Vec
     };
     if !gpu_film.is_empty() {
         // The shading kernels' own copy of the triangles and their materials.
-        buffers.push(PlannedBuffer {
-            name: "shade-triangles",
-            bytes: triangle_bytes,
-        });
-        buffers.push(PlannedBuffer {
-            name: "triangle-material",
-            bytes: triangles * 4,
-        });
+        buffers.push(PlannedBuffer::by_address("shade-triangles", triangle_bytes));
+        buffers.push(PlannedBuffer::by_address(
+            "triangle-material",
+            triangles * 4,
+        ));
     }
     for name in gpu_film {
-        buffers.push(PlannedBuffer {
-            name,
-            bytes: pixels * vec4,
-        });
+        buffers.push(PlannedBuffer::by_address(name, pixels * vec4));
+    }
+    if matches!(
+        integrator,
+        IntegratorKind::LvcBdpt | IntegratorKind::CisLbdpt
+    ) {
+        // The light-vertex-cache kernels take their films through one binding; the
+        // splat film holds at least one pass of fixed-point words per pixel.
+        let splat = pixels * crate::integrator::lvc::fixed::FIXED_WORDS as u64 * 4;
+        for (name, bytes) in [
+            ("lvc-accum", pixels * vec4),
+            ("lvc-accum2", pixels * vec4),
+            ("lvc-splat-film", splat),
+        ] {
+            buffers.push(PlannedBuffer {
+                name,
+                bytes,
+                one_binding: true,
+            });
+        }
     }
     buffers
 }
@@ -142,6 +165,22 @@ pub fn fits(
             device.max_buffer_limit
         ));
     }
+    let past_binding: Vec<String> = buffers
+        .iter()
+        .filter(|b| b.one_binding && b.bytes > device.binding)
+        .map(|b| format!("'{}' of {} bytes ({})", b.name, b.bytes, fmt_bytes(b.bytes)))
+        .collect();
+    if !past_binding.is_empty() {
+        return Err(format!(
+            "{} needs {}, which its kernels take through one storage binding: more than \
+             device '{}' binds, {} bytes ({}, its maxStorageBufferRange)",
+            size.describe(),
+            past_binding.join(", "),
+            device.device,
+            device.binding,
+            fmt_bytes(device.binding)
+        ));
+    }
     let total: u64 = buffers.iter().map(|b| b.bytes).sum();
     if total > device.memory {
         let list: Vec<String> = buffers
@@ -170,6 +209,7 @@ mod tests {
     fn device(max_buffer: u64, memory: u64) -> DeviceCapacity {
         DeviceCapacity {
             device: "test device".into(),
+            binding: 128 << 20,
             max_buffer,
             max_buffer_limit: "maxBufferSize",
             memory,
@@ -222,6 +262,24 @@ mod tests {
             assert!(err.contains(&part), "missing {part:?} in: {err}");
         }
         assert!(fits(&big, &buffers, &device(2 << 30, total)).is_ok());
+    }
+
+    #[test]
+    fn films_of_the_light_vertex_cache_integrators_stay_within_one_binding() {
+        // 2048²: 64 MiB of vec4 and 96 MiB of six-word splats; 4096² is past 128 MiB.
+        let small = size(1000, 2048);
+        let large = size(1000, 4096);
+        for kind in [IntegratorKind::LvcBdpt, IntegratorKind::CisLbdpt] {
+            let device = device(2 << 30, 1 << 40);
+            assert!(fits(&small, &planned_buffers(&small, kind), &device).is_ok());
+            let err = fits(&large, &planned_buffers(&large, kind), &device).unwrap_err();
+            for part in ["'lvc-accum' of", "'lvc-splat-film' of", "134217728 bytes"] {
+                assert!(err.contains(part), "missing {part:?} in: {err}");
+            }
+        }
+        // pt takes its film by address.
+        let pt = planned_buffers(&large, IntegratorKind::Pt);
+        assert!(fits(&large, &pt, &device(2 << 30, 1 << 40)).is_ok());
     }
 
     #[test]
