@@ -37,9 +37,11 @@ slurm-test: deps
 	$(CARGO) test --profile ci --locked --no-run --test cli_long_renders
 	bash tools/slurm/test-local-cluster.sh target/ci/splitray
 
+# Clippy in the `ci` profile reuses what `make test` built (the build script's compiled
+# shaders, the proc macros): 44 s after `make test` against 3.5 min in the dev profile.
 lint:
 	$(CARGO) fmt --all -- --check
-	$(CARGO) clippy --locked --all-targets -- -D warnings
+	$(CARGO) clippy --profile ci --locked --all-targets -- -D warnings
 
 clean:
 	$(CARGO) clean

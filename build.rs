@@ -26,10 +26,18 @@ fn main() {
                 for module in modules {
                     let spv = out_dir.join(format!("{}.spv", module.name));
                     std::fs::write(&spv, &module.spirv).expect("cannot write SPIR-V");
+                    let twin = match &module.descriptor_twin {
+                        Some(words) => {
+                            let path = out_dir.join(format!("{}__descriptors.spv", module.name));
+                            std::fs::write(&path, words).expect("cannot write SPIR-V");
+                            format!("Some(include_bytes!(\"{}\"))", path.display())
+                        }
+                        None => "None".to_string(),
+                    };
                     let ident = module.name.to_ascii_uppercase();
                     writeln!(
                         table,
-                        "/// SPIR-V of `{}`.\npub const {ident}: Kernel = Kernel {{ name: \"{}\", spirv: include_bytes!(\"{}\") }};",
+                        "/// SPIR-V of `{}`.\npub const {ident}: Kernel = Kernel {{ name: \"{}\", spirv: include_bytes!(\"{}\"), descriptor_twin: {twin} }};",
                         module.source.strip_prefix(&manifest).unwrap_or(&module.source).display(),
                         module.name,
                         spv.display()

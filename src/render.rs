@@ -4,6 +4,7 @@
 //! take one [`Shard`]'s passes, or save its film as it goes.
 
 pub mod checkpoint;
+pub mod device_fit;
 pub mod fingerprint;
 pub mod frames;
 pub mod merge;
@@ -281,8 +282,7 @@ pub fn render_from(
     plan: RenderPlan<'_>,
     control: RenderControl<'_>,
 ) -> Result<RenderOutput, RenderError> {
-    let limit = gpu.info().limits.max_storage_buffer_range;
-    scene.check_fits(limit, size_of::<GpuTriangle>() as u64)?;
+    device_fit::check(gpu, scene, options)?;
     let triangles: Vec<GpuTriangle> = scene
         .triangles
         .iter()
@@ -477,8 +477,7 @@ pub fn create_integrator(
     scene: &Scene,
     options: &RenderOptions,
 ) -> Result<Box<dyn Integrator>, RenderError> {
-    let limit = gpu.info().limits.max_storage_buffer_range;
-    scene.check_fits(limit, size_of::<GpuTriangle>() as u64)?;
+    device_fit::check(gpu, scene, options)?;
     let triangles: Vec<GpuTriangle> = scene
         .triangles
         .iter()

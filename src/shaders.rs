@@ -7,6 +7,9 @@ pub struct Kernel {
     pub name: &'static str,
     /// SPIR-V bytes (a multiple of four; copied into aligned words on pipeline creation).
     pub spirv: &'static [u8],
+    /// For a kernel that takes buffers by address: the same kernel taking them as
+    /// descriptors (glsl/common/address.glsl; src/vk/pipeline.rs picks one per dispatch).
+    pub descriptor_twin: Option<&'static [u8]>,
 }
 
 include!(concat!(env!("OUT_DIR"), "/shaders.rs"));

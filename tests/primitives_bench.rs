@@ -44,6 +44,7 @@ fn bench_primitives_full() {
         },
         device: None,
         placement: StreamPlacement::Spread,
+        ..Default::default()
     })
     .unwrap();
     let mut opts = PrimitivesBenchOptions::default();
@@ -75,6 +76,7 @@ fn tuning_sweep() {
         },
         device: None,
         placement: StreamPlacement::Spread,
+        ..Default::default()
     })
     .unwrap();
     let n: usize = std::env::var("SPLITRAY_SWEEP_N").map_or(1 << 20, |s| s.parse().unwrap());

@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use glam::Vec3;
-use splitray::scene::{self, builtin, builtin_names, obj, Scene, SceneError};
+use splitray::scene::{self, builtin, builtin_names, obj, Scene};
 
 fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
     let p = dir.join(name);
@@ -383,31 +383,6 @@ fn degenerate_and_empty() {
     // No faces at all.
     let p = write(dir.path(), "nofaces.obj", "v 0 0 0\nv 1 0 0\n");
     assert_has(&load_err(&p), &["nofaces.obj", "empty scene"]);
-}
-
-#[test]
-fn check_fits_message() {
-    let s = builtin("cornell-box").unwrap();
-    assert!(s.check_fits(128 << 20, 96).is_ok());
-    let e = s.check_fits(1024, 48).unwrap_err();
-    assert!(matches!(e, SceneError::TooLarge { triangles: 32, .. }));
-    assert_has(
-        &e.to_string(),
-        &[
-            "scene 'cornell-box' has 32 triangles = 1536 bytes",
-            "maxStorageBufferRange of 0.00 MiB",
-        ],
-    );
-    let mut big = s.clone();
-    let t = big.triangles[0];
-    big.triangles.resize(3_000_000, t);
-    assert_has(
-        &big.check_fits(128 << 20, 48).unwrap_err().to_string(),
-        &[
-            "has 3000000 triangles = 144000000 bytes",
-            "maxStorageBufferRange of 128 MiB",
-        ],
-    );
 }
 
 fn project(s: &Scene, p: Vec3) -> (f32, f32) {

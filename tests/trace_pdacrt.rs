@@ -9,7 +9,7 @@ use splitray::trace::{
     BruteForceTracer, FlushReduce, GpuTriangle, Hit, LevelSplit, PdacrtParams, PdacrtTracer, Query,
     Ray,
 };
-use splitray::vk::Gpu;
+use splitray::vk::{BufferAccess, Gpu};
 
 /// Small thresholds force deep hierarchies even on small inputs.
 fn deep() -> PdacrtParams {
@@ -73,6 +73,39 @@ fn random_soups_match_brute_force() {
             &format!("{tris} triangles, defaults"),
         );
     }
+    common::assert_clean(&gpu);
+}
+
+/// Every PDACRT kernel in the form that takes its buffers by address (lavapipe runs the
+/// descriptor twins wherever buffers fit one binding), against brute force in the
+/// default form: both split methods and both flush reductions, deep hierarchies.
+#[test]
+fn kernels_taking_buffers_by_address_match_brute_force() {
+    let by_address = common::gpu_with_access(BufferAccess::Addresses);
+    let gpu = common::gpu();
+    let soup = common::triangle_soup(2000, 11);
+    let rays = common::random_rays(6000, 12);
+    let expected = brute_force(&gpu, &soup, &rays);
+    for split in [LevelSplit::SortByKey, LevelSplit::PrefixSums] {
+        for flush in [FlushReduce::SortByRay, FlushReduce::AtomicMin] {
+            if flush == FlushReduce::AtomicMin && !gpu.info().capabilities.buffer_int64_atomics {
+                continue;
+            }
+            for stage_triangles in [false, true] {
+                let params = PdacrtParams {
+                    split,
+                    flush_reduce: flush,
+                    stage_triangles,
+                    ..deep()
+                };
+                let mut tracer = PdacrtTracer::with_params(&by_address, &soup, params).unwrap();
+                let hits = common::trace_hits(&by_address, &mut tracer, &rays, Query::ClosestHit);
+                let what = format!("by address: {split:?}, {flush:?}, staged {stage_triangles}");
+                common::assert_same_hits(&hits, &expected, &what);
+            }
+        }
+    }
+    common::assert_clean(&by_address);
     common::assert_clean(&gpu);
 }
 

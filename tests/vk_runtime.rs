@@ -4,7 +4,10 @@
 mod common;
 
 use splitray::shaders;
-use splitray::vk::{ComputePipeline, Gpu, PipelineDesc, StreamKind, StreamPlacement};
+use splitray::vk::{
+    Buffer, BufferAccess, ComputePipeline, Gpu, MemoryKind, PipelineDesc, StreamKind,
+    StreamPlacement,
+};
 
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
@@ -210,15 +213,107 @@ fn peak_memory_is_tracked() {
 #[test]
 fn oversized_buffers_are_refused_with_the_limit_named() {
     let gpu = common::gpu();
-    let limit = gpu.info().limits.max_storage_buffer_range;
+    // One storage binding is no limit: a buffer past it is made (and bound by address).
+    let binding = gpu.info().limits.max_storage_buffer_range;
+    let past_binding = gpu
+        .create_buffer("past-binding", binding + 4, MemoryKind::Device)
+        .unwrap();
+    assert_eq!(past_binding.size(), binding + 4);
+    drop(past_binding);
+    // One allocation is: the smaller of maxBufferSize and maxMemoryAllocationSize.
+    let (limit, which) = gpu.max_buffer_bytes();
+    let l = &gpu.info().limits;
+    assert_eq!(limit, l.max_buffer_size.min(l.max_memory_allocation_size));
     let err = gpu
-        .create_buffer("huge", limit + 1, splitray::vk::MemoryKind::Device)
+        .create_buffer("huge", limit + 1, MemoryKind::Device)
         .unwrap_err()
         .to_string();
     assert!(
-        err.contains("huge") && err.contains("maxStorageBufferRange"),
+        err.contains("'huge'") && err.contains(which) && err.contains(&limit.to_string()),
         "{err}"
     );
+    assert!(
+        gpu.check_buffer_size("film", limit).is_ok()
+            && gpu.check_buffer_size("film", limit + 1).is_err()
+    );
+    common::assert_clean(&gpu);
+}
+
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
+struct RangePush {
+    n: u32,
+    add: u32,
+    first: u32,
+}
+
+/// Runs test_copy_words_by_address over words `first..first + n` of `src` into `dst`.
+fn copy_range(
+    gpu: &Gpu,
+    pipeline: &ComputePipeline,
+    src: &Buffer,
+    dst: &Buffer,
+    first: u32,
+    n: u32,
+) {
+    let mut rec = gpu.recorder(StreamKind::Main).unwrap();
+    let push = RangePush { n, add: 1, first };
+    rec.dispatch_items(pipeline, &[src.into(), dst.into()], &push, n as u64)
+        .unwrap();
+    gpu.wait(&rec.submit(&[]).unwrap()).unwrap();
+}
+
+#[test]
+fn buffers_past_one_storage_binding_are_read_and_written_by_address() {
+    // Both ways a device may take buffers: by address only, and (lavapipe's default)
+    // as descriptors where they fit, by address where they do not.
+    for access in [
+        BufferAccess::Addresses,
+        BufferAccess::DescriptorsWhereTheyFit,
+    ] {
+        let gpu = common::gpu_with_access(access);
+        let pipeline = ComputePipeline::new(
+            &gpu,
+            &PipelineDesc {
+                kernel: shaders::TEST_COPY_WORDS_BY_ADDRESS,
+                bindings: 2,
+                push_constant_bytes: 12,
+                spec: &[64],
+            },
+        )
+        .unwrap();
+        // Small buffers: the descriptor twin where the device prefers it.
+        let small: Vec<u32> = (0..1000).collect();
+        let src = gpu.upload("small-src", &small).unwrap();
+        let dst = gpu.zeroed::<u32>("small-dst", small.len()).unwrap();
+        copy_range(&gpu, &pipeline, &src, &dst, 0, 1000);
+        let got = dst.read::<u32>().unwrap();
+        assert!(
+            got.iter().zip(&small).all(|(g, s)| *g == s + 1),
+            "{access:?}"
+        );
+
+        // Past one binding: the words around the binding's end and the buffer's last.
+        let binding_words = (gpu.info().limits.max_storage_buffer_range / 4) as u32;
+        let words = binding_words + 4096;
+        let src = gpu
+            .create_buffer("big-src", words as u64 * 4, MemoryKind::Device)
+            .unwrap();
+        let dst = gpu.zeroed::<u32>("big-dst", words as usize).unwrap();
+        let mut rec = gpu.recorder(StreamKind::Main).unwrap();
+        rec.fill(&src, 7);
+        gpu.wait(&rec.submit(&[]).unwrap()).unwrap();
+        let first = binding_words - 2048;
+        copy_range(&gpu, &pipeline, &src, &dst, first, 6144);
+        let got = dst.read::<u32>().unwrap();
+        let (before, rest) = got.split_at(first as usize);
+        assert!(
+            before.iter().all(|&w| w == 0),
+            "{access:?}: wrote before the range"
+        );
+        assert!(rest.iter().all(|&w| w == 8), "{access:?}: past the binding");
+        common::assert_clean(&gpu);
+    }
 }
 
 #[test]

@@ -4,6 +4,10 @@
 //! including file, then in `glsl/common/`. A kernel may declare extra variants with lines
 //! of the form `//! variant NAME: DEFINE=VALUE OTHER` — each becomes its own SPIR-V module
 //! `<kernel>__<NAME>` compiled with those defines, so variants never need copy-paste.
+//! A kernel that takes buffers by address (`BUFFER_REF(` in glsl/common/address.glsl)
+//! is compiled a second time with `SPLITRAY_DESCRIPTORS` defined, into its descriptor
+//! twin: the same buffers as descriptors, which devices may read faster while each fits
+//! one storage binding (src/vk/pipeline.rs chooses per dispatch).
 //! Errors come back as `file:line: message`, the way glslang reports them.
 
 use std::fmt;
@@ -16,7 +20,12 @@ pub struct CompiledKernel {
     pub name: String,
     pub source: PathBuf,
     pub spirv: Vec<u8>,
+    /// The descriptor twin of a kernel that takes buffers by address.
+    pub descriptor_twin: Option<Vec<u8>>,
 }
+
+/// Marks a kernel that takes buffers by address (glsl/common/address.glsl).
+const BY_ADDRESS_MARK: &str = "BUFFER_REF(";
 
 #[derive(Debug)]
 pub struct ShaderError(pub String);
@@ -92,7 +101,7 @@ pub fn find_kernels(glsl_root: &Path) -> std::io::Result<Vec<PathBuf>> {
     Ok(out)
 }
 
-/// Compiles one kernel file (all of its variants).
+/// Compiles one kernel file (all of its variants, and their descriptor twins).
 pub fn compile_kernel(
     compiler: &shaderc::Compiler,
     glsl_root: &Path,
@@ -102,53 +111,81 @@ pub fn compile_kernel(
         .map_err(|e| ShaderError(format!("{}: cannot read: {e}", file.display())))?;
     let common = glsl_root.join("common");
     let base_name = kernel_name(glsl_root, file);
+    let twin = source.contains(BY_ADDRESS_MARK);
     let mut out = Vec::new();
-    for variant in parse_variants(&source) {
-        let mut options = shaderc::CompileOptions::new()
-            .ok_or_else(|| ShaderError("shaderc: cannot create compile options".into()))?;
-        options.set_target_env(
-            shaderc::TargetEnv::Vulkan,
-            shaderc::EnvVersion::Vulkan1_3 as u32,
-        );
-        options.set_target_spirv(shaderc::SpirvVersion::V1_6);
-        options.set_source_language(shaderc::SourceLanguage::GLSL);
-        options.set_optimization_level(shaderc::OptimizationLevel::Performance);
-        options.set_generate_debug_info();
-        for (k, v) in &variant.defines {
-            options.add_macro_definition(k, v.as_deref());
-        }
-        let common = common.clone();
-        options.set_include_callback(move |requested, _kind, requester, _depth| {
-            let beside = Path::new(requester)
-                .parent()
-                .map(|p| p.join(requested))
-                .filter(|p| p.is_file());
-            let path = beside.unwrap_or_else(|| common.join(requested));
-            match std::fs::read_to_string(&path) {
-                Ok(content) => Ok(shaderc::ResolvedInclude {
-                    resolved_name: path.to_string_lossy().into_owned(),
-                    content,
-                }),
-                Err(e) => Err(format!(
-                    "cannot include \"{requested}\" (looked beside {requester} and in {}): {e}",
-                    common.display()
-                )),
-            }
-        });
-        let artifact = compiler
-            .compile_into_spirv(
+    for mut variant in parse_variants(&source) {
+        let spirv = compile_module(compiler, &source, file, &common, &variant.defines)?;
+        let descriptor_twin = if twin {
+            variant
+                .defines
+                .push(("SPLITRAY_DESCRIPTORS".to_string(), None));
+            Some(compile_module(
+                compiler,
                 &source,
-                shaderc::ShaderKind::Compute,
-                &file.to_string_lossy(),
-                "main",
-                Some(&options),
-            )
-            .map_err(|e| ShaderError(e.to_string()))?;
+                file,
+                &common,
+                &variant.defines,
+            )?)
+        } else {
+            None
+        };
         out.push(CompiledKernel {
             name: format!("{base_name}{}", variant.suffix),
             source: file.to_path_buf(),
-            spirv: artifact.as_binary_u8().to_vec(),
+            spirv,
+            descriptor_twin,
         });
     }
     Ok(out)
+}
+
+/// Compiles `source` (the text of `file`) with `defines` into SPIR-V bytes.
+fn compile_module(
+    compiler: &shaderc::Compiler,
+    source: &str,
+    file: &Path,
+    common: &Path,
+    defines: &[(String, Option<String>)],
+) -> Result<Vec<u8>, ShaderError> {
+    let mut options = shaderc::CompileOptions::new()
+        .ok_or_else(|| ShaderError("shaderc: cannot create compile options".into()))?;
+    options.set_target_env(
+        shaderc::TargetEnv::Vulkan,
+        shaderc::EnvVersion::Vulkan1_3 as u32,
+    );
+    options.set_target_spirv(shaderc::SpirvVersion::V1_6);
+    options.set_source_language(shaderc::SourceLanguage::GLSL);
+    options.set_optimization_level(shaderc::OptimizationLevel::Performance);
+    options.set_generate_debug_info();
+    for (k, v) in defines {
+        options.add_macro_definition(k, v.as_deref());
+    }
+    let common = common.to_path_buf();
+    options.set_include_callback(move |requested, _kind, requester, _depth| {
+        let beside = Path::new(requester)
+            .parent()
+            .map(|p| p.join(requested))
+            .filter(|p| p.is_file());
+        let path = beside.unwrap_or_else(|| common.join(requested));
+        match std::fs::read_to_string(&path) {
+            Ok(content) => Ok(shaderc::ResolvedInclude {
+                resolved_name: path.to_string_lossy().into_owned(),
+                content,
+            }),
+            Err(e) => Err(format!(
+                "cannot include \"{requested}\" (looked beside {requester} and in {}): {e}",
+                common.display()
+            )),
+        }
+    });
+    let artifact = compiler
+        .compile_into_spirv(
+            source,
+            shaderc::ShaderKind::Compute,
+            &file.to_string_lossy(),
+            "main",
+            Some(&options),
+        )
+        .map_err(|e| ShaderError(e.to_string()))?;
+    Ok(artifact.as_binary_u8().to_vec())
 }

@@ -28,6 +28,17 @@ struct Triangle {
 
 const uint MISS = 0xFFFFFFFFu;
 
+// The records by device address (address.glsl): scenes and ray batches outgrow one
+// storage binding.
+#include "address.glsl"
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer TrianglesInRef { Triangle data[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer RaysInRef { Ray data[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) buffer RaysRef { Ray data[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) writeonly buffer RaysOutRef { Ray data[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer HitsInRef { Hit data[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) buffer HitsRef { Hit data[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) writeonly buffer HitsOutRef { Hit data[]; };
+
 // Möller–Trumbore. Returns t in (tmin, tmax) or +inf, with barycentrics (u, v).
 // Mirrored operation for operation by `intersect_triangle` in src/trace/cpu.rs, so the
 // CPU twin agrees to rounding. Edge-on and degenerate triangles (det == 0) never hit.

@@ -7,4 +7,7 @@ struct Material {
     vec4 emission;  // rgb emitted radiance
 };
 
+#include "address.glsl"
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer MaterialsInRef { Material data[]; };
+
 #endif

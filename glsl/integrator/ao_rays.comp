@@ -7,11 +7,17 @@
 #include "frame.glsl"
 #include "random.glsl"
 
-layout(push_constant) uniform Push { FrameParams frame; };
-layout(std430, set = 0, binding = 0) readonly buffer Rays { Ray rays[]; };
-layout(std430, set = 0, binding = 1) readonly buffer Hits { Hit hits[]; };
-layout(std430, set = 0, binding = 2) readonly buffer Triangles { Triangle triangles[]; };
-layout(std430, set = 0, binding = 3) writeonly buffer AoRays { Ray ao_rays[]; };
+layout(push_constant) uniform Push {
+    FrameParams frame;
+    BUFFER_REF(RaysInRef, rays)
+    BUFFER_REF(HitsInRef, hits)
+    BUFFER_REF(TrianglesInRef, triangles)
+    BUFFER_REF(RaysOutRef, ao_rays)
+};
+BUFFER_BINDING(0, readonly, Ray, rays)
+BUFFER_BINDING(1, readonly, Hit, hits)
+BUFFER_BINDING(2, readonly, Triangle, triangles)
+BUFFER_BINDING(3, writeonly, Ray, ao_rays)
 
 const float PI = 3.14159265358979;
 
@@ -29,15 +35,15 @@ void main() {
     uint i = linear_invocation_id();
     if (i >= frame.pixel_count) return;
     uint pixel = frame.pixel_offset + i;
-    Hit hit = hits[i];
-    Ray primary = rays[i];
+    Hit hit = hits.data[i];
+    Ray primary = rays.data[i];
     if (hit.triangle == MISS) {
         for (uint k = 0; k < frame.ao_rays; ++k) {
-            ao_rays[i * frame.ao_rays + k] = Ray(primary.origin, 0.0, primary.dir, 0.0);
+            ao_rays.data[i * frame.ao_rays + k] = Ray(primary.origin, 0.0, primary.dir, 0.0);
         }
         return;
     }
-    Triangle tri = triangles[hit.triangle];
+    Triangle tri = triangles.data[hit.triangle];
     vec3 n = normalize(cross(tri.e1.xyz, tri.e2.xyz));
     if (dot(n, primary.dir) > 0.0) n = -n;
     vec3 p = primary.origin + hit.t * primary.dir + frame.ray_epsilon * n;
@@ -52,6 +58,6 @@ void main() {
         float phi = 2.0 * PI * u2;
         vec3 local = vec3(r * cos(phi), r * sin(phi), sqrt(max(0.0, 1.0 - u1)));
         vec3 dir = normalize(local.x * t + local.y * b + local.z * n);
-        ao_rays[i * frame.ao_rays + k] = Ray(p, 0.0, dir, frame.ao_radius);
+        ao_rays.data[i * frame.ao_rays + k] = Ray(p, 0.0, dir, frame.ao_radius);
     }
 }

@@ -6,8 +6,11 @@
 #include "frame.glsl"
 #include "random.glsl"
 
-layout(push_constant) uniform Push { FrameParams frame; };
-layout(std430, set = 0, binding = 0) writeonly buffer Rays { Ray rays[]; };
+layout(push_constant) uniform Push {
+    FrameParams frame;
+    BUFFER_REF(RaysOutRef, rays)
+};
+BUFFER_BINDING(0, writeonly, Ray, rays)
 
 void main() {
     uint i = linear_invocation_id();
@@ -23,5 +26,5 @@ void main() {
     float sx = 2.0 * (float(px) + offset.x) / float(frame.width) - 1.0;
     float sy = 1.0 - 2.0 * (float(py) + offset.y) / float(frame.height);
     vec3 dir = normalize(frame.forward.xyz + sx * frame.right.xyz + sy * frame.up.xyz);
-    rays[i] = Ray(frame.origin.xyz, 0.0, dir, 1.0 / 0.0);
+    rays.data[i] = Ray(frame.origin.xyz, 0.0, dir, 1.0 / 0.0);
 }

@@ -12,14 +12,23 @@
 #include "material.glsl"
 #include "random.glsl"
 
-layout(push_constant) uniform Push { FrameParams frame; };
-layout(std430, set = 0, binding = 0) buffer Rays { Ray rays[]; };
-layout(std430, set = 0, binding = 1) readonly buffer Hits { Hit hits[]; };
-layout(std430, set = 0, binding = 2) readonly buffer Triangles { Triangle triangles[]; };
-layout(std430, set = 0, binding = 3) readonly buffer TriMaterial { uint triangle_material[]; };
-layout(std430, set = 0, binding = 4) readonly buffer Materials { Material materials[]; };
-layout(std430, set = 0, binding = 5) buffer Throughput { vec4 throughput[]; };
-layout(std430, set = 0, binding = 6) buffer Accum { vec4 accum[]; };
+layout(push_constant) uniform Push {
+    FrameParams frame;
+    BUFFER_REF(RaysRef, rays)
+    BUFFER_REF(HitsInRef, hits)
+    BUFFER_REF(TrianglesInRef, triangles)
+    BUFFER_REF(UintsInRef, triangle_material)
+    BUFFER_REF(MaterialsInRef, materials)
+    BUFFER_REF(Vec4sRef, throughput)
+    BUFFER_REF(Vec4sRef, accum)
+};
+BUFFER_BINDING(0, , Ray, rays)
+BUFFER_BINDING(1, readonly, Hit, hits)
+BUFFER_BINDING(2, readonly, Triangle, triangles)
+BUFFER_BINDING(3, readonly, uint, triangle_material)
+BUFFER_BINDING(4, readonly, Material, materials)
+BUFFER_BINDING(5, , vec4, throughput)
+BUFFER_BINDING(6, , vec4, accum)
 
 const float PI = 3.14159265358979;
 // Bounces after the camera hit; the camera hit is bounce 0.
@@ -37,24 +46,24 @@ void main() {
     uint i = linear_invocation_id();
     if (i >= frame.pixel_count) return;
     uint pixel = frame.pixel_offset + i;
-    vec3 t_in = frame.bounce == 0u ? vec3(1.0) : throughput[i].rgb;
-    Ray ray = rays[i];
-    Hit hit = hits[i];
+    vec3 t_in = frame.bounce == 0u ? vec3(1.0) : throughput.data[i].rgb;
+    Ray ray = rays.data[i];
+    Hit hit = hits.data[i];
     vec4 added = vec4(0.0, 0.0, 0.0, frame.bounce == 0u ? 1.0 : 0.0);
     if (hit.triangle == MISS || ray.tmax == 0.0) {
-        rays[i] = Ray(ray.origin, 0.0, ray.dir, 0.0);
-        throughput[i] = vec4(0.0);
-        accum[pixel] += added;
+        rays.data[i] = Ray(ray.origin, 0.0, ray.dir, 0.0);
+        throughput.data[i] = vec4(0.0);
+        accum.data[pixel] += added;
         return;
     }
-    Triangle tri = triangles[hit.triangle];
-    Material m = materials[triangle_material[hit.triangle]];
+    Triangle tri = triangles.data[hit.triangle];
+    Material m = materials.data[triangle_material.data[hit.triangle]];
     added.rgb = t_in * m.emission.rgb;
-    accum[pixel] += added;
+    accum.data[pixel] += added;
     vec3 t_out = t_in * m.diffuse.rgb;
     if (frame.bounce >= MAX_BOUNCES || max(t_out.r, max(t_out.g, t_out.b)) == 0.0) {
-        rays[i] = Ray(ray.origin, 0.0, ray.dir, 0.0);
-        throughput[i] = vec4(0.0);
+        rays.data[i] = Ray(ray.origin, 0.0, ray.dir, 0.0);
+        throughput.data[i] = vec4(0.0);
         return;
     }
     vec3 n = normalize(cross(tri.e1.xyz, tri.e2.xyz));
@@ -68,6 +77,6 @@ void main() {
     float r = sqrt(u1);
     float phi = 2.0 * PI * u2;
     vec3 d = normalize(r * cos(phi) * tt + r * sin(phi) * bb + sqrt(max(0.0, 1.0 - u1)) * n);
-    rays[i] = Ray(p, 0.0, d, 1.0 / 0.0);
-    throughput[i] = vec4(t_out, 0.0);
+    rays.data[i] = Ray(p, 0.0, d, 1.0 / 0.0);
+    throughput.data[i] = vec4(t_out, 0.0);
 }

@@ -6,24 +6,30 @@
 #include "geometry.glsl"
 #include "frame.glsl"
 
-layout(push_constant) uniform Push { FrameParams frame; };
-layout(std430, set = 0, binding = 0) readonly buffer Rays { Ray rays[]; };
-layout(std430, set = 0, binding = 1) readonly buffer Hits { Hit hits[]; };
-layout(std430, set = 0, binding = 2) readonly buffer Triangles { Triangle triangles[]; };
-layout(std430, set = 0, binding = 3) writeonly buffer Reflected { Ray reflected[]; };
+layout(push_constant) uniform Push {
+    FrameParams frame;
+    BUFFER_REF(RaysInRef, rays)
+    BUFFER_REF(HitsInRef, hits)
+    BUFFER_REF(TrianglesInRef, triangles)
+    BUFFER_REF(RaysOutRef, reflected)
+};
+BUFFER_BINDING(0, readonly, Ray, rays)
+BUFFER_BINDING(1, readonly, Hit, hits)
+BUFFER_BINDING(2, readonly, Triangle, triangles)
+BUFFER_BINDING(3, writeonly, Ray, reflected)
 
 void main() {
     uint i = linear_invocation_id();
     if (i >= frame.pixel_count) return;
-    Hit hit = hits[i];
-    Ray primary = rays[i];
+    Hit hit = hits.data[i];
+    Ray primary = rays.data[i];
     if (hit.triangle == MISS) {
-        reflected[i] = Ray(primary.origin, 0.0, primary.dir, 0.0);
+        reflected.data[i] = Ray(primary.origin, 0.0, primary.dir, 0.0);
         return;
     }
-    Triangle tri = triangles[hit.triangle];
+    Triangle tri = triangles.data[hit.triangle];
     vec3 n = normalize(cross(tri.e1.xyz, tri.e2.xyz));
     if (dot(n, primary.dir) > 0.0) n = -n;
     vec3 p = primary.origin + hit.t * primary.dir + frame.ray_epsilon * n;
-    reflected[i] = Ray(p, 0.0, normalize(reflect(primary.dir, n)), 1.0 / 0.0);
+    reflected.data[i] = Ray(p, 0.0, normalize(reflect(primary.dir, n)), 1.0 / 0.0);
 }

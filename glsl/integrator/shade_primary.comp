@@ -7,25 +7,33 @@
 #include "frame.glsl"
 #include "material.glsl"
 
-layout(push_constant) uniform Push { FrameParams frame; };
-layout(std430, set = 0, binding = 0) readonly buffer Rays { Ray rays[]; };
-layout(std430, set = 0, binding = 1) readonly buffer Hits { Hit hits[]; };
-layout(std430, set = 0, binding = 2) readonly buffer Triangles { Triangle triangles[]; };
-layout(std430, set = 0, binding = 3) readonly buffer TriMaterial { uint triangle_material[]; };
-layout(std430, set = 0, binding = 4) readonly buffer Materials { Material materials[]; };
-layout(std430, set = 0, binding = 5) buffer Accum { vec4 accum[]; };
+layout(push_constant) uniform Push {
+    FrameParams frame;
+    BUFFER_REF(RaysInRef, rays)
+    BUFFER_REF(HitsInRef, hits)
+    BUFFER_REF(TrianglesInRef, triangles)
+    BUFFER_REF(UintsInRef, triangle_material)
+    BUFFER_REF(MaterialsInRef, materials)
+    BUFFER_REF(Vec4sRef, accum)
+};
+BUFFER_BINDING(0, readonly, Ray, rays)
+BUFFER_BINDING(1, readonly, Hit, hits)
+BUFFER_BINDING(2, readonly, Triangle, triangles)
+BUFFER_BINDING(3, readonly, uint, triangle_material)
+BUFFER_BINDING(4, readonly, Material, materials)
+BUFFER_BINDING(5, , vec4, accum)
 
 void main() {
     uint i = linear_invocation_id();
     if (i >= frame.pixel_count) return;
     uint pixel = frame.pixel_offset + i;
-    Hit hit = hits[i];
+    Hit hit = hits.data[i];
     vec3 color = vec3(0.0);
     if (hit.triangle != MISS) {
-        Triangle tri = triangles[hit.triangle];
+        Triangle tri = triangles.data[hit.triangle];
         vec3 n = normalize(cross(tri.e1.xyz, tri.e2.xyz));
-        Material m = materials[triangle_material[hit.triangle]];
-        color = m.emission.rgb + m.diffuse.rgb * abs(dot(n, rays[i].dir));
+        Material m = materials.data[triangle_material.data[hit.triangle]];
+        color = m.emission.rgb + m.diffuse.rgb * abs(dot(n, rays.data[i].dir));
     }
-    accum[pixel] += vec4(color, 1.0);
+    accum.data[pixel] += vec4(color, 1.0);
 }

@@ -5,15 +5,20 @@
 #include "geometry.glsl"
 #include "frame.glsl"
 
-layout(push_constant) uniform Push { FrameParams frame; };
-layout(std430, set = 0, binding = 0) readonly buffer Contribution { vec4 contribution[]; };
-layout(std430, set = 0, binding = 1) readonly buffer ShadowHits { Hit shadow_hits[]; };
-layout(std430, set = 0, binding = 2) buffer Accum { vec4 accum[]; };
+layout(push_constant) uniform Push {
+    FrameParams frame;
+    BUFFER_REF(Vec4sInRef, contribution)
+    BUFFER_REF(HitsInRef, shadow_hits)
+    BUFFER_REF(Vec4sRef, accum)
+};
+BUFFER_BINDING(0, readonly, vec4, contribution)
+BUFFER_BINDING(1, readonly, Hit, shadow_hits)
+BUFFER_BINDING(2, , vec4, accum)
 
 void main() {
     uint i = linear_invocation_id();
     if (i >= frame.pixel_count) return;
-    vec3 color = contribution[2u * i].rgb;
-    if (shadow_hits[i].triangle == MISS) color += contribution[2u * i + 1u].rgb;
-    accum[frame.pixel_offset + i] += vec4(color, 1.0);
+    vec3 color = contribution.data[2u * i].rgb;
+    if (shadow_hits.data[i].triangle == MISS) color += contribution.data[2u * i + 1u].rgb;
+    accum.data[frame.pixel_offset + i] += vec4(color, 1.0);
 }

@@ -9,40 +9,49 @@
 #include "frame.glsl"
 #include "material.glsl"
 
-layout(push_constant) uniform Push { FrameParams frame; };
-layout(std430, set = 0, binding = 0) readonly buffer Rays { Ray rays[]; };
-layout(std430, set = 0, binding = 1) readonly buffer Hits { Hit hits[]; };
-layout(std430, set = 0, binding = 2) readonly buffer Triangles { Triangle triangles[]; };
-layout(std430, set = 0, binding = 3) readonly buffer TriMaterial { uint triangle_material[]; };
-layout(std430, set = 0, binding = 4) readonly buffer Materials { Material materials[]; };
-layout(std430, set = 0, binding = 5) writeonly buffer ShadowRays { Ray shadow_rays[]; };
-layout(std430, set = 0, binding = 6) writeonly buffer Contribution { vec4 contribution[]; };
+layout(push_constant) uniform Push {
+    FrameParams frame;
+    BUFFER_REF(RaysInRef, rays)
+    BUFFER_REF(HitsInRef, hits)
+    BUFFER_REF(TrianglesInRef, triangles)
+    BUFFER_REF(UintsInRef, triangle_material)
+    BUFFER_REF(MaterialsInRef, materials)
+    BUFFER_REF(RaysOutRef, shadow_rays)
+    BUFFER_REF(Vec4sOutRef, contribution)
+};
+BUFFER_BINDING(0, readonly, Ray, rays)
+BUFFER_BINDING(1, readonly, Hit, hits)
+BUFFER_BINDING(2, readonly, Triangle, triangles)
+BUFFER_BINDING(3, readonly, uint, triangle_material)
+BUFFER_BINDING(4, readonly, Material, materials)
+BUFFER_BINDING(5, writeonly, Ray, shadow_rays)
+BUFFER_BINDING(6, writeonly, vec4, contribution)
 
 const float INV_PI = 0.31830988618379067;
 
 void main() {
     uint i = linear_invocation_id();
     if (i >= frame.pixel_count) return;
-    Hit hit = hits[i];
-    Ray primary = rays[i];
+    Hit hit = hits.data[i];
+    Ray primary = rays.data[i];
     if (hit.triangle == MISS) {
-        shadow_rays[i] = Ray(primary.origin, 0.0, primary.dir, 0.0);
-        contribution[2u * i] = vec4(0.0);
-        contribution[2u * i + 1u] = vec4(0.0);
+        shadow_rays.data[i] = Ray(primary.origin, 0.0, primary.dir, 0.0);
+        contribution.data[2u * i] = vec4(0.0);
+        contribution.data[2u * i + 1u] = vec4(0.0);
         return;
     }
-    Triangle tri = triangles[hit.triangle];
+    Triangle tri = triangles.data[hit.triangle];
     vec3 n = normalize(cross(tri.e1.xyz, tri.e2.xyz));
     if (dot(n, primary.dir) > 0.0) n = -n;
     vec3 p = primary.origin + hit.t * primary.dir + frame.ray_epsilon * n;
     vec3 to_light = frame.light.xyz - p;
     float d2 = max(dot(to_light, to_light), 1e-12);
     vec3 l = to_light * inversesqrt(d2);
-    Material m = materials[triangle_material[hit.triangle]];
+    Material m = materials.data[triangle_material.data[hit.triangle]];
     float cos_l = dot(n, l);
     vec3 lit = cos_l > 0.0 ? m.diffuse.rgb * INV_PI * frame.light.w * cos_l / d2 : vec3(0.0);
     // A light behind the surface needs no ray: tmax = 0 never hits.
-    shadow_rays[i] = Ray(p, 0.0, l, cos_l > 0.0 ? sqrt(d2) * (1.0 - 1e-4) : 0.0);
-    contribution[2u * i] = vec4(m.emission.rgb, 0.0);
-    contribution[2u * i + 1u] = vec4(lit, 0.0);
+    shadow_rays.data[i] = Ray(p, 0.0, l, cos_l > 0.0 ? sqrt(d2) * (1.0 - 1e-4) : 0.0);
+    contribution.data[2u * i] = vec4(m.emission.rgb, 0.0);
+    contribution.data[2u * i + 1u] = vec4(lit, 0.0);
 }

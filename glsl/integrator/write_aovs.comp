@@ -5,26 +5,34 @@
 #include "geometry.glsl"
 #include "frame.glsl"
 
-layout(push_constant) uniform Push { FrameParams frame; };
-layout(std430, set = 0, binding = 0) readonly buffer Rays { Ray rays[]; };
-layout(std430, set = 0, binding = 1) readonly buffer Hits { Hit hits[]; };
-layout(std430, set = 0, binding = 2) readonly buffer Triangles { Triangle triangles[]; };
-layout(std430, set = 0, binding = 3) writeonly buffer Depth { float depth[]; };
-layout(std430, set = 0, binding = 4) writeonly buffer TriId { uint triangle_id[]; };
-layout(std430, set = 0, binding = 5) writeonly buffer Normal { vec4 normal[]; };
+layout(push_constant) uniform Push {
+    FrameParams frame;
+    BUFFER_REF(RaysInRef, rays)
+    BUFFER_REF(HitsInRef, hits)
+    BUFFER_REF(TrianglesInRef, triangles)
+    BUFFER_REF(FloatsOutRef, depth)
+    BUFFER_REF(UintsOutRef, triangle_id)
+    BUFFER_REF(Vec4sOutRef, normal)
+};
+BUFFER_BINDING(0, readonly, Ray, rays)
+BUFFER_BINDING(1, readonly, Hit, hits)
+BUFFER_BINDING(2, readonly, Triangle, triangles)
+BUFFER_BINDING(3, writeonly, float, depth)
+BUFFER_BINDING(4, writeonly, uint, triangle_id)
+BUFFER_BINDING(5, writeonly, vec4, normal)
 
 void main() {
     uint i = linear_invocation_id();
     if (i >= frame.pixel_count) return;
     uint pixel = frame.pixel_offset + i;
-    Hit hit = hits[i];
+    Hit hit = hits.data[i];
     vec3 n = vec3(0.0);
     if (hit.triangle != MISS) {
-        Triangle tri = triangles[hit.triangle];
+        Triangle tri = triangles.data[hit.triangle];
         n = normalize(cross(tri.e1.xyz, tri.e2.xyz));
-        if (dot(n, rays[i].dir) > 0.0) n = -n;
+        if (dot(n, rays.data[i].dir) > 0.0) n = -n;
     }
-    depth[pixel] = hit.t;
-    triangle_id[pixel] = hit.triangle;
-    normal[pixel] = vec4(n, 0.0);
+    depth.data[pixel] = hit.t;
+    triangle_id.data[pixel] = hit.triangle;
+    normal.data[pixel] = vec4(n, 0.0);
 }

@@ -14,13 +14,19 @@
 
 layout(constant_id = 1) const uint BATCH = 256;
 
-layout(std430, set = 0, binding = 0) readonly buffer Triangles { Triangle triangles[]; };
-layout(std430, set = 0, binding = 1) readonly buffer Rays { Ray rays[]; };
-layout(std430, set = 0, binding = 2) writeonly buffer Hits { Hit hits[]; };
-layout(push_constant) uniform Push {
+struct BruteForcePush {
     uint ray_count;
     uint triangle_count;
-} pc;
+};
+layout(push_constant) uniform Push {
+    BruteForcePush pc;
+    BUFFER_REF(TrianglesInRef, triangles)
+    BUFFER_REF(RaysInRef, rays)
+    BUFFER_REF(HitsOutRef, hits)
+};
+BUFFER_BINDING(0, readonly, Triangle, triangles)
+BUFFER_BINDING(1, readonly, Ray, rays)
+BUFFER_BINDING(2, writeonly, Hit, hits)
 
 shared Triangle staged[BATCH];
 
@@ -28,7 +34,7 @@ void main() {
     uint ray_index = linear_invocation_id();
     bool has_ray = ray_index < pc.ray_count;
     Ray ray;
-    if (has_ray) ray = rays[ray_index];
+    if (has_ray) ray = rays.data[ray_index];
     float best_t = 1.0 / 0.0;
     uint best_tri = MISS;
     float best_u = 0.0, best_v = 0.0;
@@ -37,7 +43,7 @@ void main() {
     for (uint base = 0; base < pc.triangle_count; base += BATCH) {
         uint count = min(BATCH, pc.triangle_count - base);
         for (uint j = gl_LocalInvocationID.x; j < count; j += WORKGROUP_SIZE) {
-            staged[j] = triangles[base + j];
+            staged[j] = triangles.data[base + j];
         }
         barrier();
         if (!done) {
@@ -60,5 +66,5 @@ void main() {
         }
         barrier();
     }
-    if (has_ray) hits[ray_index] = Hit(best_t, best_tri, best_u, best_v);
+    if (has_ray) hits.data[ray_index] = Hit(best_t, best_tri, best_u, best_v);
 }

@@ -13,17 +13,22 @@
 #include "grid.glsl"
 #include "geometry.glsl"
 
-layout(std430, set = 0, binding = 0) readonly buffer Rays { Ray rays[]; };
-layout(std430, set = 0, binding = 1) writeonly buffer Hits { Hit hits[]; };
 layout(set = 0, binding = 2) uniform accelerationStructureEXT scene;
-layout(push_constant) uniform Push {
+struct RayQueryPush {
     uint ray_count;
-} pc;
+};
+layout(push_constant) uniform Push {
+    RayQueryPush pc;
+    BUFFER_REF(RaysInRef, rays)
+    BUFFER_REF(HitsOutRef, hits)
+};
+BUFFER_BINDING(0, readonly, Ray, rays)
+BUFFER_BINDING(1, writeonly, Hit, hits)
 
 void main() {
     uint ray_index = linear_invocation_id();
     if (ray_index >= pc.ray_count) return;
-    Ray ray = rays[ray_index];
+    Ray ray = rays.data[ray_index];
     uint flags = gl_RayFlagsOpaqueEXT;
 #ifdef OCCLUSION
     flags |= gl_RayFlagsTerminateOnFirstHitEXT;
@@ -44,5 +49,5 @@ void main() {
                       uint(rayQueryGetIntersectionPrimitiveIndexEXT(query, true)), uv.x, uv.y);
         }
     }
-    hits[ray_index] = hit;
+    hits.data[ray_index] = hit;
 }

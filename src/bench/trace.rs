@@ -31,8 +31,11 @@ pub struct TraceBenchOptions {
     /// Brute force traces at most this many ray–triangle tests per frame; beyond it, a
     /// strided subset of the rays is traced and the time extrapolated (marked).
     pub brute_force_budget: f64,
-    /// Rays per batch checked against brute force before timing.
+    /// Rays per batch checked against brute force before timing, at most.
     pub verify_rays: usize,
+    /// Ray–triangle tests the brute-force check may take per batch: on scenes of
+    /// millions of triangles it checks fewer rays (at least 64).
+    pub verify_budget: f64,
     /// PDACRT parameters instead of the device defaults.
     pub pdacrt: Option<crate::trace::PdacrtParams>,
 }
@@ -47,6 +50,7 @@ impl Default for TraceBenchOptions {
             frames: 5,
             brute_force_budget: 3e8,
             verify_rays: 4096,
+            verify_budget: 4e9,
             pdacrt: None,
         }
     }
@@ -196,6 +200,17 @@ impl fmt::Display for TraceReport {
                     p.flush_reduce,
                     if p.stage_triangles { "staged" } else { "direct" }
                 )?;
+                let triangles = (self.triangles * size_of::<GpuTriangle>()) as u64;
+                let working = r.tracer_peak_bytes.saturating_sub(triangles);
+                writeln!(
+                    f,
+                    "{:<12} at the peak: triangles {:.1} MiB, rays and hits {:.1} MiB, PDACRT's working memory {:.1} MiB = {:.1}% of the peak",
+                    "",
+                    triangles as f64 / (1 << 20) as f64,
+                    r.peak_gpu_bytes.saturating_sub(r.tracer_peak_bytes) as f64 / (1 << 20) as f64,
+                    working as f64 / (1 << 20) as f64,
+                    100.0 * working as f64 / r.peak_gpu_bytes.max(1) as f64
+                )?;
             }
         }
         Ok(())
@@ -340,10 +355,12 @@ pub fn run(
 
     // Brute-force samples for verification (the oracle of every tracer).
     let mut oracle = BruteForceTracer::new(gpu, &triangles)?;
+    let affordable = (opts.verify_budget / triangles.len().max(1) as f64) as usize;
+    let verify_rays = affordable.clamp(64.min(opts.verify_rays), opts.verify_rays);
     let samples: Vec<(Vec<Ray>, Vec<Hit>, Query)> = batches
         .iter()
         .map(|b| -> vk::Result<_> {
-            let rays = strided(&b.rays, opts.verify_rays);
+            let rays = strided(&b.rays, verify_rays);
             let hits = trace_once(gpu, &mut oracle, &rays, b.query)?;
             Ok((rays, hits, b.query))
         })

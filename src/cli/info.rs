@@ -117,8 +117,12 @@ pub fn run(args: &InfoArgs) -> anyhow::Result<()> {
         let l = &i.limits;
         let c = &i.capabilities;
         println!(
-            "    limits: maxStorageBufferRange {} MiB, shared memory {} KiB, workgroup invocations {}, subgroup size {} ({}..{}), push constants {} B, timestampPeriod {} ns",
+            "    limits: maxStorageBufferRange {} MiB (kernels pass larger buffers by address), largest buffer {} MiB (maxBufferSize {} MiB, maxMemoryAllocationSize {} MiB), device-local memory {} MiB, shared memory {} KiB, workgroup invocations {}, subgroup size {} ({}..{}), push constants {} B, timestampPeriod {} ns",
             l.max_storage_buffer_range >> 20,
+            l.max_buffer_size.min(l.max_memory_allocation_size) >> 20,
+            l.max_buffer_size >> 20,
+            l.max_memory_allocation_size >> 20,
+            l.device_local_bytes >> 20,
             l.max_compute_shared_memory_size >> 10,
             l.max_compute_work_group_invocations,
             l.subgroup_size,

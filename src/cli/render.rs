@@ -33,12 +33,16 @@ const DEFAULT_SCENE: &str = "cornell-box";
 #[derive(Debug, Args)]
 pub struct RenderArgs {
     /// A built-in scene name (see `splitray scenes`), a scene .toml or an .obj mesh
-    /// (default: cornell-box; with --resume, the checkpoint's scene).
+    /// (default: cornell-box; with --resume, the checkpoint's scene). Its size is bounded
+    /// by the device, not by one storage binding: 48 bytes per triangle in one buffer
+    /// (2 GiB on lavapipe: 44M triangles), all buffers within the device's memory.
     scene: Option<String>,
     /// Output EXR; the PNG preview goes beside it. Default: out/<scene>.exr.
     #[arg(short, long)]
     output: Option<PathBuf>,
-    /// Film width in pixels (default: the scene's, else 512).
+    /// Film width in pixels (default: the scene's, else 512). Up to 16384; the device
+    /// bounds the film too: one buffer of 16 bytes per pixel (2 GiB on lavapipe) and its
+    /// memory (`splitray info`), checked before any work.
     #[arg(long)]
     width: Option<u32>,
     /// Film height in pixels (default: the scene's, else 512).

@@ -376,6 +376,8 @@ mod tests {
                 min_subgroup_size: subgroups.0,
                 max_subgroup_size: subgroups.1,
                 max_memory_allocation_size: 1 << 32,
+                max_buffer_size: 1 << 40,
+                device_local_bytes: 8 << 30,
             },
             CapabilityInfo {
                 timeline_semaphore: true,

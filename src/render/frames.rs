@@ -165,8 +165,8 @@ pub fn render_frames(
     check_frames(animated, options, range)?;
     let mut t = range.time(range.first);
     let mut scene = animated.pose(t);
-    let limit = gpu.info().limits.max_storage_buffer_range;
-    scene.check_fits(limit, size_of::<GpuTriangle>() as u64)?;
+    // Every frame has the first frame's triangle count and film.
+    super::device_fit::check(gpu, &scene, options)?;
     let mut triangles = gpu_triangles(&scene);
     let tracer = Rc::new(RefCell::new(Shared {
         tracer: options.tracer.create(gpu, &triangles)?,

@@ -132,19 +132,6 @@ pub enum SceneError {
     /// No usable triangles.
     #[error("{at}: empty scene: {message}")]
     Empty { at: Location, message: String },
-    /// More triangle data than one storage-buffer binding can address.
-    #[error(
-        "scene '{name}' has {triangles} triangles = {bytes} bytes ({mib}), more than this device's \
-         maxStorageBufferRange of {limit_mib}",
-        mib = fmt_mib(*.bytes),
-        limit_mib = fmt_mib(*.limit)
-    )]
-    TooLarge {
-        name: String,
-        triangles: u64,
-        bytes: u64,
-        limit: u64,
-    },
     /// `load` got something that is neither a built-in name nor a .toml / .obj path.
     #[error("'{spec}': {message}")]
     BadSpec { spec: String, message: String },
@@ -155,16 +142,6 @@ fn plural(kind: &str, count: usize) -> String {
         (k, 1) => k.to_string(),
         ("vertex", _) => "vertices".to_string(),
         (k, _) => format!("{k}s"),
-    }
-}
-
-/// `n` bytes as MiB: exact when a whole number, else with two decimals.
-pub fn fmt_mib(bytes: u64) -> String {
-    const MIB: u64 = 1 << 20;
-    if bytes % MIB == 0 {
-        format!("{} MiB", bytes / MIB)
-    } else {
-        format!("{:.2} MiB", bytes as f64 / MIB as f64)
     }
 }
 
@@ -181,18 +158,5 @@ mod tests {
         // 'é' is two bytes: the space after it is column 2.
         assert_eq!(line_col(t, 8), (3, 2));
         assert_eq!(line_col(t, 999), (3, 4));
-    }
-
-    #[test]
-    fn too_large_message() {
-        let e = SceneError::TooLarge {
-            name: "x".into(),
-            triangles: 3_000_000,
-            bytes: 3_000_000 * 64,
-            limit: 128 << 20,
-        };
-        let s = e.to_string();
-        assert!(s.contains("scene 'x' has 3000000 triangles"), "{s}");
-        assert!(s.contains("maxStorageBufferRange of 128 MiB"), "{s}");
     }
 }

@@ -430,26 +430,6 @@ impl Scene {
     pub fn camera_frame(&self) -> CameraFrame {
         self.camera.frame(self.film.width, self.film.height)
     }
-
-    /// Errors when `triangles × bytes_per_triangle` exceeds one storage-buffer binding
-    /// (`VkPhysicalDeviceLimits::maxStorageBufferRange`).
-    pub fn check_fits(
-        &self,
-        max_storage_buffer_range: u64,
-        bytes_per_triangle: u64,
-    ) -> Result<(), SceneError> {
-        let triangles = self.triangles.len() as u64;
-        let bytes = triangles.saturating_mul(bytes_per_triangle);
-        if bytes > max_storage_buffer_range {
-            return Err(SceneError::TooLarge {
-                name: self.name.clone(),
-                triangles,
-                bytes,
-                limit: max_storage_buffer_range,
-            });
-        }
-        Ok(())
-    }
 }
 
 /// A camera that frames `bounds`: it looks at the box centre from the +z side
@@ -545,15 +525,5 @@ mod tests {
         let half = (c.fov_y.to_radians() * 0.5).sin();
         assert!(b.radius() / d <= half);
         assert!(c.position.z > b.max.z);
-    }
-
-    #[test]
-    fn check_fits_reports_sizes() {
-        let mut s = builtin("cornell-box").unwrap();
-        assert!(s.check_fits(128 << 20, 64).is_ok());
-        s.name = "big".into();
-        let e = s.check_fits(1024, 64).unwrap_err().to_string();
-        assert!(e.contains("scene 'big' has"), "{e}");
-        assert!(e.contains("maxStorageBufferRange"), "{e}");
     }
 }

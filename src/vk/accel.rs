@@ -215,7 +215,6 @@ impl AccelerationStructure {
             sizes.acceleration_structure_size,
             MemoryKind::Device,
             BufferUsage {
-                device_address: true,
                 accel_build_input: false,
                 accel_storage: true,
             },
@@ -226,15 +225,10 @@ impl AccelerationStructure {
             true => sizes.build_scratch_size.max(sizes.update_scratch_size),
             false => sizes.build_scratch_size,
         };
-        let scratch = gpu.create_buffer_with(
+        let scratch = gpu.create_buffer(
             &format!("{name}:scratch"),
             scratch_size + align,
             MemoryKind::Device,
-            BufferUsage {
-                device_address: true,
-                accel_build_input: false,
-                accel_storage: false,
-            },
         )?;
         let scratch_address = scratch.device_address().next_multiple_of(align);
         let create_info = vk::AccelerationStructureCreateInfoKHR::default()

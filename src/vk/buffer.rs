@@ -1,9 +1,14 @@
 //! Buffers allocated through gpu-allocator, with upload and readback.
 //!
-//! Every engine buffer is a storage buffer that can also be copied, filled and read as
-//! indirect arguments. On devices whose memory is host-visible (lavapipe, integrated
-//! GPUs), device buffers are allocated mapped and transfers are plain copies; elsewhere
-//! they go through staging buffers on the main stream.
+//! Every engine buffer is a storage buffer that can also be copied, filled, read as
+//! indirect arguments and addressed from kernels by its device address (so it may be
+//! larger than one storage binding: see [`super::reflect`]). On devices whose memory is
+//! host-visible (lavapipe, integrated GPUs), device buffers are allocated mapped and
+//! transfers are plain copies; elsewhere they go through staging buffers on the main
+//! stream.
+//!
+//! One buffer holds at most [`Gpu::max_buffer_bytes`]: the smaller of the device's
+//! maxBufferSize and maxMemoryAllocationSize (each buffer is one allocation).
 
 use ash::vk;
 use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
@@ -23,12 +28,10 @@ pub enum MemoryKind {
     Readback,
 }
 
-/// Extra uses of a buffer beyond the storage/transfer/indirect ones every buffer has.
-/// All need a device opened with ray queries ([`Gpu::ray_query`]).
+/// Extra uses of a buffer beyond the storage/transfer/indirect/device-address ones every
+/// buffer has. All need a device opened with ray queries ([`Gpu::ray_query`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct BufferUsage {
-    /// SHADER_DEVICE_ADDRESS: the buffer has a device address.
-    pub device_address: bool,
     /// ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY: vertices or instances of a build.
     pub accel_build_input: bool,
     /// ACCELERATION_STRUCTURE_STORAGE: backs an acceleration structure.
@@ -38,16 +41,12 @@ pub struct BufferUsage {
 impl BufferUsage {
     /// Vertices or instances read by an acceleration-structure build.
     pub const ACCEL_BUILD_INPUT: Self = Self {
-        device_address: true,
         accel_build_input: true,
         accel_storage: false,
     };
 
     fn flags(self) -> vk::BufferUsageFlags {
         let mut f = vk::BufferUsageFlags::empty();
-        if self.device_address {
-            f |= vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS;
-        }
         if self.accel_build_input {
             f |= vk::BufferUsageFlags::ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_KHR;
         }
@@ -64,6 +63,8 @@ pub struct Buffer {
     gpu: Gpu,
     pub(crate) raw: vk::Buffer,
     allocation: Option<Allocation>,
+    /// The device address of its first byte.
+    address: vk::DeviceAddress,
     /// Size in bytes as requested (the Vulkan buffer is at least 4 bytes).
     size: u64,
     name: String,
@@ -98,6 +99,32 @@ impl Gpu {
         self.0.info.is_cpu()
     }
 
+    /// The most bytes one buffer may hold, and the limit that sets it: each buffer is one
+    /// allocation, so the smaller of maxBufferSize and maxMemoryAllocationSize.
+    pub fn max_buffer_bytes(&self) -> (u64, &'static str) {
+        let limits = &self.0.info.limits;
+        if limits.max_memory_allocation_size < limits.max_buffer_size {
+            (limits.max_memory_allocation_size, "maxMemoryAllocationSize")
+        } else {
+            (limits.max_buffer_size, "maxBufferSize")
+        }
+    }
+
+    /// Refuses a buffer of `size` bytes that one buffer cannot hold on this device, naming
+    /// it and the limit: for callers that check their buffers before any work.
+    pub fn check_buffer_size(&self, name: &str, size: u64) -> Result<()> {
+        let (limit, which) = self.max_buffer_bytes();
+        if size.max(4).next_multiple_of(4) > limit {
+            return Err(VkError::BufferTooLarge {
+                name: name.to_string(),
+                size,
+                limit,
+                which,
+            });
+        }
+        Ok(())
+    }
+
     /// Allocates a buffer of `size` bytes (contents undefined).
     pub fn create_buffer(&self, name: &str, size: u64, kind: MemoryKind) -> Result<Buffer> {
         self.create_buffer_with(name, size, kind, BufferUsage::default())
@@ -114,17 +141,10 @@ impl Gpu {
         if usage != BufferUsage::default() && !self.ray_query() {
             return Err(VkError::Usage(format!(
                 "buffer '{name}' needs {usage:?}, which this device was not opened with \
-                 (it needs VK_KHR_acceleration_structure and bufferDeviceAddress)"
+                 (it needs VK_KHR_acceleration_structure)"
             )));
         }
-        let limit = self.0.info.limits.max_storage_buffer_range;
-        if size > limit {
-            return Err(VkError::BufferTooLarge {
-                name: name.to_string(),
-                size,
-                limit,
-            });
-        }
+        self.check_buffer_size(name, size)?;
         // Vulkan forbids empty buffers; round up so vkCmdFillBuffer's 4-byte rule holds.
         let vk_size = size.max(4).next_multiple_of(4);
         let families: Vec<u32> = {
@@ -138,6 +158,7 @@ impl Gpu {
                 | vk::BufferUsageFlags::TRANSFER_SRC
                 | vk::BufferUsageFlags::TRANSFER_DST
                 | vk::BufferUsageFlags::INDIRECT_BUFFER
+                | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS
                 | usage.flags(),
         );
         // Streams on several queue families share buffers without ownership transfers.
@@ -189,10 +210,15 @@ impl Gpu {
         // `RUST_LOG=splitray::vk=trace` lists every allocation: what makes up a peak.
         log::trace!("alloc {name} {} bytes, {now} in all", allocation.size());
         self.set_object_name(raw, name);
+        let address_info = vk::BufferDeviceAddressInfo::default().buffer(raw);
+        // SAFETY: raw is bound to memory and was created with SHADER_DEVICE_ADDRESS usage
+        // on a device opened with bufferDeviceAddress.
+        let address = unsafe { device.get_buffer_device_address(&address_info) };
         Ok(Buffer {
             gpu: self.clone(),
             raw,
             allocation: Some(allocation),
+            address,
             size,
             name: name.to_string(),
         })
@@ -236,13 +262,9 @@ impl Buffer {
         self.size as usize / size_of::<T>()
     }
 
-    /// The buffer's device address (it must have been created with
-    /// [`BufferUsage::device_address`]).
+    /// The device address of the buffer's first byte.
     pub(crate) fn device_address(&self) -> vk::DeviceAddress {
-        let info = vk::BufferDeviceAddressInfo::default().buffer(self.raw);
-        // SAFETY: valid buffer of this device, created with SHADER_DEVICE_ADDRESS usage
-        // (callers in this module tree only ask for buffers they created so).
-        unsafe { self.gpu.0.raw.get_buffer_device_address(&info) }
+        self.address
     }
 
     pub fn slice(&self, offset: u64, size: u64) -> BufferSlice<'_> {

@@ -6,7 +6,7 @@ use super::accel::AccelerationStructure;
 use super::buffer::{Buffer, BufferSlice};
 use super::device::{Gpu, InFlight, QUERIES_PER_POOL};
 use super::error::{CallContext, Result, VkError};
-use super::pipeline::ComputePipeline;
+use super::pipeline::{ComputePipeline, Variant};
 use super::profiler::{QueryBatch, ScopeInfo, ScopeQueries};
 use super::stream::{StreamKind, TimelinePoint};
 
@@ -196,10 +196,11 @@ impl Recorder {
         Ok(())
     }
 
-    /// Records a dispatch of `groups` workgroups inside a scope under the kernel's name.
+    /// Records a dispatch of `groups` workgroups of `variant` (bound) inside a scope
+    /// under the kernel's name.
     fn dispatch_scope(
         &mut self,
-        pipeline: &ComputePipeline,
+        (pipeline, variant): (&ComputePipeline, &Variant),
         bindings: &[BufferSlice<'_>],
         groups: [u32; 3],
         items: Option<u64>,
@@ -208,7 +209,7 @@ impl Recorder {
             workgroups: Some(groups),
             items,
             bytes_bound: Some(bindings.iter().map(|b| b.size).sum()),
-            first_use: pipeline.mark_dispatched(),
+            first_use: variant.mark_dispatched(),
         };
         self.begin_scope_with(pipeline.name(), info)?;
         // SAFETY: recording with a bound compute pipeline and pushed descriptors (the
@@ -221,22 +222,25 @@ impl Recorder {
         self.end_scope()
     }
 
-    fn bind(
+    fn bind<'p>(
         &mut self,
-        pipeline: &ComputePipeline,
+        pipeline: &'p ComputePipeline,
         bindings: &[BufferSlice<'_>],
         push: &[u8],
-    ) -> Result<()> {
+    ) -> Result<&'p Variant> {
         self.bind_with(pipeline, bindings, None, push)
     }
 
-    fn bind_with(
+    /// Binds the form of `pipeline` that suits `bindings` (its descriptor twin where every
+    /// buffer fits a binding and the device prefers it), its descriptors and its push
+    /// constants with the buffer addresses; returns that form.
+    fn bind_with<'p>(
         &mut self,
-        pipeline: &ComputePipeline,
+        pipeline: &'p ComputePipeline,
         bindings: &[BufferSlice<'_>],
         tlas: Option<&AccelerationStructure>,
         push: &[u8],
-    ) -> Result<()> {
+    ) -> Result<&'p Variant> {
         if pipeline.tlas_binding != tlas.is_some() {
             return Err(VkError::Usage(format!(
                 "kernel '{}' {} an acceleration structure, {} given",
@@ -265,9 +269,27 @@ impl Recorder {
                 push.len()
             )));
         }
-        let infos: Vec<[vk::DescriptorBufferInfo; 1]> = bindings
+        let variant = pipeline.variant_for(bindings)?;
+        let descriptors = &variant.passing.descriptors;
+        let max_range = self.gpu.info().limits.max_storage_buffer_range;
+        if let Some(&b) = descriptors
             .iter()
-            .map(|b| {
+            .find(|&&b| bindings[b as usize].size > max_range)
+        {
+            let slice = &bindings[b as usize];
+            return Err(VkError::Usage(format!(
+                "kernel '{}' binds buffer '{}' ({} bytes) as descriptor {b}, more than one \
+                 storage binding holds on this device (maxStorageBufferRange, {max_range} \
+                 bytes): the kernel must take it by address (glsl/common/address.glsl)",
+                pipeline.name(),
+                slice.buffer.name(),
+                slice.size
+            )));
+        }
+        let infos: Vec<[vk::DescriptorBufferInfo; 1]> = descriptors
+            .iter()
+            .map(|&b| {
+                let b = &bindings[b as usize];
                 // An empty range is invalid; bind 4 bytes the kernel will not read.
                 let range = if b.size == 0 {
                     4
@@ -282,14 +304,15 @@ impl Recorder {
             .collect();
         let mut writes: Vec<_> = infos
             .iter()
-            .enumerate()
-            .map(|(i, info)| {
+            .zip(descriptors)
+            .map(|(info, &binding)| {
                 vk::WriteDescriptorSet::default()
-                    .dst_binding(i as u32)
+                    .dst_binding(binding)
                     .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
                     .buffer_info(info)
             })
             .collect();
+        let push = push_with_addresses(variant, bindings, push);
         let tlas_handles = tlas.map(|t| [t.raw]);
         let mut tlas_write = vk::WriteDescriptorSetAccelerationStructureKHR::default();
         if let Some(handles) = &tlas_handles {
@@ -305,12 +328,12 @@ impl Recorder {
         // SAFETY: recording; the pipeline and buffers are alive; counts were checked.
         unsafe {
             let d = self.device();
-            d.cmd_bind_pipeline(self.cmd, vk::PipelineBindPoint::COMPUTE, pipeline.raw);
+            d.cmd_bind_pipeline(self.cmd, vk::PipelineBindPoint::COMPUTE, variant.raw);
             if !writes.is_empty() {
                 self.gpu.0.push_descriptor.cmd_push_descriptor_set(
                     self.cmd,
                     vk::PipelineBindPoint::COMPUTE,
-                    pipeline.layout,
+                    variant.layout,
                     0,
                     &writes,
                 );
@@ -318,14 +341,14 @@ impl Recorder {
             if !push.is_empty() {
                 d.cmd_push_constants(
                     self.cmd,
-                    pipeline.layout,
+                    variant.layout,
                     vk::ShaderStageFlags::COMPUTE,
                     0,
-                    push,
+                    &push,
                 );
             }
         }
-        Ok(())
+        Ok(variant)
     }
 
     /// Records a dispatch of `groups` workgroups, timed under the kernel's name.
@@ -355,11 +378,11 @@ impl Recorder {
                 pipeline.name()
             )));
         }
-        self.bind(pipeline, bindings, push)?;
+        let variant = self.bind(pipeline, bindings, push)?;
         if groups.contains(&0) {
             return Ok(());
         }
-        self.dispatch_scope(pipeline, bindings, groups, items)
+        self.dispatch_scope((pipeline, variant), bindings, groups, items)
     }
 
     /// Dispatches enough workgroups for `n` items of a kernel made with
@@ -373,11 +396,11 @@ impl Recorder {
         n: u64,
     ) -> Result<()> {
         let groups = grid_for(&self.gpu, n, pipeline.workgroup_size());
-        self.bind_with(pipeline, bindings, Some(tlas), bytemuck::bytes_of(push))?;
+        let variant = self.bind_with(pipeline, bindings, Some(tlas), bytemuck::bytes_of(push))?;
         if groups.contains(&0) {
             return Ok(());
         }
-        self.dispatch_scope(pipeline, bindings, groups, Some(n))
+        self.dispatch_scope((pipeline, variant), bindings, groups, Some(n))
     }
 
     /// Dispatches enough workgroups for `n` items (see [`grid_for`]).
@@ -408,10 +431,10 @@ impl Recorder {
         args: &Buffer,
         offset: u64,
     ) -> Result<()> {
-        self.bind(pipeline, bindings, bytemuck::bytes_of(push))?;
+        let variant = self.bind(pipeline, bindings, bytemuck::bytes_of(push))?;
         let info = ScopeInfo {
             bytes_bound: Some(bindings.iter().map(|b| b.size).sum()),
-            first_use: pipeline.mark_dispatched(),
+            first_use: variant.mark_dispatched(),
             ..Default::default()
         };
         self.begin_scope_with(pipeline.name(), info)?;
@@ -638,6 +661,19 @@ impl Recorder {
         self.submitted = true;
         Ok(gpu.timeline_point(self.stream, value))
     }
+}
+
+/// The push-constant bytes of a dispatch: the caller's values, then the device address
+/// of each buffer the kernel takes by address at its offset (see [`super::reflect`]).
+fn push_with_addresses(variant: &Variant, bindings: &[BufferSlice<'_>], values: &[u8]) -> Vec<u8> {
+    let mut push = vec![0u8; variant.passing.push_bytes as usize];
+    push[..values.len()].copy_from_slice(values);
+    for &(binding, offset) in &variant.passing.addresses {
+        let slice = &bindings[binding as usize];
+        let address = slice.buffer.device_address() + slice.offset;
+        push[offset as usize..offset as usize + 8].copy_from_slice(&address.to_le_bytes());
+    }
+    push
 }
 
 impl Drop for Recorder {

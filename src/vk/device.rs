@@ -15,6 +15,7 @@ use super::clock::Calibrator;
 use super::error::{CallContext, Result, VkError};
 use super::instance::{Instance, InstanceDesc};
 use super::physical::{self, PhysicalDeviceInfo};
+use super::pipeline::BufferAccess;
 use super::profiler::{GpuBatch, ProfileLog, QueryBatch};
 use super::stream::{StreamKind, StreamMapping, StreamPlacement, TimelineHandle, TimelinePoint};
 
@@ -25,6 +26,10 @@ pub struct GpuDesc {
     /// Device index or name substring; `None` picks the best (see [`physical::select`]).
     pub device: Option<String>,
     pub placement: StreamPlacement,
+    /// How kernels with a descriptor twin take their buffers; `None`: the device's
+    /// default ([`BufferAccess::for_device`]), or `SPLITRAY_BUFFER_ACCESS`
+    /// (`descriptors` or `addresses`) where it is set.
+    pub buffer_access: Option<BufferAccess>,
 }
 
 /// Bytes allocated through the allocator: now and at the peak.
@@ -103,6 +108,7 @@ pub(crate) struct GpuInner {
     pub(crate) timeline: Mutex<Option<Vec<GpuBatch>>>,
     /// Present where the device offers VK_KHR/EXT_calibrated_timestamps.
     pub(crate) calibrator: Option<Calibrator>,
+    pub(crate) buffer_access: BufferAccess,
     /// Opened with VK_KHR_swapchain ([`Gpu::new_for_presentation`]).
     pub(crate) present: bool,
 }
@@ -128,7 +134,8 @@ impl Gpu {
         let instance = Instance::new(desc.instance)?;
         let devices = physical::enumerate(&instance)?;
         let info = physical::select(&devices, desc.device.as_deref())?;
-        Self::open(instance, info, desc.placement, false)
+        let buffer_access = buffer_access_for(desc, &info)?;
+        Self::open(instance, info, desc.placement, buffer_access, false)
     }
 
     /// [`Gpu::new`] for a device that also presents to windows: the instance gets the
@@ -152,13 +159,15 @@ impl Gpu {
                 what: "VK_KHR_swapchain (to present to a window)".into(),
             });
         }
-        Self::open(instance, info, desc.placement, true)
+        let buffer_access = buffer_access_for(desc, &info)?;
+        Self::open(instance, info, desc.placement, buffer_access, true)
     }
 
     fn open(
         instance: Arc<Instance>,
         info: PhysicalDeviceInfo,
         placement: StreamPlacement,
+        buffer_access: BufferAccess,
         present: bool,
     ) -> Result<Self> {
         let mapping = StreamMapping::plan(&info, placement);
@@ -192,7 +201,7 @@ impl Gpu {
         let int64_atomics = info.capabilities.buffer_int64_atomics;
         let mut f12 = vk::PhysicalDeviceVulkan12Features::default()
             .timeline_semaphore(true)
-            .buffer_device_address(ray_query)
+            .buffer_device_address(true)
             .shader_buffer_int64_atomics(int64_atomics);
         let f10 =
             vk::PhysicalDeviceFeatures::default().shader_int64(info.capabilities.shader_int64);
@@ -225,7 +234,7 @@ impl Gpu {
             device: raw.clone(),
             physical_device: info.raw,
             debug_settings: Default::default(),
-            buffer_device_address: ray_query,
+            buffer_device_address: true,
             allocation_sizes: Default::default(),
         })
         .map_err(|source| VkError::Alloc {
@@ -308,6 +317,7 @@ impl Gpu {
             profile: Mutex::new(ProfileLog::default()),
             timeline: Mutex::new(None),
             calibrator,
+            buffer_access,
             present,
         }));
         for s in &gpu.0.streams {
@@ -324,6 +334,11 @@ impl Gpu {
     /// (VK_KHR_ray_query, VK_KHR_acceleration_structure, bufferDeviceAddress).
     pub fn ray_query(&self) -> bool {
         self.0.accel.is_some()
+    }
+
+    /// How kernels with a descriptor twin take their buffers on this device.
+    pub fn buffer_access(&self) -> BufferAccess {
+        self.0.buffer_access
     }
 
     /// Whether the device was opened to present to windows ([`Gpu::new_for_presentation`]).
@@ -523,5 +538,20 @@ impl Drop for GpuInner {
             ManuallyDrop::drop(&mut self.allocator);
             self.raw.destroy_device(None);
         }
+    }
+}
+
+/// How kernels with a descriptor twin take their buffers: the description's choice, else
+/// `SPLITRAY_BUFFER_ACCESS`, else the device's default ([`BufferAccess::for_device`]).
+fn buffer_access_for(desc: &GpuDesc, info: &PhysicalDeviceInfo) -> Result<BufferAccess> {
+    let from_env = std::env::var("SPLITRAY_BUFFER_ACCESS").ok();
+    match (desc.buffer_access, from_env.as_deref()) {
+        (Some(access), _) => Ok(access),
+        (None, None | Some("")) => Ok(BufferAccess::for_device(info)),
+        (None, Some(s)) => BufferAccess::parse(s).ok_or_else(|| {
+            VkError::Usage(format!(
+                "SPLITRAY_BUFFER_ACCESS={s}: expected `descriptors` or `addresses`"
+            ))
+        }),
     }
 }

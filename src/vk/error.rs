@@ -23,8 +23,19 @@ pub enum VkError {
         #[source]
         source: gpu_allocator::AllocationError,
     },
-    #[error("buffer '{name}' is {size} bytes, more than this device's maxStorageBufferRange ({limit} bytes)")]
-    BufferTooLarge { name: String, size: u64, limit: u64 },
+    #[error(
+        "buffer '{name}' needs {size} bytes ({size_h}), more than one buffer can hold on \
+         this device: {limit} bytes ({limit_h}, its {which})",
+        size_h = fmt_bytes(*.size),
+        limit_h = fmt_bytes(*.limit)
+    )]
+    BufferTooLarge {
+        name: String,
+        size: u64,
+        limit: u64,
+        /// The device limit that binds: maxBufferSize or maxMemoryAllocationSize.
+        which: &'static str,
+    },
     #[error("kernel '{0}' has malformed SPIR-V")]
     BadSpirv(&'static str),
     #[error("the validation layer VK_LAYER_KHRONOS_validation is not installed (apt-get install vulkan-validationlayers)")]
@@ -34,6 +45,21 @@ pub enum VkError {
 }
 
 pub type Result<T, E = VkError> = std::result::Result<T, E>;
+
+/// A byte count for people: `512 B`, `96.0 MiB`, `2.00 GiB`.
+pub fn fmt_bytes(bytes: u64) -> String {
+    const KIB: f64 = 1024.0;
+    let b = bytes as f64;
+    if b < KIB {
+        format!("{bytes} B")
+    } else if b < KIB * KIB {
+        format!("{:.1} KiB", b / KIB)
+    } else if b < KIB * KIB * KIB {
+        format!("{:.1} MiB", b / (KIB * KIB))
+    } else {
+        format!("{:.2} GiB", b / (KIB * KIB * KIB))
+    }
+}
 
 /// Maps a raw `vk::Result` error into [`VkError::Call`] naming the entry point.
 pub(crate) trait CallContext<T> {

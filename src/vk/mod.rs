@@ -17,6 +17,7 @@ mod physical;
 mod pipeline;
 mod profile_tree;
 mod profiler;
+mod reflect;
 mod stream;
 #[cfg(feature = "window")]
 mod swapchain;
@@ -27,13 +28,13 @@ pub use buffer::{Buffer, BufferSlice, BufferUsage, MemoryKind};
 pub use clock::ClockCalibration;
 pub use command::{grid_for, Recorder};
 pub use device::{Gpu, GpuDesc};
-pub use error::{Result, VkError};
+pub use error::{fmt_bytes, Result, VkError};
 pub use instance::{validation_layer_available, Instance, InstanceDesc};
 pub use physical::{
     enumerate, select, CapabilityInfo, LimitsInfo, PhysicalDeviceInfo, QueueFamilyInfo,
 };
 pub use pipeline::{
-    compute_pipeline, compute_pipeline_full_subgroups, ComputePipeline, PipelineDesc,
+    compute_pipeline, compute_pipeline_full_subgroups, BufferAccess, ComputePipeline, PipelineDesc,
 };
 pub use profile_tree::{ProfileNode, ProfileTree};
 pub use profiler::{GpuBatch, KernelTime, ProfileLog, ProfileRecord, ScopeInfo};

@@ -35,6 +35,10 @@ pub struct LimitsInfo {
     pub min_subgroup_size: u32,
     pub max_subgroup_size: u32,
     pub max_memory_allocation_size: u64,
+    /// maxBufferSize (Vulkan 1.3): the largest VkBuffer.
+    pub max_buffer_size: u64,
+    /// Bytes of the largest device-local memory heap.
+    pub device_local_bytes: u64,
 }
 
 /// Optional capabilities that later methods use when present.
@@ -133,6 +137,7 @@ impl PhysicalDeviceInfo {
             (c.synchronization2, "the synchronization2 feature"),
             (c.maintenance4, "the maintenance4 feature"),
             (c.push_descriptor, "the VK_KHR_push_descriptor extension"),
+            (c.buffer_device_address, "the bufferDeviceAddress feature"),
         ] {
             if !ok {
                 missing.push(what.to_string());
@@ -238,7 +243,7 @@ pub fn enumerate(instance: &Instance) -> Result<Vec<PhysicalDeviceInfo>> {
             .push_next(&mut f12)
             .push_next(&mut f13);
         // SAFETY: valid physical device; the chains live on this stack frame.
-        let (families, exts) = unsafe {
+        let (families, exts, memory) = unsafe {
             raw_instance.get_physical_device_properties2(pd, &mut props2);
             raw_instance.get_physical_device_features2(pd, &mut features2);
             (
@@ -246,6 +251,7 @@ pub fn enumerate(instance: &Instance) -> Result<Vec<PhysicalDeviceInfo>> {
                 raw_instance
                     .enumerate_device_extension_properties(pd)
                     .call("vkEnumerateDeviceExtensionProperties")?,
+                raw_instance.get_physical_device_memory_properties(pd),
             )
         };
         let p = props2.properties;
@@ -320,6 +326,14 @@ pub fn enumerate(instance: &Instance) -> Result<Vec<PhysicalDeviceInfo>> {
                 },
                 max_subgroup_size: props13.max_subgroup_size.max(props11.subgroup_size),
                 max_memory_allocation_size: props11.max_memory_allocation_size,
+                max_buffer_size: props13.max_buffer_size,
+                device_local_bytes: memory
+                    .memory_heaps_as_slice()
+                    .iter()
+                    .filter(|h| h.flags.contains(vk::MemoryHeapFlags::DEVICE_LOCAL))
+                    .map(|h| h.size)
+                    .max()
+                    .unwrap_or(0),
             },
             capabilities: CapabilityInfo {
                 timeline_semaphore: f12.timeline_semaphore == vk::TRUE,

@@ -7,7 +7,7 @@ pub mod lvc_dump;
 pub mod reference;
 pub mod scenes;
 
-use splitray::vk::{Gpu, GpuDesc, InstanceDesc, StreamPlacement};
+use splitray::vk::{BufferAccess, Gpu, GpuDesc, InstanceDesc, StreamPlacement};
 
 /// Opens the default device with validation (and synchronization validation if `sync`).
 pub fn gpu_with(placement: StreamPlacement, sync: bool) -> Gpu {
@@ -19,12 +19,29 @@ pub fn gpu_with(placement: StreamPlacement, sync: bool) -> Gpu {
         },
         device: None,
         placement,
+        ..Default::default()
     })
     .expect("a Vulkan device with the validation layer (run `make deps`)")
 }
 
 pub fn gpu() -> Gpu {
     gpu_with(StreamPlacement::Spread, false)
+}
+
+/// The default device with validation, its kernels taking buffers as `access` says
+/// (lavapipe's default reads descriptors where they fit: this proves the other way).
+pub fn gpu_with_access(access: BufferAccess) -> Gpu {
+    let _ = env_logger::builder().is_test(true).try_init();
+    Gpu::new(&GpuDesc {
+        instance: InstanceDesc {
+            validation: true,
+            sync_validation: false,
+        },
+        device: None,
+        placement: StreamPlacement::Spread,
+        buffer_access: Some(access),
+    })
+    .expect("a Vulkan device with the validation layer (run `make deps`)")
 }
 
 /// Waits for the device, then fails the test on any validation message.

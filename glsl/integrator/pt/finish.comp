@@ -6,24 +6,29 @@
 #include "grid.glsl"
 #include "pt.glsl"
 
-layout(push_constant) uniform Push { PtParams params; };
-layout(std430, set = 0, binding = 0) readonly buffer Paths { PathState paths[]; };
-layout(std430, set = 0, binding = 1) buffer Accum { vec4 accum[]; };
-layout(std430, set = 0, binding = 2) buffer Accum2 { vec4 accum2[]; };
+layout(push_constant) uniform Push {
+    PtParams params;
+    BUFFER_REF(PathStatesInRef, paths)
+    BUFFER_REF(Vec4sRef, accum)
+    BUFFER_REF(Vec4sRef, accum2)
+};
+BUFFER_BINDING(0, readonly, PathState, paths)
+BUFFER_BINDING(1, , vec4, accum)
+BUFFER_BINDING(2, , vec4, accum2)
 
 void main() {
     uint i = linear_invocation_id();
     if (i >= params.pixel_count) return;
     uint pixel = params.pixel_offset + i;
-    vec4 sum = accum[pixel];
-    vec4 sum2 = accum2[pixel];
+    vec4 sum = accum.data[pixel];
+    vec4 sum2 = accum2.data[pixel];
     for (uint p = i; p < params.path_count; p += params.pixel_count) {
-        vec3 l = paths[p].radiance.rgb;
+        vec3 l = paths.data[p].radiance.rgb;
         // A non-finite sample would poison the pixel forever: drop it (counted as zero).
         if (any(isnan(l)) || any(isinf(l))) l = vec3(0.0);
         sum += vec4(l, 1.0);
         sum2 += vec4(l * l, 0.0);
     }
-    accum[pixel] = sum;
-    accum2[pixel] = sum2;
+    accum.data[pixel] = sum;
+    accum2.data[pixel] = sum2;
 }

@@ -5,17 +5,24 @@
 #include "geometry.glsl"
 #include "pt.glsl"
 
-layout(push_constant) uniform Push { PtParams params; };
-layout(std430, set = 0, binding = 0) readonly buffer Kept { uint kept[]; };
-layout(std430, set = 0, binding = 1) readonly buffer RaysIn { Ray rays_in[]; };
-layout(std430, set = 0, binding = 2) readonly buffer ActiveIn { uint ids_in[]; };
-layout(std430, set = 0, binding = 3) writeonly buffer RaysOut { Ray rays_out[]; };
-layout(std430, set = 0, binding = 4) writeonly buffer ActiveOut { uint ids_out[]; };
+layout(push_constant) uniform Push {
+    PtParams params;
+    BUFFER_REF(UintsInRef, kept)
+    BUFFER_REF(RaysInRef, rays_in)
+    BUFFER_REF(UintsInRef, ids_in)
+    BUFFER_REF(RaysOutRef, rays_out)
+    BUFFER_REF(UintsOutRef, ids_out)
+};
+BUFFER_BINDING(0, readonly, uint, kept)
+BUFFER_BINDING(1, readonly, Ray, rays_in)
+BUFFER_BINDING(2, readonly, uint, ids_in)
+BUFFER_BINDING(3, writeonly, Ray, rays_out)
+BUFFER_BINDING(4, writeonly, uint, ids_out)
 
 void main() {
     uint k = linear_invocation_id();
     if (k >= params.active_count) return;
-    uint i = kept[k];
-    rays_out[k] = rays_in[i];
-    ids_out[k] = ids_in[i];
+    uint i = kept.data[k];
+    rays_out.data[k] = rays_in.data[i];
+    ids_out.data[k] = ids_in.data[i];
 }

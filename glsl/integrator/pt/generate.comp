@@ -6,10 +6,15 @@
 #include "random.glsl"
 #include "pt.glsl"
 
-layout(push_constant) uniform Push { PtParams params; };
-layout(std430, set = 0, binding = 0) writeonly buffer Rays { Ray rays[]; };
-layout(std430, set = 0, binding = 1) writeonly buffer Active { uint live_ids[]; };
-layout(std430, set = 0, binding = 2) writeonly buffer Paths { PathState paths[]; };
+layout(push_constant) uniform Push {
+    PtParams params;
+    BUFFER_REF(RaysOutRef, rays)
+    BUFFER_REF(UintsOutRef, live_ids)
+    BUFFER_REF(PathStatesOutRef, paths)
+};
+BUFFER_BINDING(0, writeonly, Ray, rays)
+BUFFER_BINDING(1, writeonly, uint, live_ids)
+BUFFER_BINDING(2, writeonly, PathState, paths)
 
 void main() {
     uint i = linear_invocation_id();
@@ -23,8 +28,8 @@ void main() {
     float sx = 2.0 * (float(px) + offset.x) / float(params.width) - 1.0;
     float sy = 1.0 - 2.0 * (float(py) + offset.y) / float(params.height);
     vec3 dir = normalize(params.forward.xyz + sx * params.right.xyz + sy * params.up.xyz);
-    rays[i] = Ray(params.origin.xyz, 0.0, dir, 1.0 / 0.0);
-    live_ids[i] = i;
+    rays.data[i] = Ray(params.origin.xyz, 0.0, dir, 1.0 / 0.0);
+    live_ids.data[i] = i;
     PathState s;
     s.throughput = vec4(1.0);
     s.radiance = vec4(0.0);
@@ -32,5 +37,5 @@ void main() {
     s.flags = PATH_DELTA;
     s.pad0 = 0u;
     s.pad1 = 0u;
-    paths[i] = s;
+    paths.data[i] = s;
 }

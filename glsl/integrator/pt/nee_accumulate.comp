@@ -5,17 +5,23 @@
 #include "geometry.glsl"
 #include "pt.glsl"
 
-layout(push_constant) uniform Push { PtParams params; };
-layout(std430, set = 0, binding = 0) readonly buffer Active { uint live_ids[]; };
-layout(std430, set = 0, binding = 1) readonly buffer ShadowHits { Hit shadow_hits[]; };
-layout(std430, set = 0, binding = 2) readonly buffer Nee { vec4 nee[]; };
-layout(std430, set = 0, binding = 3) buffer Paths { PathState paths[]; };
+layout(push_constant) uniform Push {
+    PtParams params;
+    BUFFER_REF(UintsInRef, live_ids)
+    BUFFER_REF(HitsInRef, shadow_hits)
+    BUFFER_REF(Vec4sInRef, nee)
+    BUFFER_REF(PathStatesRef, paths)
+};
+BUFFER_BINDING(0, readonly, uint, live_ids)
+BUFFER_BINDING(1, readonly, Hit, shadow_hits)
+BUFFER_BINDING(2, readonly, vec4, nee)
+BUFFER_BINDING(3, , PathState, paths)
 
 void main() {
     uint i = linear_invocation_id();
     if (i >= params.active_count) return;
-    vec4 c = nee[i];
-    if (c.a == 0.0 || shadow_hits[i].triangle != MISS) return;
-    uint p = live_ids[i];
-    paths[p].radiance.rgb += c.rgb;
+    vec4 c = nee.data[i];
+    if (c.a == 0.0 || shadow_hits.data[i].triangle != MISS) return;
+    uint p = live_ids.data[i];
+    paths.data[p].radiance.rgb += c.rgb;
 }

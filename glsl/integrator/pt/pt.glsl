@@ -31,6 +31,7 @@ struct PtParams {
 const uint PT_FLAG_SORTED = 1u;  // shade reads its items through the sorted order
 const uint PT_FLAG_NEE = 2u;     // next-event estimation on
 const uint PT_FLAG_BSDF = 4u;    // emission found by BSDF sampling counts
+const uint PT_FLAG_NORMALS = 8u; // the normals table has three per triangle (else a dummy)
 // Both NEE and BSDF on = multiple importance sampling (power heuristic).
 
 // 48 bytes per path.
@@ -45,6 +46,12 @@ struct PathState {
 
 const uint PATH_DELTA = 1u;
 
+// The records by device address (address.glsl).
+#include "address.glsl"
+layout(buffer_reference, std430, buffer_reference_align = 16) buffer PathStatesRef { PathState data[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer PathStatesInRef { PathState data[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) writeonly buffer PathStatesOutRef { PathState data[]; };
+
 // 64 bytes per light. Triangles: p0/e1/e2 in world space, a = area in e1.w;
 // points: p0 = position. emission: radiance (triangles) or intensity (points);
 // emission.w = probability of choosing this light.
@@ -54,6 +61,8 @@ struct Light {
     vec4 e2_tri;         // xyz edge 2; w = triangle index (as float bits)
     vec4 emission_pmf;
 };
+
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer LightsInRef { Light data[]; };
 
 const uint LIGHT_TRIANGLE = 0u;
 const uint LIGHT_POINT = 1u;
@@ -66,6 +75,8 @@ struct PtMaterial {
     uint pad0;
     uint pad1;
 };
+
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer PtMaterialsInRef { PtMaterial data[]; };
 
 // Random-number dimensions: 0, 1 for the pixel position, then DIMS_PER_BOUNCE per bounce.
 const uint DIMS_PER_BOUNCE = 8u;

@@ -19,23 +19,42 @@
 #include "bsdf.glsl"
 #include "pt.glsl"
 
-layout(push_constant) uniform Push { PtParams params; };
-layout(std430, set = 0, binding = 0) buffer Rays { Ray rays[]; };
-layout(std430, set = 0, binding = 1) readonly buffer Hits { Hit hits[]; };
-layout(std430, set = 0, binding = 2) readonly buffer Active { uint live_ids[]; };
-layout(std430, set = 0, binding = 3) readonly buffer Order { uint order[]; };
-layout(std430, set = 0, binding = 4) buffer Paths { PathState paths[]; };
-layout(std430, set = 0, binding = 5) readonly buffer Triangles { Triangle triangles[]; };
-layout(std430, set = 0, binding = 6) readonly buffer TriMaterial { uint triangle_material[]; };
-layout(std430, set = 0, binding = 7) readonly buffer Materials { PtMaterial materials[]; };
-layout(std430, set = 0, binding = 8) readonly buffer Bsdfs { BsdfParams bsdfs[]; };
-layout(std430, set = 0, binding = 9) readonly buffer Normals { vec4 normals[]; };
-layout(std430, set = 0, binding = 10) readonly buffer Lights { Light lights[]; };
-layout(std430, set = 0, binding = 11) readonly buffer LightCdf { float light_cdf[]; };
-layout(std430, set = 0, binding = 12) readonly buffer TriLightPmf { float tri_light_pmf[]; };
-layout(std430, set = 0, binding = 13) writeonly buffer ShadowRays { Ray shadow_rays[]; };
-layout(std430, set = 0, binding = 14) writeonly buffer Nee { vec4 nee[]; };
-layout(std430, set = 0, binding = 15) writeonly buffer Alive { uint alive[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer BsdfsInRef { BsdfParams data[]; };
+layout(push_constant) uniform Push {
+    PtParams params;
+    BUFFER_REF(RaysRef, rays)
+    BUFFER_REF(HitsInRef, hits)
+    BUFFER_REF(UintsInRef, live_ids)
+    BUFFER_REF(UintsInRef, order)
+    BUFFER_REF(PathStatesRef, paths)
+    BUFFER_REF(TrianglesInRef, triangles)
+    BUFFER_REF(UintsInRef, triangle_material)
+    BUFFER_REF(PtMaterialsInRef, materials)
+    BUFFER_REF(BsdfsInRef, bsdfs)
+    BUFFER_REF(Vec4sInRef, normals)
+    BUFFER_REF(LightsInRef, lights)
+    BUFFER_REF(FloatsInRef, light_cdf)
+    BUFFER_REF(FloatsInRef, tri_light_pmf)
+    BUFFER_REF(RaysOutRef, shadow_rays)
+    BUFFER_REF(Vec4sOutRef, nee)
+    BUFFER_REF(UintsOutRef, alive)
+};
+BUFFER_BINDING(0, , Ray, rays)
+BUFFER_BINDING(1, readonly, Hit, hits)
+BUFFER_BINDING(2, readonly, uint, live_ids)
+BUFFER_BINDING(3, readonly, uint, order)
+BUFFER_BINDING(4, , PathState, paths)
+BUFFER_BINDING(5, readonly, Triangle, triangles)
+BUFFER_BINDING(6, readonly, uint, triangle_material)
+BUFFER_BINDING(7, readonly, PtMaterial, materials)
+BUFFER_BINDING(8, readonly, BsdfParams, bsdfs)
+BUFFER_BINDING(9, readonly, vec4, normals)
+BUFFER_BINDING(10, readonly, Light, lights)
+BUFFER_BINDING(11, readonly, float, light_cdf)
+BUFFER_BINDING(12, readonly, float, tri_light_pmf)
+BUFFER_BINDING(13, writeonly, Ray, shadow_rays)
+BUFFER_BINDING(14, writeonly, vec4, nee)
+BUFFER_BINDING(15, writeonly, uint, alive)
 
 float power_heuristic(float a, float b) {
     float a2 = a * a;
@@ -49,7 +68,7 @@ uint pick_light(float u) {
     uint hi = params.light_count - 1u;
     while (lo < hi) {
         uint mid = (lo + hi) / 2u;
-        if (u < light_cdf[mid]) hi = mid; else lo = mid + 1u;
+        if (u < light_cdf.data[mid]) hi = mid; else lo = mid + 1u;
     }
     return lo;
 }
@@ -57,22 +76,22 @@ uint pick_light(float u) {
 void main() {
     uint j = linear_invocation_id();
     if (j >= params.active_count) return;
-    uint i = (params.flags & PT_FLAG_SORTED) != 0u ? order[j] : j;
-    uint p = live_ids[i];
+    uint i = (params.flags & PT_FLAG_SORTED) != 0u ? order.data[j] : j;
+    uint p = live_ids.data[i];
     uint pixel = pt_pixel(params, p);
     uint sample_index = pt_sample(params, p);
-    PathState s = paths[p];
-    Ray ray = rays[i];
-    Hit hit = hits[i];
+    PathState s = paths.data[p];
+    Ray ray = rays.data[i];
+    Hit hit = hits.data[i];
 
-    shadow_rays[i] = Ray(ray.origin, 0.0, ray.dir, 0.0);
-    nee[i] = vec4(0.0);
-    alive[i] = 0u;
+    shadow_rays.data[i] = Ray(ray.origin, 0.0, ray.dir, 0.0);
+    nee.data[i] = vec4(0.0);
+    alive.data[i] = 0u;
     if (hit.triangle == MISS) return;  // no environment light
 
-    Triangle tri = triangles[hit.triangle];
-    uint mat = triangle_material[hit.triangle];
-    PtMaterial m = materials[mat];
+    Triangle tri = triangles.data[hit.triangle];
+    uint mat = triangle_material.data[hit.triangle];
+    PtMaterial m = materials.data[mat];
     vec3 cross_n = cross(tri.e1.xyz, tri.e2.xyz);
     vec3 ng = normalize(cross_n);
     vec3 x = ray.origin + hit.t * ray.dir;
@@ -91,7 +110,7 @@ void main() {
                 w = 0.0;  // NEE-only: emitters count only through light sampling
             } else if (mis) {
                 float area = 0.5 * length(cross_n);
-                float pdf_light = tri_light_pmf[hit.triangle] * hit.t * hit.t / (area * cos_l);
+                float pdf_light = tri_light_pmf.data[hit.triangle] * hit.t * hit.t / (area * cos_l);
                 w = power_heuristic(prev_pdf, pdf_light);
             }
         }
@@ -100,16 +119,17 @@ void main() {
 
     bool next = (params.max_depth < 0 || int(s.depth) + 1 < params.max_depth);
     if (!next) {
-        paths[p].radiance.rgb = radiance;
+        paths.data[p].radiance.rgb = radiance;
         return;
     }
 
     // Shading frame: interpolated normals where the mesh has them, else geometric.
     vec3 ns = ng;
-    vec4 n0 = normals[3u * hit.triangle];
+    bool has_normals = (params.flags & PT_FLAG_NORMALS) != 0u;
+    vec4 n0 = has_normals ? normals.data[3u * hit.triangle] : vec4(0.0);
     if (n0.w != 0.0) {
-        vec3 n1 = normals[3u * hit.triangle + 1u].xyz;
-        vec3 n2 = normals[3u * hit.triangle + 2u].xyz;
+        vec3 n1 = normals.data[3u * hit.triangle + 1u].xyz;
+        vec3 n2 = normals.data[3u * hit.triangle + 2u].xyz;
         vec3 n = (1.0 - hit.u - hit.v) * n0.xyz + hit.u * n1 + hit.v * n2;
         if (dot(n, n) > 0.0) {
             ns = normalize(n);
@@ -117,7 +137,7 @@ void main() {
         }
     }
     mat3 frame = bsdf_frame(ns);
-    BsdfParams bsdf = bsdfs[mat];
+    BsdfParams bsdf = bsdfs.data[mat];
     vec3 wo = bsdf_to_local(frame, -ray.dir);
     float eps = params.ray_epsilon;
 
@@ -125,7 +145,7 @@ void main() {
     if ((params.flags & PT_FLAG_NEE) != 0u && params.light_count > 0u && m.all_delta == 0u) {
         uint d0 = pt_dim(params.bounce, DIM_LIGHT_SELECT);
         uint li = pick_light(random01(pixel, sample_index, d0, params.seed));
-        Light light = lights[li];
+        Light light = lights.data[li];
         float u1 = random01(pixel, sample_index, pt_dim(params.bounce, DIM_LIGHT_U), params.seed);
         float u2 = random01(pixel, sample_index, pt_dim(params.bounce, DIM_LIGHT_V), params.seed);
         float pmf = light.emission_pmf.w;
@@ -169,8 +189,8 @@ void main() {
                 vec3 c = beta * f * le * (w / pdf_light);
                 vec3 o = x + ng * (dot(ng, wi_world) > 0.0 ? eps : -eps);
                 float reach = length(target - o);
-                shadow_rays[i] = Ray(o, 0.0, (target - o) / reach, reach * (1.0 - 1e-4));
-                nee[i] = vec4(c, 1.0);
+                shadow_rays.data[i] = Ray(o, 0.0, (target - o) / reach, reach * (1.0 - 1e-4));
+                nee.data[i] = vec4(c, 1.0);
             }
         }
     }
@@ -182,7 +202,7 @@ void main() {
     BsdfSample bs = bsdf_sample(bsdf, wo, u, TRANSPORT_RADIANCE);
     uint depth = s.depth + 1u;
     if (!bs.valid || !(bs.pdf > 0.0)) {
-        paths[p].radiance.rgb = radiance;
+        paths.data[p].radiance.rgb = radiance;
         return;
     }
     beta *= bs.f * (abs(bs.wi.z) / bs.pdf);
@@ -205,10 +225,10 @@ void main() {
     o.flags = (bs.flags & BSDF_SPECULAR) != 0u ? PATH_DELTA : 0u;
     o.pad0 = 0u;
     o.pad1 = 0u;
-    paths[p] = o;
+    paths.data[p] = o;
     if (live) {
         vec3 origin = x + ng * (dot(ng, wi_world) > 0.0 ? eps : -eps);
-        rays[i] = Ray(origin, 0.0, wi_world, 1.0 / 0.0);
-        alive[i] = 1u;
+        rays.data[i] = Ray(origin, 0.0, wi_world, 1.0 / 0.0);
+        alive.data[i] = 1u;
     }
 }

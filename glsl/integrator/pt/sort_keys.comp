@@ -5,17 +5,24 @@
 #include "geometry.glsl"
 #include "pt.glsl"
 
-layout(push_constant) uniform Push { PtParams params; };
-layout(std430, set = 0, binding = 0) readonly buffer Hits { Hit hits[]; };
-layout(std430, set = 0, binding = 1) readonly buffer TriMaterial { uint triangle_material[]; };
-layout(std430, set = 0, binding = 2) readonly buffer Materials { PtMaterial materials[]; };
-layout(std430, set = 0, binding = 3) writeonly buffer Keys { uint keys[]; };
-layout(std430, set = 0, binding = 4) writeonly buffer Order { uint order[]; };
+layout(push_constant) uniform Push {
+    PtParams params;
+    BUFFER_REF(HitsInRef, hits)
+    BUFFER_REF(UintsInRef, triangle_material)
+    BUFFER_REF(PtMaterialsInRef, materials)
+    BUFFER_REF(UintsOutRef, keys)
+    BUFFER_REF(UintsOutRef, order)
+};
+BUFFER_BINDING(0, readonly, Hit, hits)
+BUFFER_BINDING(1, readonly, uint, triangle_material)
+BUFFER_BINDING(2, readonly, PtMaterial, materials)
+BUFFER_BINDING(3, writeonly, uint, keys)
+BUFFER_BINDING(4, writeonly, uint, order)
 
 void main() {
     uint i = linear_invocation_id();
     if (i >= params.active_count) return;
-    uint tri = hits[i].triangle;
-    keys[i] = tri == MISS ? 0xFFFFFFFFu : materials[triangle_material[tri]].key;
-    order[i] = i;
+    uint tri = hits.data[i].triangle;
+    keys.data[i] = tri == MISS ? 0xFFFFFFFFu : materials.data[triangle_material.data[tri]].key;
+    order.data[i] = i;
 }

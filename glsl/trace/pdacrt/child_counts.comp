@@ -4,15 +4,26 @@
 // table directly. (The paper sums codes and divides by the code; counting runs directly
 // is the same result and also works for code 0.)
 #include "grid.glsl"
+#include "address.glsl"
 
-layout(std430, set = 0, binding = 0) readonly buffer RunKeys { uint run_keys[]; };
-layout(std430, set = 0, binding = 1) readonly buffer RunCounts { uint run_counts[]; };
-layout(std430, set = 0, binding = 2) readonly buffer RunTotal { uint run_total; };
-layout(std430, set = 0, binding = 3) writeonly buffer Counts { uint counts[]; };
-layout(push_constant) uniform Push { uint max_runs; } pc;
+struct MaxRunsPush {
+    uint max_runs;
+};
+layout(push_constant) uniform Push {
+    MaxRunsPush pc;
+    BUFFER_REF(UintsInRef, run_keys)
+    BUFFER_REF(UintsInRef, run_counts)
+    BUFFER_REF(UintsInRef, run_total)  // one word
+    BUFFER_REF(UintsOutRef, counts)
+
+};
+BUFFER_BINDING(0, readonly, uint, run_keys)
+BUFFER_BINDING(1, readonly, uint, run_counts)
+BUFFER_BINDING(2, readonly, uint, run_total)
+BUFFER_BINDING(3, writeonly, uint, counts)
 
 void main() {
     uint i = linear_invocation_id();
-    if (i >= min(run_total, pc.max_runs)) return;
-    counts[run_keys[i]] = run_counts[i];
+    if (i >= min(run_total.data[0], pc.max_runs)) return;
+    counts.data[run_keys.data[i]] = run_counts.data[i];
 }

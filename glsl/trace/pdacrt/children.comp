@@ -17,18 +17,7 @@
 #include "grid.glsl"
 #include "pdacrt.glsl"
 
-layout(std430, set = 0, binding = 0) readonly buffer Nodes { Node nodes[]; };
-#ifdef RANKED
-layout(std430, set = 0, binding = 1) readonly buffer Ranks { uint ranks[]; };
-#define CHILDREN_BINDING 2
-#else
-layout(std430, set = 0, binding = 1) readonly buffer TriCounts { uint tri_counts[]; };
-layout(std430, set = 0, binding = 2) readonly buffer RayCounts { uint ray_counts[]; };
-#define CHILDREN_BINDING 3
-#endif
-layout(std430, set = 0, binding = CHILDREN_BINDING) writeonly buffer Children { Child children[]; };
-layout(std430, set = 0, binding = CHILDREN_BINDING + 1) writeonly buffer Channels { uint channels[]; };
-layout(push_constant) uniform Push {
+struct ChildrenPush {
     uint child_count;
     uint stride;
     uint alpha;
@@ -42,27 +31,53 @@ layout(push_constant) uniform Push {
     uint tri_right_base;
     uint ray_left_base;
     uint ray_right_base;
-} pc;
+};
+layout(push_constant) uniform Push {
+    ChildrenPush pc;
+    BUFFER_REF(NodesInRef, nodes)
+#ifdef RANKED
+    BUFFER_REF(UintsInRef, ranks)
+#else
+    BUFFER_REF(UintsInRef, tri_counts)
+    BUFFER_REF(UintsInRef, ray_counts)
+#endif
+    BUFFER_REF(ChildrenOutRef, children)
+    BUFFER_REF(UintsOutRef, channels)
+};
+BUFFER_BINDING(0, readonly, Node, nodes)
+#ifdef RANKED
+BUFFER_BINDING(1, readonly, uint, ranks)
+BUFFER_BINDING(2, writeonly, Child, children)
+BUFFER_BINDING(3, writeonly, uint, channels)
+#else
+BUFFER_BINDING(1, readonly, uint, tri_counts)
+BUFFER_BINDING(2, readonly, uint, ray_counts)
+BUFFER_BINDING(3, writeonly, Child, children)
+BUFFER_BINDING(4, writeonly, uint, channels)
+#endif
 
 void main() {
     uint c = linear_invocation_id();
     if (c >= pc.child_count) return;
     uint p = c >> 1;
     bool right = (c & 1u) != 0u;
-    Node nd = nodes[p];
+    Node nd = nodes.data[p];
     Child ch;
 #ifdef RANKED
     uint tri_base = right ? pc.tri_right_base : pc.tri_left_base;
     uint ray_base = right ? pc.ray_right_base : pc.ray_left_base;
     uint tri_end = nd.first_tri_tile + (nd.tri_count + pc.tile_items - 1u) / pc.tile_items;
     uint ray_end = nd.first_ray_tile + (nd.ray_count + pc.tile_items - 1u) / pc.tile_items;
-    ch.tri_src = ranks[tri_base + nd.first_tri_tile];
-    ch.ray_src = ranks[ray_base + nd.first_ray_tile];
-    ch.tri_count = ranks[tri_base + tri_end] - ch.tri_src;
-    ch.ray_count = ranks[ray_base + ray_end] - ch.ray_src;
+    ch.tri_src = ranks.data[tri_base + nd.first_tri_tile];
+    ch.ray_src = ranks.data[ray_base + nd.first_ray_tile];
+    ch.tri_count = ranks.data[tri_base + tri_end] - ch.tri_src;
+    ch.ray_count = ranks.data[ray_base + ray_end] - ch.ray_src;
 #else
-    uvec3 tc = uvec3(tri_counts[4u * p + CODE_LEFT], tri_counts[4u * p + CODE_BOTH], tri_counts[4u * p + CODE_RIGHT]);
-    uvec3 rc = uvec3(ray_counts[4u * p + CODE_LEFT], ray_counts[4u * p + CODE_BOTH], ray_counts[4u * p + CODE_RIGHT]);
+    uint q = 4u * p;
+    uvec3 tc = uvec3(tri_counts.data[q + CODE_LEFT], tri_counts.data[q + CODE_BOTH],
+                     tri_counts.data[q + CODE_RIGHT]);
+    uvec3 rc = uvec3(ray_counts.data[q + CODE_LEFT], ray_counts.data[q + CODE_BOTH],
+                     ray_counts.data[q + CODE_RIGHT]);
     ch.tri_count = right ? tc.y + tc.z : tc.x + tc.y;
     ch.ray_count = right ? rc.y + rc.z : rc.x + rc.y;
     ch.tri_src = nd.tri_start + (right ? tc.x : 0u);
@@ -85,16 +100,16 @@ void main() {
     ch.pad0 = 0u;
     ch.pad1 = 0u;
     ch.pad2 = 0u;
-    children[c] = ch;
+    children.data[c] = ch;
     bool next = ch.kind == CHILD_NEXT;
     bool term = ch.kind == CHILD_TERMINAL;
-    channels[CH_NEXT_FLAG * pc.stride + c] = next ? 1u : 0u;
-    channels[CH_NEXT_TRIS * pc.stride + c] = next ? ch.tri_count : 0u;
-    channels[CH_NEXT_RAYS * pc.stride + c] = next ? ch.ray_count : 0u;
+    channels.data[CH_NEXT_FLAG * pc.stride + c] = next ? 1u : 0u;
+    channels.data[CH_NEXT_TRIS * pc.stride + c] = next ? ch.tri_count : 0u;
+    channels.data[CH_NEXT_RAYS * pc.stride + c] = next ? ch.ray_count : 0u;
     // A terminal node with many rays becomes several segments (see write_nodes.comp).
-    channels[CH_TERM_FLAG * pc.stride + c] = term ? (ch.ray_count + pc.max_segment_rays - 1u) / pc.max_segment_rays : 0u;
-    channels[CH_TERM_TRIS * pc.stride + c] = term ? ch.tri_count : 0u;
-    channels[CH_TERM_RAYS * pc.stride + c] = term ? ch.ray_count : 0u;
-    channels[CH_NEXT_TRI_TILES * pc.stride + c] = next ? (ch.tri_count + pc.tile_items - 1u) / pc.tile_items : 0u;
-    channels[CH_NEXT_RAY_TILES * pc.stride + c] = next ? (ch.ray_count + pc.tile_items - 1u) / pc.tile_items : 0u;
+    channels.data[CH_TERM_FLAG * pc.stride + c] = term ? (ch.ray_count + pc.max_segment_rays - 1u) / pc.max_segment_rays : 0u;
+    channels.data[CH_TERM_TRIS * pc.stride + c] = term ? ch.tri_count : 0u;
+    channels.data[CH_TERM_RAYS * pc.stride + c] = term ? ch.ray_count : 0u;
+    channels.data[CH_NEXT_TRI_TILES * pc.stride + c] = next ? (ch.tri_count + pc.tile_items - 1u) / pc.tile_items : 0u;
+    channels.data[CH_NEXT_RAY_TILES * pc.stride + c] = next ? (ch.ray_count + pc.tile_items - 1u) / pc.tile_items : 0u;
 }

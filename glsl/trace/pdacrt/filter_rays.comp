@@ -24,40 +24,57 @@
 // Rays and nodes are read through vec4 views (two and three vec4 per record): CPU
 // devices turn every lane's load into a scalar loop, so one 16-byte load beats four
 // 4-byte ones.
-layout(std430, set = 0, binding = 0) restrict readonly buffer Rays { vec4 rays4[]; };
-layout(std430, set = 0, binding = 1) restrict readonly buffer Nodes { vec4 nodes4[]; };
-#ifdef RANKED
-layout(std430, set = 0, binding = 2) restrict buffer Ids { uint ids[]; };
-layout(std430, set = 0, binding = 3) restrict readonly buffer Tiles { uvec4 tiles[]; };
-#else
-layout(std430, set = 0, binding = 2) restrict readonly buffer Ids { uint ids[]; };
-layout(std430, set = 0, binding = 3) restrict buffer Keys { uint keys[]; };
-#endif
-// The hit buffer, holding the closest hits so far (BEST_SLOT in pdacrt.glsl).
-layout(std430, set = 0, binding = 4) restrict readonly buffer Best { uvec2 best[]; };
-#ifdef RANKED
-layout(std430, set = 0, binding = 5) restrict writeonly buffer Ranks { uint ranks[]; };
-#endif
-layout(push_constant) uniform Push {
+layout(buffer_reference, std430, buffer_reference_align = 8) readonly buffer BestInRef { uvec2 data[]; };
+struct FilterRaysPush {
     uint n;  // list length (ranked: the tile count, also the dispatch size)
     float eps;
     uint occlusion;
     uint ray_offset;
     uint left_base;
     uint right_base;
-} pc;
+};
+layout(push_constant) uniform Push {
+    FilterRaysPush pc;
+    BUFFER_REF(Vec4sInRef, rays4)
+    BUFFER_REF(Vec4sInRef, nodes4)
+#ifdef RANKED
+    BUFFER_REF(UintsRef, ids)
+    BUFFER_REF(Uvec4sInRef, tiles)
+#else
+    BUFFER_REF(UintsInRef, ids)
+    BUFFER_REF(UintsRef, keys)
+#endif
+    // The hit buffer, holding the closest hits so far (BEST_SLOT in pdacrt.glsl).
+    BUFFER_REF(BestInRef, best)
+#ifdef RANKED
+    BUFFER_REF(UintsOutRef, ranks)
+#endif
+};
+BUFFER_BINDING(0, restrict readonly, vec4, rays4)
+BUFFER_BINDING(1, restrict readonly, vec4, nodes4)
+#ifdef RANKED
+BUFFER_BINDING(2, restrict, uint, ids)
+BUFFER_BINDING(3, restrict readonly, uvec4, tiles)
+#else
+BUFFER_BINDING(2, restrict readonly, uint, ids)
+BUFFER_BINDING(3, restrict, uint, keys)
+#endif
+BUFFER_BINDING(4, restrict readonly, uvec2, best)
+#ifdef RANKED
+BUFFER_BINDING(5, restrict writeonly, uint, ranks)
+#endif
 
 // The status code of ray `id` against the two halves of the node's box (lines 4–5).
 uint ray_code(uint id, vec3 box_min, vec3 box_max) {
-    uvec2 closest = best[BEST_SLOT(pc.ray_offset + id)];
+    uvec2 closest = best.data[BEST_SLOT(pc.ray_offset + id)];
     if (pc.occlusion != 0u && has_hit(closest)) return CODE_NONE;
     vec3 lo = box_min - pc.eps;
     vec3 hi = box_max + pc.eps;
     uint axis = split_axis(box_min, box_max);
     bvec3 on_axis = axis_mask(axis);
     float mid = split_position(box_min, box_max, axis);
-    vec4 origin_tmin = rays4[2u * (pc.ray_offset + id)];
-    vec4 dir_tmax = rays4[2u * (pc.ray_offset + id) + 1u];
+    vec4 origin_tmin = rays4.data[2u * (pc.ray_offset + id)];
+    vec4 dir_tmax = rays4.data[2u * (pc.ray_offset + id) + 1u];
     Ray r = Ray(origin_tmin.xyz, origin_tmin.w, dir_tmax.xyz, dir_tmax.w);
     float t1 = min(r.tmax, hit_t(closest) + pc.eps);
     vec3 left_hi = mix(hi, vec3(mid + pc.eps), on_axis);
@@ -72,32 +89,32 @@ uint ray_code(uint id, vec3 box_min, vec3 box_max) {
 void main() {
 #ifdef RANKED
     uint tile_index = linear_group_id();
-    uvec4 tile = tiles[tile_index];
+    uvec4 tile = tiles.data[tile_index];
     uint lid = gl_LocalInvocationID.x;
-    vec3 box_min = nodes4[3u * tile.x].xyz;      // Node.box_min
-    vec3 box_max = nodes4[3u * tile.x + 1u].xyz; // Node.box_max
+    vec3 box_min = nodes4.data[3u * tile.x].xyz;      // Node.box_min
+    vec3 box_max = nodes4.data[3u * tile.x + 1u].xyz; // Node.box_max
     uvec2 counts = uvec2(0u);
     for (uint k = lid; k < tile.z; k += WORKGROUP_SIZE) {
         uint i = tile.y + k;
-        uint id = ids[i] & ID_MASK;
+        uint id = ids.data[i] & ID_MASK;
         uint code = ray_code(id, box_min, box_max);
-        ids[i] = id | (code << ID_BITS);
+        ids.data[i] = id | (code << ID_BITS);
         counts += side_flags(code);
     }
     counts = tile_sum(counts);
     if (lid == 0u) {
-        ranks[pc.left_base + tile_index] = counts.x;
-        ranks[pc.right_base + tile_index] = counts.y;
+        ranks.data[pc.left_base + tile_index] = counts.x;
+        ranks.data[pc.right_base + tile_index] = counts.y;
         if (tile_index == 0u) {
-            ranks[pc.left_base + pc.n] = 0u;
-            ranks[pc.right_base + pc.n] = 0u;
+            ranks.data[pc.left_base + pc.n] = 0u;
+            ranks.data[pc.right_base + pc.n] = 0u;
         }
     }
 #else
     uint i = linear_invocation_id();
     if (i >= pc.n) return;
-    uint node = keys[i] >> 2;
-    uint code = ray_code(ids[i], nodes4[3u * node].xyz, nodes4[3u * node + 1u].xyz);
-    keys[i] = (node << 2) | code;
+    uint node = keys.data[i] >> 2;
+    uint code = ray_code(ids.data[i], nodes4.data[3u * node].xyz, nodes4.data[3u * node + 1u].xyz);
+    keys.data[i] = (node << 2) | code;
 #endif
 }

@@ -23,22 +23,40 @@
 #include "tile_lanes.glsl"
 #endif
 
-layout(std430, set = 0, binding = 0) readonly buffer Triangles { Triangle triangles[]; };
-layout(std430, set = 0, binding = 1) readonly buffer Nodes { Node nodes[]; };
+struct FilterTrianglesPush {
+    uint n;  // list length (ranked: the tile count, also the dispatch size)
+    float eps;
+    uint left_base;
+    uint right_base;
+};
+layout(push_constant) uniform Push {
+    FilterTrianglesPush pc;
+    BUFFER_REF(TrianglesInRef, triangles)
+    BUFFER_REF(NodesInRef, nodes)
 #ifdef RANKED
-layout(std430, set = 0, binding = 2) buffer Ids { uint ids[]; };
-layout(std430, set = 0, binding = 3) readonly buffer Tiles { uvec4 tiles[]; };
-layout(std430, set = 0, binding = 4) writeonly buffer Ranks { uint ranks[]; };
+    BUFFER_REF(UintsRef, ids)
+    BUFFER_REF(Uvec4sInRef, tiles)
+    BUFFER_REF(UintsOutRef, ranks)
 #else
-layout(std430, set = 0, binding = 2) readonly buffer Ids { uint ids[]; };
-layout(std430, set = 0, binding = 3) buffer Keys { uint keys[]; };
+    BUFFER_REF(UintsInRef, ids)
+    BUFFER_REF(UintsRef, keys)
 #endif
-// n: list length (ranked: the tile count, also the dispatch size)
-layout(push_constant) uniform Push { uint n; float eps; uint left_base; uint right_base; } pc;
+
+};
+BUFFER_BINDING(0, readonly, Triangle, triangles)
+BUFFER_BINDING(1, readonly, Node, nodes)
+#ifdef RANKED
+BUFFER_BINDING(2, , uint, ids)
+BUFFER_BINDING(3, readonly, uvec4, tiles)
+BUFFER_BINDING(4, writeonly, uint, ranks)
+#else
+BUFFER_BINDING(2, readonly, uint, ids)
+BUFFER_BINDING(3, , uint, keys)
+#endif
 
 // The status code of triangle `id` against the split of the node's box (lines 4–5).
 uint triangle_code(uint id, uint axis, float mid) {
-    Triangle t = triangles[id];
+    Triangle t = triangles.data[id];
     float a = component(t.v0.xyz, axis);
     float b = a + component(t.e1.xyz, axis);
     float c = a + component(t.e2.xyz, axis);
@@ -50,35 +68,35 @@ uint triangle_code(uint id, uint axis, float mid) {
 void main() {
 #ifdef RANKED
     uint tile_index = linear_group_id();
-    uvec4 tile = tiles[tile_index];
+    uvec4 tile = tiles.data[tile_index];
     uint lid = gl_LocalInvocationID.x;
-    Node nd = nodes[tile.x];
+    Node nd = nodes.data[tile.x];
     uint axis = split_axis(nd.box_min, nd.box_max);
     float mid = split_position(nd.box_min, nd.box_max, axis);
     uvec2 counts = uvec2(0u);
     for (uint k = lid; k < tile.z; k += WORKGROUP_SIZE) {
         uint i = tile.y + k;
-        uint id = ids[i] & ID_MASK;
+        uint id = ids.data[i] & ID_MASK;
         uint code = triangle_code(id, axis, mid);
-        ids[i] = id | (code << ID_BITS);
+        ids.data[i] = id | (code << ID_BITS);
         counts += side_flags(code);
     }
     counts = tile_sum(counts);
     if (lid == 0u) {
-        ranks[pc.left_base + tile_index] = counts.x;
-        ranks[pc.right_base + tile_index] = counts.y;
+        ranks.data[pc.left_base + tile_index] = counts.x;
+        ranks.data[pc.right_base + tile_index] = counts.y;
         if (tile_index == 0u) {
-            ranks[pc.left_base + pc.n] = 0u;
-            ranks[pc.right_base + pc.n] = 0u;
+            ranks.data[pc.left_base + pc.n] = 0u;
+            ranks.data[pc.right_base + pc.n] = 0u;
         }
     }
 #else
     uint i = linear_invocation_id();
     if (i >= pc.n) return;
-    uint node = keys[i] >> 2;
-    Node nd = nodes[node];
+    uint node = keys.data[i] >> 2;
+    Node nd = nodes.data[node];
     uint axis = split_axis(nd.box_min, nd.box_max);
     float mid = split_position(nd.box_min, nd.box_max, axis);
-    keys[i] = (node << 2) | triangle_code(ids[i], axis, mid);
+    keys.data[i] = (node << 2) | triangle_code(ids.data[i], axis, mid);
 #endif
 }

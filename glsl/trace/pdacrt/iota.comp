@@ -4,16 +4,28 @@
 // The `ids_only` variant writes no tags (tiled levels have no keys).
 //! variant ids_only: IDS_ONLY=1
 #include "grid.glsl"
-layout(std430, set = 0, binding = 0) writeonly buffer Ids { uint ids[]; };
+#include "address.glsl"
+struct IotaPush {
+    uint n;
+    uint base;
+    uint tag;
+};
+layout(push_constant) uniform Push {
+    IotaPush pc;
+    BUFFER_REF(UintsOutRef, ids)
 #ifndef IDS_ONLY
-layout(std430, set = 0, binding = 1) writeonly buffer Tags { uint tags[]; };
+    BUFFER_REF(UintsOutRef, tags)
 #endif
-layout(push_constant) uniform Push { uint n; uint base; uint tag; } pc;
+};
+BUFFER_BINDING(0, writeonly, uint, ids)
+#ifndef IDS_ONLY
+BUFFER_BINDING(1, , uint, tags)
+#endif
 void main() {
     uint i = linear_invocation_id();
     if (i >= pc.n) return;
-    ids[i] = pc.base + i;
+    ids.data[i] = pc.base + i;
 #ifndef IDS_ONLY
-    tags[i] = pc.tag;
+    tags.data[i] = pc.tag;
 #endif
 }

@@ -5,13 +5,24 @@
 // to decide whether the terminal-node buffer must be flushed first (line 7).
 #include "pdacrt.glsl"
 layout(local_size_x = 1) in;
-layout(std430, set = 0, binding = 0) readonly buffer Channels { uint channels[]; };
-layout(std430, set = 0, binding = 1) readonly buffer Offsets { uint offsets[]; };
-layout(std430, set = 0, binding = 2) writeonly buffer Summary { uint totals[CHANNELS]; };
-layout(push_constant) uniform Push { uint child_count; uint stride; } pc;
+struct SummaryPush {
+    uint child_count;
+    uint stride;
+};
+layout(push_constant) uniform Push {
+    SummaryPush pc;
+    BUFFER_REF(UintsInRef, channels)
+    BUFFER_REF(UintsInRef, offsets)
+    BUFFER_REF(UintsOutRef, totals)  // CHANNELS words
+
+};
+BUFFER_BINDING(0, readonly, uint, channels)
+BUFFER_BINDING(1, readonly, uint, offsets)
+BUFFER_BINDING(2, writeonly, uint, totals)
 void main() {
     uint last = pc.child_count - 1u;
     for (uint k = 0u; k < CHANNELS; ++k) {
-        totals[k] = CHANNEL_OFFSET(offsets, pc.stride, k, last) + channels[k * pc.stride + last];
+        totals.data[k] = CHANNEL_OFFSET(offsets.data, pc.stride, k, last)
+                          + channels.data[k * pc.stride + last];
     }
 }

@@ -81,6 +81,14 @@ struct Segment {
     uint ray_count;
 };
 
+// The records by device address (address.glsl): a level's lists grow with the scene.
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer NodesInRef { Node data[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) writeonly buffer NodesOutRef { Node data[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer ChildrenInRef { Child data[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) writeonly buffer ChildrenOutRef { Child data[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer SegmentsInRef { Segment data[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) writeonly buffer SegmentsOutRef { Segment data[]; };
+
 // Order-preserving map of float bits to uint (negative floats reversed below the
 // positive ones), so that comparing the uints compares the floats.
 uint ordered_bits(float t) {

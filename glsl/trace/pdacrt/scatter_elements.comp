@@ -21,57 +21,75 @@
 #include "tile_lanes.glsl"
 #endif
 
-#ifdef RANKED
-layout(std430, set = 0, binding = 0) readonly buffer Tiles { uvec4 tiles[]; };
-layout(std430, set = 0, binding = 1) readonly buffer Ids { uint ids[]; };
-layout(std430, set = 0, binding = 2) readonly buffer Routes { uvec4 routes[]; };  // write_nodes.comp
-layout(std430, set = 0, binding = 3) writeonly buffer NextIds { uint next_ids[]; };
-layout(std430, set = 0, binding = 4) writeonly buffer TermIds { uint term_ids[]; };
-layout(std430, set = 0, binding = 5) readonly buffer Ranks { uint ranks[]; };
-#else
-layout(std430, set = 0, binding = 0) readonly buffer Keys { uint keys[]; };
-layout(std430, set = 0, binding = 1) readonly buffer Ids { uint ids[]; };
-layout(std430, set = 0, binding = 2) readonly buffer Routes { uvec4 routes[]; };  // write_nodes.comp
-layout(std430, set = 0, binding = 3) writeonly buffer NextIds { uint next_ids[]; };
-layout(std430, set = 0, binding = 4) writeonly buffer NextKeys { uint next_keys[]; };
-layout(std430, set = 0, binding = 5) writeonly buffer TermIds { uint term_ids[]; };
-#endif
-layout(push_constant) uniform Push {
+struct ScatterPush {
     uint n;
     uint rays;       // 0: triangle lists, 1: ray lists
     uint left_base;  // ranked: where this list's scanned tile counts start in `ranks`
     uint right_base;
-} pc;
+};
+layout(push_constant) uniform Push {
+    ScatterPush pc;
+#ifdef RANKED
+    BUFFER_REF(Uvec4sInRef, tiles)
+    BUFFER_REF(UintsInRef, ids)
+    BUFFER_REF(Uvec4sInRef, routes)  // write_nodes.comp
+    BUFFER_REF(UintsOutRef, next_ids)
+    BUFFER_REF(UintsOutRef, term_ids)
+    BUFFER_REF(UintsInRef, ranks)
+#else
+    BUFFER_REF(UintsInRef, keys)
+    BUFFER_REF(UintsInRef, ids)
+    BUFFER_REF(Uvec4sInRef, routes)  // write_nodes.comp
+    BUFFER_REF(UintsOutRef, next_ids)
+    BUFFER_REF(UintsOutRef, next_keys)
+    BUFFER_REF(UintsOutRef, term_ids)
+#endif
+};
+#ifdef RANKED
+BUFFER_BINDING(0, readonly, uvec4, tiles)
+BUFFER_BINDING(1, readonly, uint, ids)
+BUFFER_BINDING(2, readonly, uvec4, routes)
+BUFFER_BINDING(3, writeonly, uint, next_ids)
+BUFFER_BINDING(4, writeonly, uint, term_ids)
+BUFFER_BINDING(5, readonly, uint, ranks)
+#else
+BUFFER_BINDING(0, readonly, uint, keys)
+BUFFER_BINDING(1, readonly, uint, ids)
+BUFFER_BINDING(2, readonly, uvec4, routes)
+BUFFER_BINDING(3, writeonly, uint, next_ids)
+BUFFER_BINDING(4, writeonly, uint, next_keys)
+BUFFER_BINDING(5, writeonly, uint, term_ids)
+#endif
 
 // Element at `position` (its place in the parent list, or its rank on that side)
 // goes where `route` sends it.
 void send(uvec4 route, uint position, uint id) {
     uint at = position + (pc.rays != 0u ? route.z : route.y);  // wrapping, see Routes
     if (route.x == CHILD_NEXT) {
-        next_ids[at] = id;
+        next_ids.data[at] = id;
 #ifndef RANKED
-        next_keys[at] = route.w;
+        next_keys.data[at] = route.w;
 #endif
     } else if (route.x == CHILD_TERMINAL) {
-        term_ids[at] = id;
+        term_ids.data[at] = id;
     }
 }
 
 void main() {
 #ifdef RANKED
     uint tile_index = linear_group_id();
-    uvec4 tile = tiles[tile_index];
-    uvec4 left_route = routes[2u * tile.x];
-    uvec4 right_route = routes[2u * tile.x + 1u];
+    uvec4 tile = tiles.data[tile_index];
+    uvec4 left_route = routes.data[2u * tile.x];
+    uvec4 right_route = routes.data[2u * tile.x + 1u];
     uint run = (tile.z + WORKGROUP_SIZE - 1u) / WORKGROUP_SIZE;
     uint begin = tile.y + min(gl_LocalInvocationID.x * run, tile.z);
     uint end = tile.y + min((gl_LocalInvocationID.x + 1u) * run, tile.z);
     uvec2 counts = uvec2(0u);
-    for (uint j = begin; j < end; ++j) counts += side_flags(ids[j] >> ID_BITS);
+    for (uint j = begin; j < end; ++j) counts += side_flags(ids.data[j] >> ID_BITS);
     uvec2 rank = tile_exclusive_scan(counts)
-               + uvec2(ranks[pc.left_base + tile_index], ranks[pc.right_base + tile_index]);
+               + uvec2(ranks.data[pc.left_base + tile_index], ranks.data[pc.right_base + tile_index]);
     for (uint j = begin; j < end; ++j) {
-        uint raw = ids[j];
+        uint raw = ids.data[j];
         uvec2 sides = side_flags(raw >> ID_BITS);
         uint id = raw & ID_MASK;
         if (sides.x != 0u) send(left_route, rank.x, id);
@@ -81,11 +99,11 @@ void main() {
 #else
     uint j = linear_invocation_id();
     if (j >= pc.n) return;
-    uint key = keys[j];
+    uint key = keys.data[j];
     uint node = key >> 2;
     uint code = key & 3u;
-    uint id = ids[j];
-    if (code == CODE_LEFT || code == CODE_BOTH) send(routes[2u * node], j, id);
-    if (code == CODE_RIGHT || code == CODE_BOTH) send(routes[2u * node + 1u], j, id);
+    uint id = ids.data[j];
+    if (code == CODE_LEFT || code == CODE_BOTH) send(routes.data[2u * node], j, id);
+    if (code == CODE_RIGHT || code == CODE_BOTH) send(routes.data[2u * node + 1u], j, id);
 #endif
 }

@@ -32,18 +32,43 @@
 
 layout(constant_id = 1) const uint BATCH = 256;
 
-layout(std430, set = 0, binding = 0) readonly buffer Triangles { Triangle triangles[]; };
-layout(std430, set = 0, binding = 1) readonly buffer Rays { Ray rays[]; };
-layout(std430, set = 0, binding = 2) readonly buffer Segments { Segment segments[]; };
-layout(std430, set = 0, binding = 3) readonly buffer TermTris { uint term_tris[]; };
-layout(std430, set = 0, binding = 4) readonly buffer TermRays { uint term_rays[]; };
-// occlusion: 1 in occlusion mode (any hit will do; see the direct variant).
-layout(push_constant) uniform Push { uint segment_count; uint ray_offset; uint occlusion; } pc;
+#ifdef ATOMIC
+layout(buffer_reference, std430, buffer_reference_align = 8) buffer PackedHitsRef { uint64_t data[]; };
+#endif
+
+struct IntersectPush {
+    uint segment_count;
+    uint ray_offset;
+    uint occlusion;  // 1 in occlusion mode (any hit will do; see the direct variant)
+};
+layout(push_constant) uniform Push {
+    IntersectPush pc;
+    BUFFER_REF(TrianglesInRef, triangles)
+    BUFFER_REF(RaysInRef, rays)
+    BUFFER_REF(SegmentsInRef, segments)
+    BUFFER_REF(UintsInRef, term_tris)
+    BUFFER_REF(UintsInRef, term_rays)
+#ifdef ATOMIC
+    // The hit buffer, holding the closest hits so far (BEST_SLOT in pdacrt.glsl).
+    BUFFER_REF(PackedHitsRef, best_packed)
+#else
+    BUFFER_REF(FloatsOutRef, entry_t)
+    BUFFER_REF(UintsOutRef, entry_tri)
+#endif
+};
+BUFFER_BINDING(0, readonly, Triangle, triangles)
+BUFFER_BINDING(1, readonly, Ray, rays)
+BUFFER_BINDING(2, readonly, Segment, segments)
+BUFFER_BINDING(3, readonly, uint, term_tris)
+BUFFER_BINDING(4, readonly, uint, term_rays)
+#ifdef ATOMIC
+BUFFER_BINDING(5, , uint64_t, best_packed)
+#else
+BUFFER_BINDING(5, writeonly, float, entry_t)
+BUFFER_BINDING(6, writeonly, uint, entry_tri)
+#endif
 
 #ifdef ATOMIC
-// The hit buffer, holding the closest hits so far (BEST_SLOT in pdacrt.glsl).
-layout(std430, set = 0, binding = 5) buffer Best { uint64_t best_packed[]; };
-
 // A closest hit packed for 64-bit atomicMin: smaller t first, then smaller triangle.
 uint64_t pack_hit(float t, uint tri) {
     return (uint64_t(ordered_bits(t)) << 32) | uint64_t(tri);
@@ -51,15 +76,12 @@ uint64_t pack_hit(float t, uint tri) {
 
 // Records entry `entry` (ray `ray` of the chunk): its closest hit within the segment.
 void record(uint entry, uint ray, float t, uint tri) {
-    if (tri != MISS) atomicMin(best_packed[BEST_SLOT(pc.ray_offset + ray)], pack_hit(t, tri));
+    if (tri != MISS) atomicMin(best_packed.data[BEST_SLOT(pc.ray_offset + ray)], pack_hit(t, tri));
 }
 #else
-layout(std430, set = 0, binding = 5) writeonly buffer EntryT { float entry_t[]; };
-layout(std430, set = 0, binding = 6) writeonly buffer EntryTri { uint entry_tri[]; };
-
 void record(uint entry, uint ray, float t, uint tri) {
-    entry_t[entry] = t;
-    entry_tri[entry] = tri;
+    entry_t.data[entry] = t;
+    entry_tri.data[entry] = tri;
 }
 #endif
 
@@ -77,7 +99,7 @@ shared uint staged_id[BATCH];
 void main() {
     uint seg = linear_group_id();
     if (seg >= pc.segment_count) return;
-    Segment s = segments[seg];
+    Segment s = segments.data[seg];
     uint lid = gl_LocalInvocationID.x;
     uint round_rays = RAYS_PER_INVOCATION * WORKGROUP_SIZE;
     for (uint ray_base = 0u; ray_base < s.ray_count; ray_base += round_rays) {
@@ -91,8 +113,8 @@ void main() {
             best_t[m] = 1.0 / 0.0;
             best[m] = MISS;
             if (k < s.ray_count) {
-                ray_id[m] = term_rays[s.ray_start + k];
-                r[m] = rays[pc.ray_offset + ray_id[m]];
+                ray_id[m] = term_rays.data[s.ray_start + k];
+                r[m] = rays.data[pc.ray_offset + ray_id[m]];
                 mine = m + 1u;
             }
         }
@@ -103,8 +125,8 @@ void main() {
                 for (uint m = 0u; m < mine; ++m) all_hit = all_hit && best[m] != MISS;
                 if (all_hit) break;
             }
-            uint id = term_tris[s.tri_start + j];
-            Triangle tri = triangles[id];
+            uint id = term_tris.data[s.tri_start + j];
+            Triangle tri = triangles.data[id];
             for (uint m = 0u; m < RAYS_PER_INVOCATION; ++m) {
                 if (m >= mine) break;
                 float u, v;
@@ -126,7 +148,7 @@ void main() {
     uint seg = linear_group_id();
     // Uniform per workgroup: the whole group leaves together, before any barrier.
     if (seg >= pc.segment_count) return;
-    Segment s = segments[seg];
+    Segment s = segments.data[seg];
     uint lid = gl_LocalInvocationID.x;
     for (uint ray_base = 0u; ray_base < s.ray_count; ray_base += WORKGROUP_SIZE) {
         uint k = ray_base + lid;
@@ -134,16 +156,16 @@ void main() {
         Ray r;
         uint ray_id = 0u;
         if (has_ray) {
-            ray_id = term_rays[s.ray_start + k];
-            r = rays[pc.ray_offset + ray_id];
+            ray_id = term_rays.data[s.ray_start + k];
+            r = rays.data[pc.ray_offset + ray_id];
         }
         float best_t = 1.0 / 0.0;
         uint best = MISS;
         for (uint tri_base = 0u; tri_base < s.tri_count; tri_base += BATCH) {
             uint count = min(BATCH, s.tri_count - tri_base);
             for (uint j = lid; j < count; j += WORKGROUP_SIZE) {
-                uint id = term_tris[s.tri_start + tri_base + j];
-                staged[j] = triangles[id];
+                uint id = term_tris.data[s.tri_start + tri_base + j];
+                staged[j] = triangles.data[id];
                 staged_id[j] = id;
             }
             barrier();

@@ -6,27 +6,39 @@
 #include "geometry.glsl"
 #include "pdacrt.glsl"
 
-layout(std430, set = 0, binding = 0) readonly buffer RunRays { uint run_rays[]; };
-layout(std430, set = 0, binding = 1) readonly buffer RunT { float run_t[]; };
-layout(std430, set = 0, binding = 2) readonly buffer RunTri { uint run_tri[]; };
-layout(std430, set = 0, binding = 3) readonly buffer RunTotal { uint run_total; };
-// The hit buffer, holding the closest hits so far (BEST_SLOT in pdacrt.glsl).
-layout(std430, set = 0, binding = 4) buffer Best { uvec2 best[]; };
-layout(push_constant) uniform Push { uint max_runs; uint ray_offset; } pc;
+struct UpdateHitsPush {
+    uint max_runs;
+    uint ray_offset;
+};
+layout(push_constant) uniform Push {
+    UpdateHitsPush pc;
+    BUFFER_REF(UintsInRef, run_rays)
+    BUFFER_REF(FloatsInRef, run_t)
+    BUFFER_REF(UintsInRef, run_tri)
+    BUFFER_REF(UintsInRef, run_total)  // one word
+    // The hit buffer, holding the closest hits so far (BEST_SLOT in pdacrt.glsl).
+    BUFFER_REF(Uvec2sRef, best)
+
+};
+BUFFER_BINDING(0, readonly, uint, run_rays)
+BUFFER_BINDING(1, readonly, float, run_t)
+BUFFER_BINDING(2, readonly, uint, run_tri)
+BUFFER_BINDING(3, readonly, uint, run_total)
+BUFFER_BINDING(4, , uvec2, best)
 
 void main() {
     uint i = linear_invocation_id();
-    if (i >= min(run_total, pc.max_runs)) return;
-    uint ray = run_rays[i];
-    float t = run_t[i];
-    uint tri = run_tri[i];
+    if (i >= min(run_total.data[0], pc.max_runs)) return;
+    uint ray = run_rays.data[i];
+    float t = run_t.data[i];
+    uint tri = run_tri.data[i];
     if (tri == MISS) return;
     // One run per ray: no other invocation touches this ray's record. Compared as the
     // packed (ordered t, triangle) pair, the order of the atomic flush.
     uint slot = BEST_SLOT(pc.ray_offset + ray);
-    uvec2 old = best[slot];
+    uvec2 old = best.data[slot];
     uvec2 candidate = uvec2(tri, ordered_bits(t));
     if (candidate.y < old.y || (candidate.y == old.y && candidate.x < old.x)) {
-        best[slot] = candidate;
+        best.data[slot] = candidate;
     }
 }

@@ -36,6 +36,8 @@ const _: () = assert!(size_of::<PtParams>() == 128);
 pub const FLAG_SORTED: u32 = 1;
 pub const FLAG_NEE: u32 = 2;
 pub const FLAG_BSDF: u32 = 4;
+/// The normals table holds three per triangle (else one dummy entry, never read).
+pub const FLAG_NORMALS: u32 = 8;
 
 impl PtParams {
     pub fn new(frame: &CameraFrame) -> Self {

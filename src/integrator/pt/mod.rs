@@ -40,7 +40,7 @@ use std::time::Instant;
 
 use glam::Vec3;
 
-use self::gpu::{PathState, PtMaterial, PtParams, FLAG_BSDF, FLAG_NEE, FLAG_SORTED};
+use self::gpu::{PathState, PtMaterial, PtParams, FLAG_BSDF, FLAG_NEE, FLAG_NORMALS, FLAG_SORTED};
 pub use self::lights::LightTable;
 use super::{check_film_size, Integrator, IntegratorError, IntegratorStats, SceneFrame};
 use crate::bsdf::BsdfParams;
@@ -379,6 +379,11 @@ impl<'t> PtIntegrator<'t> {
         };
         if options.sort {
             params.flags |= FLAG_SORTED;
+        }
+        // Without per-triangle normals the table is one dummy entry: reading it at a
+        // triangle's index would be out of bounds (no robustness promises zeros there).
+        if scene.normals.len() == 3 * scene.triangles.len() {
+            params.flags |= FLAG_NORMALS;
         }
         Ok(Self {
             gpu: gpu.clone(),

@@ -84,8 +84,9 @@ impl BufferPool {
             let smaller = std::mem::replace(&mut self.free, outgrown);
             self.retired.extend(smaller.into_values().flatten());
         }
-        let limit = self.gpu.info().limits.max_storage_buffer_range;
-        // Past the largest size a binding allows, allocate exactly.
+        let (limit, _) = self.gpu.max_buffer_bytes();
+        // Past the largest buffer the device allows, allocate exactly (and be refused
+        // with the limit named when even that is too large).
         let capacity = capacity_for(bytes).min(limit).max(bytes);
         self.gpu.create_buffer(name, capacity, MemoryKind::Device)
     }

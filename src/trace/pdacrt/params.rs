@@ -1,0 +1,172 @@
+//! PDACRT's parameters (paper §2.1–2.2), the variants of its steps, and their defaults
+//! per device.
+
+use serde::Serialize;
+
+use super::types::MAX_IDS;
+use crate::vk::{self, Gpu};
+
+/// How a level's lists are split into the children's lists.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub enum LevelSplit {
+    /// The paper's way (§2.1, Figure 4): sort each list by status key (node << 2 |
+    /// code), run-length encode the sorted keys into per-node, per-code counts, and
+    /// read each child's range off the sorted list.
+    SortByKey,
+    /// Ranks by prefix sums of the side flags (left child: code left or both; right
+    /// child: both or right). A list is already grouped by node, so the sort only ever
+    /// reorders elements within a node; ranks on each side give each element its place
+    /// within its child directly, and each child's size as a difference of two ranks.
+    /// Same child lists (each in the parent list's order rather than code order, which
+    /// no result depends on: ties go to the smaller triangle id), at the cost of one
+    /// small scan instead of a multi-pass radix sort and a reduce-by-key per list.
+    /// Lists are processed in tiles of one node (pdacrt.glsl): no per-id keys, the
+    /// status code rides in the top two bits of each id, the filters count each tile's
+    /// sides, one exclusive scan runs over the tile counts, and the scatter ranks the
+    /// elements within their tile (tile_lanes.glsl).
+    PrefixSums,
+}
+
+/// How a flush reduces its entries to each ray's closest hit.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub enum FlushReduce {
+    /// The paper's way (Algorithm 3 lines 12–13): every (segment, ray) entry writes its
+    /// closest hit; the entries are sorted by ray id, reduced by a segmented arg-min,
+    /// and the runs update the global closest hits (Algorithm 1 line 9).
+    SortByRay,
+    /// Every entry lowers its ray's packed closest hit (ordered t, triangle; see
+    /// pdacrt.glsl) with one 64-bit atomicMin — the arg-min's own order: t, then
+    /// triangle index. No per-entry arrays, no sort, no sort scratch. Needs
+    /// shaderBufferInt64Atomics.
+    AtomicMin,
+}
+
+/// PDACRT's parameters (paper §2.1–2.2).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct PdacrtParams {
+    /// α: a node with fewer triangles becomes terminal.
+    pub alpha: u32,
+    /// β: a node with fewer rays becomes terminal.
+    pub beta: u32,
+    /// η: capacity of the terminal-node buffer, in triangle ids and in ray ids.
+    pub eta: u32,
+    /// λ < η: the buffer is flushed when adding a level's terminal nodes would pass it.
+    pub lambda: u32,
+    /// T: triangles staged per shared-memory batch in the segmented intersection.
+    pub batch: u32,
+    /// N: invocations per workgroup (one terminal node each) in the segmented intersection.
+    pub intersect_workgroup: u32,
+    /// Invocations per workgroup (one tile each) of the filters and the scatter of
+    /// [`LevelSplit::PrefixSums`].
+    pub tile_workgroup: u32,
+    /// Stage triangles through shared memory in batches of T (Algorithm 3 line 5), or
+    /// read them straight from the triangle buffer (no barriers; for CPU devices).
+    pub stage_triangles: bool,
+    /// Rays traced per pass of the level loop; larger batches go in chunks.
+    pub max_rays_per_chunk: u32,
+    /// Deepest level; its surviving children are all terminal.
+    pub max_depth: u32,
+    /// How each level is split (Algorithm 2 lines 7–12).
+    pub split: LevelSplit,
+    /// How a flush finds each ray's closest hit (Algorithm 3 lines 12–13).
+    pub flush_reduce: FlushReduce,
+}
+
+impl Default for PdacrtParams {
+    fn default() -> Self {
+        Self {
+            alpha: 256,
+            beta: 256,
+            eta: 1 << 19,
+            lambda: 3 << 17,
+            batch: 256,
+            intersect_workgroup: 64,
+            tile_workgroup: 64,
+            stage_triangles: true,
+            max_rays_per_chunk: 1 << 19,
+            max_depth: 28,
+            split: LevelSplit::SortByKey,
+            flush_reduce: FlushReduce::SortByRay,
+        }
+    }
+}
+
+impl PdacrtParams {
+    /// Defaults fitted to the device ([`Default`] is the paper's own setting).
+    ///
+    /// - Every device splits levels by prefix sums ([`LevelSplit::PrefixSums`]): one
+    ///   scan does the work of a radix sort plus a reduce-by-key per list. On lavapipe
+    ///   it cut the bunny's level time from 980 to 446 ms per 1024² frame
+    ///   (docs/PERFORMANCE.md); on a GPU it is strictly fewer passes over the same data.
+    /// - Devices with 64-bit buffer atomics reduce flushes atomically
+    ///   ([`FlushReduce::AtomicMin`]): no sort by ray id, no per-entry arrays (bunny on
+    ///   lavapipe: 1 224 → 1 006 ms per frame, back to back).
+    /// - The paper's α = β = 256 and N = T = 256 are for a GTX 580; on CPU devices
+    ///   (lavapipe) a sweep on the bunny (512², primary rays, docs/PERFORMANCE.md) found
+    ///   α = 64 with β = 256 about 2× faster than 256/256: each level costs a fixed
+    ///   handful of dispatches, while the segmented brute force is cheap per test, so
+    ///   finer terminal nodes pay.
+    /// - CPU devices read triangles directly in the segmented intersection instead of
+    ///   staging them through shared memory: the barriers cost more than the staging
+    ///   saves there (848 → 215 ms of intersection per bunny frame, docs/PERFORMANCE.md).
+    /// - CPU devices halve the terminal-node buffer (η = 2¹⁸, λ = ¾η): its 4 MiB at the
+    ///   paper-sized η were the difference between the bunny's 62.0 MiB peak and the
+    ///   issue's 64 MB (61.0 MiB) target, and on lavapipe the more frequent flushes cost
+    ///   nothing measurable (they clip rays to their hits sooner; docs/PERFORMANCE.md).
+    ///   GPUs keep η = 2¹⁹: a flush there is one wide launch and should stay wide.
+    /// - CPU devices give each tile one subgroup (lavapipe: 8 invocations) instead of 64
+    ///   invocations: a workgroup wider than the SIMD width makes lavapipe switch
+    ///   between its subgroups at every barrier, and the tile kernels have one or two.
+    ///   On the bunny this halved the ray filter (188 → 98 ms per 1024² frame) and cut
+    ///   the scatter from 108 to 58 ms (docs/PERFORMANCE.md). The segmented
+    ///   intersection too runs one subgroup per segment there (N = 8 on lavapipe, so
+    ///   segments of at most 64 rays): 212–219 → 172–187 ms per frame.
+    /// - The batch must fit shared memory (48 + 4 bytes per staged triangle).
+    pub fn for_device(gpu: &Gpu) -> Self {
+        let mut p = Self::default();
+        let shared = gpu.info().limits.max_compute_shared_memory_size;
+        p.batch = p.batch.min(shared / 52);
+        p.split = LevelSplit::PrefixSums;
+        if gpu.info().capabilities.buffer_int64_atomics {
+            p.flush_reduce = FlushReduce::AtomicMin;
+        }
+        if gpu.info().is_cpu() {
+            p.alpha = 64;
+            p.stage_triangles = false;
+            p.eta = 1 << 18;
+            p.lambda = 3 << 16;
+            p.tile_workgroup = gpu.info().limits.subgroup_size.max(1);
+            p.intersect_workgroup = p.tile_workgroup;
+        } else {
+            p.intersect_workgroup = 128;
+        }
+        p
+    }
+
+    /// Rays per terminal segment at most: larger terminal nodes are split so that one
+    /// node does not serialise on one workgroup (write_nodes.comp).
+    pub fn max_segment_rays(&self) -> u32 {
+        self.intersect_workgroup * 8
+    }
+
+    pub(super) fn validate(&self) -> vk::Result<()> {
+        let bad = |what: &str| Err(vk::VkError::Usage(format!("PDACRT parameters: {what}")));
+        if self.alpha == 0 || self.beta == 0 {
+            return bad("α and β must be at least 1");
+        }
+        if self.lambda == 0 || self.lambda > self.eta {
+            return bad("λ must be in 1..=η");
+        }
+        if self.batch == 0
+            || self.intersect_workgroup == 0
+            || self.tile_workgroup == 0
+            || self.max_rays_per_chunk == 0
+        {
+            return bad("T, N, the tile workgroup and the chunk size must be at least 1");
+        }
+        if self.max_rays_per_chunk >= MAX_IDS {
+            return bad("the chunk size must be below 2^30 rays");
+        }
+        Ok(())
+    }
+}
