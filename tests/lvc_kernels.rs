@@ -553,6 +553,9 @@ fn check_connections(
                 .map(|(_, c)| c.map_or(0.0, |c| lum(c.0)))
                 .sum();
             let scale = size as f32 / (m as f32 * n as f32 * light_paths as f32);
+            // A candidate drawn c times is one slot with c times its contribution: the
+            // copies of the traced slots account for all n draws.
+            let mut draws = 0;
             for g in slots {
                 if !g.is_some() {
                     continue;
@@ -562,9 +565,15 @@ fn check_connections(
                     .find(|(slot, _)| *slot == g.target)
                     .unwrap_or_else(|| panic!("resampled vertex {} is no candidate", g.target));
                 let (v, w, t) = chosen.expect("a chosen candidate contributes");
-                let expected = v * (total / lum(v)) * scale;
-                compare_sample("resampled connection", Some((expected, w, t)), g);
+                let once = v * (total / lum(v)) * scale;
+                let copies = (lum(g.value()) / lum(once)).round().max(1.0);
+                draws += copies as usize;
+                compare_sample("resampled connection", Some((once * copies, w, t)), g);
             }
+            assert!(
+                draws == n || total == 0.0,
+                "{draws} of {n} resampled draws traced (total target {total})"
+            );
         }
     }
 }

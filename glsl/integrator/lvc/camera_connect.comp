@@ -17,8 +17,9 @@
 // luminance taken as the target p^; then N of them drawn with replacement in proportion
 // to p^, each weighted by (1 / p^(y)) (1 / M) sum_m p^(y_m) / q(y_m), so that
 // g(y) V(y) (sum_m p^_m / p^(y)) |C_q| / (M N N_L) is unbiased wherever p^ > 0 when g > 0
-// (luminance of a non-negative RGB value with positive weights). Only those N are traced.
-// Keeping the best N instead would be biased. With M = N = 1 the sum over p^ is p^(y)
+// (luminance of a non-negative RGB value with positive weights). Only those N are traced,
+// a candidate drawn more than once with one shadow ray. Keeping the best N instead would
+// be biased. With M = N = 1 the sum over p^ is p^(y)
 // itself, the weight exactly 1 and the result bit for bit the uniform one.
 //
 // The MIS weight is the path's alone, as if the selection were uniform (count
@@ -78,6 +79,9 @@ vec3 connection(LvcVertex z, vec3 z_ng, EndpointBsdf zb, LvcVertex y, out float 
                                         light ? -dir : dir,
                                         light ? TRANSPORT_IMPORTANCE : TRANSPORT_RADIANCE);
         if (light) ey = e; else ez = e;
+        // Nothing scatters towards y (y behind an opaque camera vertex, mostly): the
+        // light vertex's material need not be loaded.
+        if (!light && ez.f == vec3(0.0)) return vec3(0.0);
     }
     vec3 value = y.beta * ey.f * ez.f * z.beta / dist2;
     if (value == vec3(0.0)) return vec3(0.0);
@@ -154,6 +158,8 @@ void main() {
     }
     if (!(total > 0.0)) return;
     float scale = float(size) / (float(m_count) * float(n) * float(C.light_paths));
+    // The N draws' candidates, four bits each (m < MAX_CANDIDATES = 16, k < 16).
+    uvec2 picks = uvec2(0u);
     for (uint k = 0u; k < n; ++k) {
         // The first candidate whose running sum exceeds u * total (the last one with a
         // non-zero target when rounding leaves u * total at the very end).
@@ -168,9 +174,25 @@ void main() {
                 if (u < running) break;
             }
         }
+        picks[k >> 3] |= chosen << ((k & 7u) * 4u);
+    }
+    // A candidate drawn c times is one shadow ray (its visibility is the same each time)
+    // in the slot of its first draw, its contribution counted c times; the slots of the
+    // repeated draws stay empty. The estimate is the same sum, with fewer rays to trace.
+    for (uint k = 0u; k < n; ++k) {
+        uint chosen = (picks[k >> 3] >> ((k & 7u) * 4u)) & 0xFu;
+        uint earlier = 0u;
+        uint copies = 0u;
+        for (uint l = 0u; l < n; ++l) {
+            bool same = ((picks[l >> 3] >> ((l & 7u) * 4u)) & 0xFu) == chosen;
+            if (same && l < k) earlier += 1u;
+            if (same) copies += 1u;
+        }
+        if (earlier != 0u) continue;
         float ris = total / candidate_target[own + chosen];
         vec4 g = candidate_value[own + chosen];
-        emit(first + k, z, z_ng, candidate_slot[own + chosen], g.rgb * ris, g.a, scale);
+        emit(first + k, z, z_ng, candidate_slot[own + chosen], g.rgb * (ris * float(copies)),
+             g.a, scale);
     }
 #endif
 }
