@@ -49,42 +49,6 @@ def length(intervals):
     return sum(end - start for start, end in intervals)
 
 
-def clip(intervals, window):
-    """`intervals` cut to `window` (both sorted and disjoint): their intersection."""
-    out = []
-    i = j = 0
-    while i < len(intervals) and j < len(window):
-        lo = max(intervals[i][0], window[j][0])
-        hi = min(intervals[i][1], window[j][1])
-        if hi > lo:
-            out.append([lo, hi])
-        if intervals[i][1] < window[j][1]:
-            i += 1
-        else:
-            j += 1
-    return out
-
-
-def length(intervals):
-    return sum(end - start for start, end in intervals)
-
-
-def intersection(a, b):
-    """The length of the intersection of two sorted, disjoint interval lists."""
-    i = j = 0
-    total = 0.0
-    while i < len(a) and j < len(b):
-        lo = max(a[i][0], b[j][0])
-        hi = min(a[i][1], b[j][1])
-        if hi > lo:
-            total += hi - lo
-        if a[i][1] < b[j][1]:
-            i += 1
-        else:
-            j += 1
-    return total
-
-
 def main(argv):
     if len(argv) < 2:
         sys.exit(__doc__)

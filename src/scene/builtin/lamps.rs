@@ -31,7 +31,7 @@ use glam::Vec3;
 
 use super::{box_face, quad, v, Facing};
 use crate::scene::{
-    BsdfKind, Camera, FilmSize, Material, MaterialBsdf, MaterialLayer, MicrofacetModel,
+    shapes, BsdfKind, Camera, FilmSize, Material, MaterialBsdf, MaterialLayer, MicrofacetModel,
     RenderSettings, Scene, Triangle,
 };
 
@@ -226,87 +226,12 @@ fn torus(out: &mut Vec<Triangle>, centre: Vec3, major: f32, minor: f32, material
     });
 }
 
-/// An icosahedron subdivided `levels` times onto the sphere (20 · 4^levels facets).
+/// An icosphere ([`shapes::icosphere`]) of `radius` about `centre`, smooth-shaded with
+/// the sphere's normals.
 fn icosphere(out: &mut Vec<Triangle>, centre: Vec3, radius: f32, levels: u32, material: u32) {
-    let t = (1.0 + 5f32.sqrt()) / 2.0;
-    let corners: Vec<Vec3> = [
-        (-1.0, t, 0.0),
-        (1.0, t, 0.0),
-        (-1.0, -t, 0.0),
-        (1.0, -t, 0.0),
-        (0.0, -1.0, t),
-        (0.0, 1.0, t),
-        (0.0, -1.0, -t),
-        (0.0, 1.0, -t),
-        (t, 0.0, -1.0),
-        (t, 0.0, 1.0),
-        (-t, 0.0, -1.0),
-        (-t, 0.0, 1.0),
-    ]
-    .iter()
-    .map(|&(x, y, z)| Vec3::new(x, y, z).normalize())
-    .collect();
-    let faces = [
-        [0, 11, 5],
-        [0, 5, 1],
-        [0, 1, 7],
-        [0, 7, 10],
-        [0, 10, 11],
-        [1, 5, 9],
-        [5, 11, 4],
-        [11, 10, 2],
-        [10, 7, 6],
-        [7, 1, 8],
-        [3, 9, 4],
-        [3, 4, 2],
-        [3, 2, 6],
-        [3, 6, 8],
-        [3, 8, 9],
-        [4, 9, 5],
-        [2, 4, 11],
-        [6, 2, 10],
-        [8, 6, 7],
-        [9, 8, 1],
-    ];
-    let mut tris: Vec<[Vec3; 3]> = faces
-        .iter()
-        .map(|f| [corners[f[0]], corners[f[1]], corners[f[2]]])
-        .collect();
-    for _ in 0..levels {
-        tris = tris
-            .iter()
-            .flat_map(|&[a, b, c]| {
-                let (ab, bc, ca) = (
-                    (a + b).normalize(),
-                    (b + c).normalize(),
-                    (c + a).normalize(),
-                );
-                [[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]
-            })
-            .collect();
-    }
-    for [a, b, c] in tris {
-        let mut tri = smooth(
-            [
-                centre + a * radius,
-                centre + b * radius,
-                centre + c * radius,
-            ],
-            [a, b, c],
-            material,
-        );
-        if tri.geometric_normal().dot(a + b + c) < 0.0 {
-            tri = smooth(
-                [
-                    centre + a * radius,
-                    centre + c * radius,
-                    centre + b * radius,
-                ],
-                [a, c, b],
-                material,
-            );
-        }
-        out.push(tri);
+    for [a, b, c] in shapes::icosphere(levels) {
+        let p = [a, b, c].map(|n| centre + n * radius);
+        out.push(smooth(p, [a, b, c], material));
     }
 }
 
