@@ -40,6 +40,14 @@ impl FilmSums {
         }
     }
 
+    /// Starts keeping Σ estimate² from here on where the sums had none (a restored film
+    /// of an integrator that keeps them: its standard error then covers the new passes).
+    pub fn keep_second_moments(&mut self) {
+        if self.sum_sq.is_none() {
+            self.sum_sq = Some(vec![[0.0; 3]; self.sum.len()]);
+        }
+    }
+
     /// Sums of GPU accumulators: `sum` holds Σ L in rgb (its w is ignored), `sum_sq`
     /// Σ L² in rgb.
     pub fn from_gpu(

@@ -174,9 +174,7 @@ impl Integrator for BptIntegrator {
     fn restore(&mut self, sums: &FilmSums) -> Result<(), IntegratorError> {
         check_film_size(sums, self.camera.width(), self.camera.height(), 1)?;
         self.sums = sums.clone();
-        if self.sums.sum_sq.is_none() {
-            self.sums.sum_sq = Some(vec![[0.0; 3]; self.sums.sum.len()]);
-        }
+        self.sums.keep_second_moments();
         if let Some(t) = &mut self.techniques {
             *t = TechniqueImages::new(self.camera.width(), self.camera.height());
         }

@@ -387,9 +387,7 @@ impl Integrator for CbptIntegrator {
         let camera = &self.setup.camera;
         check_film_size(sums, camera.width(), camera.height(), SAMPLES_PER_PIXEL)?;
         self.sums = sums.clone();
-        if self.sums.sum_sq.is_none() {
-            self.sums.sum_sq = Some(vec![[0.0; 3]; self.sums.sum.len()]);
-        }
+        self.sums.keep_second_moments();
         Ok(())
     }
 
