@@ -203,19 +203,22 @@ impl IntegratorKind {
         ),
     ];
 
-    /// Whether the integrator renders animated scenes ([`Integrator::set_frame`]).
+    /// Whether the integrator renders animated scenes ([`Integrator::set_frame`]): all
+    /// of them, listed so that a new kind decides.
     pub fn animates(self) -> bool {
-        matches!(
-            self,
+        match self {
             Self::Primary
-                | Self::Ao
-                | Self::Shadow
-                | Self::Reflection
-                | Self::Path
-                | Self::Pt
-                | Self::Bpt
-                | Self::Light
-        )
+            | Self::Ao
+            | Self::Shadow
+            | Self::Reflection
+            | Self::Path
+            | Self::Pt
+            | Self::Bpt
+            | Self::Light
+            | Self::LvcBdpt
+            | Self::CisLbdpt
+            | Self::Cbpt => true,
+        }
     }
 
     pub fn name(self) -> &'static str {

@@ -21,7 +21,7 @@ use super::{
     RenderOutput, RenderPlan,
 };
 use crate::film::FilmSums;
-use crate::integrator::{aov, Integrator, SceneFrame};
+use crate::integrator::{aov, Integrator, IntegratorStats, SceneFrame};
 use crate::scene::animation::frame_time;
 use crate::scene::{validate, AnimatedScene, Location, Scene};
 use crate::trace::{pdacrt, GpuTriangle, Query, Tracer};
@@ -185,6 +185,11 @@ pub fn render_frames(
         frames: 0,
         stopped: false,
     };
+    // A frame's counts start where the previous frame's ended (the first frame's at
+    // zero), so that they hold what moving the integrator to the frame cost (the light
+    // vertex cache's prepass on the posed scene) as a still render's hold what making
+    // the integrator cost: frame k counts what the still render at time k counts.
+    let mut stats_before = IntegratorStats::default();
     for k in range.frames() {
         if (control.stop)() {
             run.stopped = true;
@@ -214,7 +219,6 @@ pub fn render_frames(
             &aov_triangles,
             &camera,
         )?;
-        let stats_before = integrator.stats();
         let mut output = render_prepared(
             gpu,
             &scene,
@@ -223,7 +227,7 @@ pub fn render_frames(
                 integrator: integrator.as_mut(),
                 aovs,
                 start,
-                stats_before,
+                stats_before: stats_before.clone(),
             },
             RenderPlan::default(),
             RenderControl {
@@ -231,6 +235,7 @@ pub fn render_frames(
                 stop: control.stop,
             },
         )?;
+        stats_before = integrator.stats();
         if output.stats.stopped_early {
             run.stopped = true;
             break;

@@ -22,7 +22,7 @@ use super::layout::{CombinationData, GpuVertex, Kinds, Tables, SHADING_PLANES};
 use super::pipeline::Evaluator;
 use crate::bidir::scene::SHADOW_RAY_REACH;
 use crate::bidir::CpuScene;
-use crate::integrator::IntegratorError;
+use crate::integrator::{IntegratorError, SceneFrame};
 use crate::shaders;
 use crate::trace::{Hit, Query, Ray, Tracer};
 use crate::vk::{
@@ -199,6 +199,26 @@ impl GpuCombiner {
             slots: Default::default(),
             next_slot: 0,
         })
+    }
+
+    /// Moves the combination to another frame of an animated scene: the tracer's
+    /// geometry in the changed ranges and the ray offset of the posed scene (`scene`,
+    /// already built for it); the BSDF table does not move. Called between steps only:
+    /// the GPU is waited for first, so no batch of the old pose is still tracing. A slot
+    /// still marked busy belonged to a step whose call ended in an error (a call that
+    /// returns finishes all of its steps): its pending data went with that call, so the
+    /// slot is free.
+    pub fn move_to_frame(&mut self, frame: &SceneFrame<'_>, scene: &CpuScene) -> vk::Result<()> {
+        self.gpu.wait_idle()?;
+        if frame.geometry_changed() {
+            self.tracer
+                .update_geometry(frame.triangles, frame.changed)?;
+        }
+        self.ray_epsilon = scene.ray_epsilon;
+        for slot in &mut self.slots {
+            slot.busy = false;
+        }
+        Ok(())
     }
 
     pub fn tracer_name(&self) -> &'static str {

@@ -43,7 +43,7 @@ use self::pipeline::{run_steps, CpuSide, Evaluator, StepTimes};
 use self::population::SamplingInputs;
 use self::steps::{PassPlan, StepId, Streams, SAMPLES_PER_PIXEL};
 use super::bpt::{BidirMode, BptIntegrator, BptOptions};
-use super::{check_film_size, Integrator, IntegratorError, IntegratorStats};
+use super::{check_film_size, Integrator, IntegratorError, IntegratorStats, SceneFrame};
 use crate::bidir::combinatorial::CombinatorialCounts;
 use crate::bidir::{Connector, Counters, CpuScene, PinholeCamera, WalkSettings};
 use crate::film::FilmSums;
@@ -406,6 +406,36 @@ impl Integrator for CbptIntegrator {
             rays_traced: c.rays,
             counters: counters.iter().map(|(k, v)| (k.to_string(), *v)).collect(),
         }
+    }
+
+    /// The CPU scene (its BVH built again, as `bpt`'s, and with it the emitter table,
+    /// whose areas and probabilities move with their triangles), the camera, and on the
+    /// GPU the tracer's geometry and the ray offset. The population sizes, the pass plan
+    /// and the MIS counts depend on the film and the settings only; N_C and N_L from
+    /// Equation 4 stay those measured on the first frame (a measurement of time, which
+    /// no two renders repeat exactly).
+    ///
+    /// The pipeline keeps two population couples in flight only within a call to
+    /// [`Integrator::render_passes`]: `run_steps` finishes the last step's combination
+    /// and joins its CPU thread before it returns, and frames change between calls. So
+    /// no step straddles a frame change — every population of the next call is sampled
+    /// on the posed scene and combined against its geometry — without draining anything
+    /// here; the GPU side waits for the device all the same before it moves the tracer.
+    fn set_frame(&mut self, frame: &SceneFrame<'_>) -> Result<(), IntegratorError> {
+        let camera = &self.setup.camera;
+        if (frame.camera.width, frame.camera.height) != (camera.width(), camera.height()) {
+            return Err(IntegratorError::Usage(
+                "a frame cannot change the film size".to_string(),
+            ));
+        }
+        if frame.geometry_changed() {
+            self.setup.scene = CpuScene::new(frame.scene);
+        }
+        if let Backend::Gpu(g) = &mut self.backend {
+            g.move_to_frame(frame, &self.setup.scene)?;
+        }
+        self.setup.camera = PinholeCamera::new(&frame.camera);
+        Ok(())
     }
 
     fn settings(&self) -> Vec<(String, String)> {

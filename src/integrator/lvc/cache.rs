@@ -35,6 +35,7 @@ pub struct LightCache {
     /// Per-path slots: entry `path_offset[l] + o` is the cache slot of light path l's
     /// o-th vertex.
     pub index: Buffer,
+    /// Slots a light pass may fill (the buffers may hold more).
     pub capacity: u32,
     /// Per light path of a chunk (and one more, zero): its cached vertices.
     pub vertex_count: Buffer,
@@ -66,8 +67,8 @@ impl LightCache {
         })
     }
 
-    /// Replaces the vertex and index buffers by ones of `needed` slots and 10% more
-    /// (the caller waits for the GPU to be done with the old ones first).
+    /// Raises the capacity to `needed` slots and 10% more (the caller waits for the GPU
+    /// to be done with the old buffers first: [`LightCache::set_capacity`]).
     pub fn grow(&mut self, gpu: &Gpu, needed: u64) -> vk::Result<()> {
         let limit = gpu.info().limits.max_storage_buffer_range / size_of::<LvcVertex>() as u64;
         if needed > limit.min(u32::MAX as u64) {
@@ -75,18 +76,30 @@ impl LightCache {
                 "a chunk's light subpaths made {needed} cache vertices, more than one                  storage-buffer binding holds ({limit}): use fewer light paths per pass"
             )));
         }
-        self.grow_to(gpu, (needed + needed / 10 + 64).min(limit))
+        self.set_capacity(gpu, (needed + needed / 10 + 64).min(limit))
     }
 
-    /// Replaces the vertex and index buffers by ones of `capacity` slots (at most what
-    /// one binding holds).
-    pub fn grow_to(&mut self, gpu: &Gpu, capacity: u64) -> vk::Result<()> {
+    /// Sets the capacity to `capacity` slots (at most what one binding holds). The
+    /// vertex and index buffers are replaced only when they hold fewer (the caller waits
+    /// for the GPU to be done with them first): a cache sized for an earlier frame of an
+    /// animation keeps its buffers, while its capacity — which decides when a light pass
+    /// grows the cache and runs again, and so the rays traced — is the one a render of
+    /// this frame alone would have.
+    pub fn set_capacity(&mut self, gpu: &Gpu, capacity: u64) -> vk::Result<()> {
         let limit = gpu.info().limits.max_storage_buffer_range / size_of::<LvcVertex>() as u64;
         let capacity = capacity.clamp(1, limit.min(u32::MAX as u64));
-        self.vertices = gpu.zeroed::<LvcVertex>("lvc-cache", capacity as usize)?;
-        self.index = gpu.zeroed::<u32>("lvc-cache-index", capacity as usize)?;
+        if capacity > self.slots() {
+            self.vertices = gpu.zeroed::<LvcVertex>("lvc-cache", capacity as usize)?;
+            self.index = gpu.zeroed::<u32>("lvc-cache-index", capacity as usize)?;
+        }
         self.capacity = capacity as u32;
         Ok(())
+    }
+
+    /// Slots the vertex and index buffers hold (the capacity or more).
+    fn slots(&self) -> u64 {
+        (self.vertices.size() / size_of::<LvcVertex>() as u64)
+            .min(self.index.size() / size_of::<u32>() as u64)
     }
 
     /// Records the per-path index of a chunk of `paths` light paths that stored `total`

@@ -39,6 +39,7 @@
 pub mod cache;
 pub mod camera_pass;
 pub mod fixed;
+mod frame;
 pub mod gpu;
 pub mod kernels;
 pub mod light_pass;
@@ -53,9 +54,9 @@ pub mod wavefront;
 use crate::bidir::mis::TechniqueCounts;
 use crate::bidir::random::fold_seed;
 use crate::film::FilmSums;
-use crate::integrator::pt::{PtScene, SceneBuffers};
+use crate::integrator::pt::{LightTable, PtScene, SceneBuffers};
 use crate::integrator::{
-    check_film_size, Integrator, IntegratorError, IntegratorStats, NamedImage,
+    check_film_size, Integrator, IntegratorError, IntegratorStats, NamedImage, SceneFrame,
 };
 use crate::scene::CameraFrame;
 use crate::trace::Tracer;
@@ -93,6 +94,36 @@ pub fn lvc_counts(
         light_trace: on(families.light_trace, light_paths as f32),
         light_trace_emitter: 0.0,
     }
+}
+
+/// The constants of a render through `camera` before its prepass: the camera, the ray
+/// offset from the scene's extent (`scene_radius`), the light count, N_L of the plan
+/// before the prepass fits it, and provisional counts (the prepass's vertices do not
+/// depend on them).
+fn prepass_constants(
+    options: &LvcOptions,
+    plan: &Plan,
+    camera: &CameraFrame,
+    scene_radius: f32,
+    light_count: usize,
+) -> LvcConstants {
+    let mut constants = LvcConstants::new(camera);
+    constants.ray_epsilon = 1e-4 * scene_radius.max(1e-3);
+    constants.seed = fold_seed(options.seed);
+    constants.light_paths = plan.light_paths;
+    constants.max_depth = options.max_depth;
+    constants.rr_depth = options.rr_depth;
+    constants.light_count = light_count as u32;
+    constants.connections = options.connections;
+    constants.candidates = options.candidates;
+    constants.flags = if options.sort { FLAG_SORTED } else { 0 };
+    constants.set_counts(&lvc_counts(
+        &options.families,
+        options.connections,
+        plan.light_paths,
+        1.0,
+    ));
+    constants
 }
 
 /// Whether material sorting pays on `gpu`: on devices that run invocations in SIMT
@@ -182,6 +213,9 @@ pub struct LvcIntegrator<'t> {
     options: LvcOptions,
     kernels: Kernels,
     scene: SceneBuffers,
+    /// The light table on the GPU, as the host last computed it (a new frame uploads it
+    /// only where it changed).
+    light_table: LightTable,
     constants: LvcConstants,
     constants_buffer: Buffer,
     wave: Wavefront,
@@ -208,23 +242,13 @@ impl<'t> LvcIntegrator<'t> {
     ) -> Result<Self, IntegratorError> {
         options.check()?;
         let plan = Plan::new(gpu, camera.width, camera.height, options);
-        let mut constants = LvcConstants::new(camera);
-        constants.ray_epsilon = 1e-4 * scene.scene_radius.max(1e-3);
-        constants.seed = fold_seed(options.seed);
-        constants.light_paths = plan.light_paths;
-        constants.max_depth = options.max_depth;
-        constants.rr_depth = options.rr_depth;
-        constants.light_count = scene.lights.lights.len() as u32;
-        constants.connections = options.connections;
-        constants.candidates = options.candidates;
-        constants.flags = if options.sort { FLAG_SORTED } else { 0 };
-        // Provisional counts for the prepass (its vertices do not depend on them).
-        constants.set_counts(&lvc_counts(
-            &options.families,
-            options.connections,
-            plan.light_paths,
-            1.0,
-        ));
+        let constants = prepass_constants(
+            options,
+            &plan,
+            camera,
+            scene.scene_radius,
+            scene.lights.lights.len(),
+        );
         let pixels = plan.pixels as usize;
         let max_light_paths = plan.chunk_light_paths(plan.passes_per_chunk);
         let mut integrator = Self {
@@ -233,6 +257,7 @@ impl<'t> LvcIntegrator<'t> {
             options: *options,
             kernels: Kernels::new(gpu, options.variant)?,
             scene: SceneBuffers::new(gpu, scene)?,
+            light_table: scene.lights.clone(),
             constants_buffer: gpu.upload("lvc-constants", &[constants])?,
             constants,
             wave: Wavefront::new(gpu, plan.wave_capacity, options.connections, options.sort)?,
@@ -256,7 +281,8 @@ impl<'t> LvcIntegrator<'t> {
         Ok(integrator)
     }
 
-    /// Measures v̄ on light paths of their own and sizes the cache and the counts.
+    /// Measures v̄ on light paths of their own and sizes the cache and the counts (from
+    /// the plan and constants of [`Plan::new`] and [`prepass_constants`], on the GPU).
     fn prepass(&mut self) -> Result<(), IntegratorError> {
         let _span = tracing::info_span!("lvc prepass").entered();
         let paths = prepass_paths(self.plan.light_paths);
@@ -288,7 +314,7 @@ impl<'t> LvcIntegrator<'t> {
             None => self.plan.cache_capacity(self.per_path),
         };
         self.gpu.wait_idle()?;
-        self.cache.grow_to(&self.gpu, capacity)?;
+        self.cache.set_capacity(&self.gpu, capacity)?;
         Ok(())
     }
 
@@ -527,5 +553,15 @@ impl Integrator for LvcIntegrator<'_> {
             .as_ref()
             .map(|t| t.images())
             .unwrap_or_default())
+    }
+
+    fn set_frame(&mut self, frame: &SceneFrame<'_>) -> Result<(), IntegratorError> {
+        let c = &self.constants;
+        if (frame.camera.width, frame.camera.height) != (c.width, c.height) {
+            return Err(IntegratorError::Usage(
+                "a frame cannot change the film size".to_string(),
+            ));
+        }
+        self.move_to_frame(frame)
     }
 }

@@ -1,6 +1,8 @@
 //! `pt` on an animated scene: a new frame moves the path tracer's scene tables in place.
+//! The light-vertex-cache integrators read the same tables ([`SceneBuffers`]) and move
+//! them the same way.
 
-use super::{upload_or_dummy, LightTable, PtIntegrator, Strategy};
+use super::{upload_or_dummy, LightTable, PtIntegrator, SceneBuffers, Strategy};
 use crate::integrator::frame::{write_ranges, SceneFrame};
 use crate::integrator::pt::gpu::PtParams;
 use crate::vk::{self, Buffer, Gpu};
@@ -37,6 +39,56 @@ fn replace_table<T: bytemuck::Pod + PartialEq>(
     }
 }
 
+impl SceneBuffers {
+    /// Moves the tables to `frame`: triangles and shading normals in the changed ranges,
+    /// and the light table where it differs from `lights`, the table they hold now
+    /// (emitters that moved change their edges, areas and so every light's probability
+    /// of choice). Returns the posed scene's light table. The GPU must be done with the
+    /// tables (the caller waits first).
+    pub(crate) fn move_to_frame(
+        &mut self,
+        gpu: &Gpu,
+        frame: &SceneFrame<'_>,
+        lights: &LightTable,
+    ) -> vk::Result<LightTable> {
+        let scene = frame.scene;
+        if frame.geometry_changed() {
+            write_ranges(&self.triangles, frame.triangles, frame.changed, 1)?;
+            // The table is three per triangle when any triangle has normals, else a
+            // placeholder; which triangles have them never changes within a scene.
+            if self.normals.size() as usize >= scene.triangles.len() * 3 * 16 {
+                for r in frame.changed {
+                    self.normals
+                        .write_at(3 * r.start, &normals_of(scene, r.clone()))?;
+                }
+            }
+        }
+        let posed = LightTable::new(scene);
+        replace_table(
+            gpu,
+            "pt-lights",
+            &mut self.lights,
+            &lights.lights,
+            &posed.lights,
+        )?;
+        replace_table(
+            gpu,
+            "pt-light-cdf",
+            &mut self.light_cdf,
+            &lights.cdf,
+            &posed.cdf,
+        )?;
+        replace_table(
+            gpu,
+            "pt-tri-light-pmf",
+            &mut self.tri_pmf,
+            &lights.tri_pmf,
+            &posed.tri_pmf,
+        )?;
+        Ok(posed)
+    }
+}
+
 impl PtIntegrator<'_> {
     /// Triangles, shading normals and the tracer's geometry in the changed ranges; the
     /// light table where it changed (emitters that moved); the camera, the ray offset
@@ -47,41 +99,10 @@ impl PtIntegrator<'_> {
         if frame.geometry_changed() {
             self.tracer
                 .update_geometry(frame.triangles, frame.changed)?;
-            let s = &self.scene;
-            write_ranges(&s.triangles, frame.triangles, frame.changed, 1)?;
-            // The table is three per triangle when any triangle has normals, else a
-            // placeholder; which triangles have them never changes within a scene.
-            if s.normals.size() as usize >= scene.triangles.len() * 3 * 16 {
-                for r in frame.changed {
-                    s.normals
-                        .write_at(3 * r.start, &normals_of(scene, r.clone()))?;
-                }
-            }
         }
-        let lights = LightTable::new(scene);
-        let s = &mut self.scene;
-        let old = &self.light_table;
-        replace_table(
-            &self.gpu,
-            "pt-lights",
-            &mut s.lights,
-            &old.lights,
-            &lights.lights,
-        )?;
-        replace_table(
-            &self.gpu,
-            "pt-light-cdf",
-            &mut s.light_cdf,
-            &old.cdf,
-            &lights.cdf,
-        )?;
-        replace_table(
-            &self.gpu,
-            "pt-tri-light-pmf",
-            &mut s.tri_pmf,
-            &old.tri_pmf,
-            &lights.tri_pmf,
-        )?;
+        let lights = self
+            .scene
+            .move_to_frame(&self.gpu, frame, &self.light_table)?;
         let posed = PtParams::new(&frame.camera);
         let p = &mut self.params;
         (p.origin, p.forward, p.right, p.up) = (posed.origin, posed.forward, posed.right, posed.up);
