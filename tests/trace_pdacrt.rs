@@ -145,6 +145,16 @@ fn builtin_scenes_match_including_cameras_inside_the_box() {
             deep(),
             name,
         );
+        check(
+            &gpu,
+            &tris,
+            &common::camera_rays(&s.camera, 64, 48),
+            PdacrtParams {
+                tight_boxes: true,
+                ..deep()
+            },
+            &format!("{name}, tight boxes"),
+        );
         // From the centre of the scene box, looking at a corner.
         let b = s.bounds();
         s.camera.position = b.center();
@@ -250,6 +260,22 @@ fn split_planes_flat_triangles_and_axis_parallel_rays() {
         ));
     }
     check(&gpu, &tris, &rays, deep(), "lattice, deep");
+    // Tight boxes around flat triangles have zero extent on an axis; rays run inside
+    // them and along their faces.
+    for split in [LevelSplit::SortByKey, LevelSplit::PrefixSums] {
+        check(
+            &gpu,
+            &tris,
+            &rays,
+            PdacrtParams {
+                tight_boxes: true,
+                cost_terminal: true,
+                split,
+                ..deep()
+            },
+            &format!("lattice, deep, tight boxes, {split:?}"),
+        );
+    }
     check(
         &gpu,
         &tris,
@@ -346,6 +372,31 @@ fn results_do_not_depend_on_the_parameters() {
         },
         PdacrtParams {
             flush_reduce: FlushReduce::SortByRay,
+            ..PdacrtParams::for_device(&gpu)
+        },
+        // Children boxed by their triangles and by the halves of their parents, with
+        // both splits; nodes of few rays terminal by count and by cost.
+        PdacrtParams {
+            tight_boxes: true,
+            split: LevelSplit::SortByKey,
+            ..deep()
+        },
+        PdacrtParams {
+            tight_boxes: true,
+            cost_terminal: true,
+            split: LevelSplit::PrefixSums,
+            tile_workgroup: 3,
+            ..deep()
+        },
+        PdacrtParams {
+            cost_terminal: true,
+            alpha: 2,
+            beta: 64,
+            ..deep()
+        },
+        PdacrtParams {
+            tight_boxes: false,
+            cost_terminal: false,
             ..PdacrtParams::for_device(&gpu)
         },
     ];

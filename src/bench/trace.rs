@@ -183,7 +183,7 @@ impl fmt::Display for TraceReport {
             if let (true, Some(p)) = (r.tracer == "pdacrt", &self.pdacrt_params) {
                 writeln!(
                     f,
-                    "{:<12} α {} β {} η {} λ {} N {} T {}, chunks of {} rays, split {}, flush {:?}, triangles {}",
+                    "{:<12} α {} β {} η {} λ {} N {} T {}, chunks of {} rays, split {}, flush {:?}, triangles {}, {} boxes",
                     "",
                     p.alpha,
                     p.beta,
@@ -198,7 +198,8 @@ impl fmt::Display for TraceReport {
                         split => format!("{split:?}"),
                     },
                     p.flush_reduce,
-                    if p.stage_triangles { "staged" } else { "direct" }
+                    if p.stage_triangles { "staged" } else { "direct" },
+                    if p.tight_boxes { "tight" } else { "half" }
                 )?;
                 let triangles = (self.triangles * size_of::<GpuTriangle>()) as u64;
                 let working = r.tracer_peak_bytes.saturating_sub(triangles);

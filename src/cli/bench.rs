@@ -220,6 +220,16 @@ enum BenchCommand {
         /// (true) or read them directly (false); the default depends on the device.
         #[arg(long)]
         stage_triangles: Option<bool>,
+        /// PDACRT: give each child the bounds of its triangles as its box (true) or the
+        /// half of its parent's box, as the paper does (false); the default depends on
+        /// the device.
+        #[arg(long)]
+        tight_boxes: Option<bool>,
+        /// PDACRT: a node with fewer than β rays is terminal only while rays × triangles
+        /// is below α·β (true) or always (false, the paper's rule); the default depends
+        /// on the device.
+        #[arg(long)]
+        cost_terminal: Option<bool>,
         /// PDACRT: split levels by `sort` (the paper's sort by status key) or `scan`
         /// (one prefix scan of side flags); the default is `scan`.
         #[arg(long)]
@@ -536,6 +546,8 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             tile_workgroup,
             chunk,
             stage_triangles,
+            tight_boxes,
+            cost_terminal,
             split,
             flush,
             ..
@@ -551,6 +563,8 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             params.tile_workgroup = tile_workgroup.unwrap_or(params.tile_workgroup);
             params.max_rays_per_chunk = chunk.unwrap_or(params.max_rays_per_chunk);
             params.stage_triangles = stage_triangles.unwrap_or(params.stage_triangles);
+            params.tight_boxes = tight_boxes.unwrap_or(params.tight_boxes);
+            params.cost_terminal = cost_terminal.unwrap_or(params.cost_terminal);
             if let Some(split) = split {
                 params.split = match split {
                     SplitArg::Sort => LevelSplit::SortByKey,

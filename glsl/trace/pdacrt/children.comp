@@ -13,6 +13,10 @@
 // the difference of the ranks at the node's end (the tile after its last) and start
 // (its first tile), and the rank at the start serves as the child's source offset
 // (scatter_elements.comp subtracts it).
+//
+// With `tight` set (PdacrtParams::tight_boxes) a child's box is the union of its
+// triangles' boxes clipped to its half (filter_triangles.comp) instead of the half
+// itself, and "too thin to split" looks at its largest extent, the axis it would split.
 //! variant ranked: RANKED=1
 #include "grid.glsl"
 #include "pdacrt.glsl"
@@ -31,6 +35,8 @@ struct ChildrenPush {
     uint tri_right_base;
     uint ray_left_base;
     uint ray_right_base;
+    uint tight;  // 1: the child's box is its triangles' bounds (`bounds`)
+    uint cost_rule;  // 1: few rays make a child terminal only if rays × triangles < αβ
 };
 layout(push_constant) uniform Push {
     ChildrenPush pc;
@@ -43,18 +49,30 @@ layout(push_constant) uniform Push {
 #endif
     BUFFER_REF(ChildrenOutRef, children)
     BUFFER_REF(UintsOutRef, channels)
+    BUFFER_REF(UintsInRef, bounds)
 };
 BUFFER_BINDING(0, readonly, Node, nodes)
 #ifdef RANKED
 BUFFER_BINDING(1, readonly, uint, ranks)
 BUFFER_BINDING(2, writeonly, Child, children)
 BUFFER_BINDING(3, writeonly, uint, channels)
+BUFFER_BINDING(4, readonly, uint, bounds)
 #else
 BUFFER_BINDING(1, readonly, uint, tri_counts)
 BUFFER_BINDING(2, readonly, uint, ray_counts)
 BUFFER_BINDING(3, writeonly, Child, children)
 BUFFER_BINDING(4, writeonly, uint, channels)
+BUFFER_BINDING(5, readonly, uint, bounds)
 #endif
+
+// Whether a child has too few rays to split (the β test, Algorithm 1 line 6). With
+// `cost_rule` (PdacrtParams::cost_terminal) a child below β rays still splits while its
+// brute force would cost more than α·β tests, the most any child below both
+// thresholds costs: a handful of rays over thousands of triangles goes on down.
+bool few_rays(uint rays, uint tris) {
+    if (pc.cost_rule == 0u) return rays < pc.beta;
+    return float(rays) * float(tris) < float(pc.alpha) * float(pc.beta);
+}
 
 void main() {
     uint c = linear_invocation_id();
@@ -89,9 +107,18 @@ void main() {
     ch.box_max = vec4(nd.box_max, 0.0);
     if (right) ch.box_min[axis] = mid; else ch.box_max[axis] = mid;
     float extent = ch.box_max[axis] - ch.box_min[axis];
+    if (pc.tight != 0u && ch.tri_count != 0u) {
+        uint w = 8u * c;
+        ch.box_min.xyz = vec3(from_ordered_bits(bounds.data[w]), from_ordered_bits(bounds.data[w + 1u]),
+                              from_ordered_bits(bounds.data[w + 2u]));
+        ch.box_max.xyz = vec3(from_ordered_bits(~bounds.data[w + 4u]), from_ordered_bits(~bounds.data[w + 5u]),
+                              from_ordered_bits(~bounds.data[w + 6u]));
+        vec3 e = ch.box_max.xyz - ch.box_min.xyz;
+        extent = max(e.x, max(e.y, e.z));
+    }
     if (ch.tri_count == 0u || ch.ray_count == 0u) {
         ch.kind = CHILD_DROPPED;
-    } else if (ch.tri_count < pc.alpha || ch.ray_count < pc.beta || pc.last_level != 0u
+    } else if (ch.tri_count < pc.alpha || few_rays(ch.ray_count, ch.tri_count) || pc.last_level != 0u
                || extent <= pc.min_extent) {
         ch.kind = CHILD_TERMINAL;
     } else {

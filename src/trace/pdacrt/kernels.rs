@@ -23,6 +23,8 @@ pub struct FilterTrianglesPush {
     pub eps: f32,
     pub left_base: u32,
     pub right_base: u32,
+    /// 1: bound each child's triangles ([`PdacrtParams::tight_boxes`]).
+    pub tight: u32,
 }
 
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -64,6 +66,10 @@ pub struct ChildrenPush {
     pub tri_right_base: u32,
     pub ray_left_base: u32,
     pub ray_right_base: u32,
+    /// 1: children take their triangles' bounds as their boxes.
+    pub tight: u32,
+    /// 1: [`PdacrtParams::cost_terminal`].
+    pub cost_rule: u32,
 }
 
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -157,7 +163,7 @@ impl Kernels {
                     shaders::TRACE_PDACRT_FILTER_TRIANGLES,
                     shaders::TRACE_PDACRT_FILTER_TRIANGLES__RANKED,
                 ),
-                4 + ranked as u32, // ranked: tiles for keys, and the ranks
+                5 + ranked as u32, // ranked: tiles for keys, and the ranks; the bounds
                 size_of::<FilterTrianglesPush>(),
                 tile_wg,
             )?,
@@ -181,7 +187,7 @@ impl Kernels {
                     shaders::TRACE_PDACRT_CHILDREN,
                     shaders::TRACE_PDACRT_CHILDREN__RANKED,
                 ),
-                5 - ranked as u32,
+                6 - ranked as u32, // the last: the children's bounds
                 size_of::<ChildrenPush>(),
                 wg,
             )?,

@@ -40,6 +40,13 @@
 //! - `stage_triangles`: the paper's shared-memory batches of T triangles, or direct
 //!   reads with 8 rays per invocation (the default on CPU devices, where barriers are
 //!   slow and shared memory is no nearer than any other memory).
+//! - `tight_boxes`: a child's box is the bounds of its triangles within its half of the
+//!   parent's box (the default), or the half itself as in the paper (Algorithm 2 line
+//!   4). Rays passing beside the geometry leave a level later, and the next split
+//!   halves the geometry rather than empty space.
+//! - `cost_terminal`: a node below β rays stays in the loop while rays × triangles
+//!   exceeds α·β (the default), or is terminal as in the paper (Algorithm 1 line 6),
+//!   however many triangles it brute-forces.
 
 mod kernels;
 mod params;
@@ -490,7 +497,7 @@ impl PdacrtTracer {
         // Algorithm 1 line 2: the root level. A root already below α or β is terminal.
         let mut level = if tris == 0 {
             None // every ray misses
-        } else if tris < p.alpha || n < p.beta {
+        } else if p.is_terminal(tris, n) {
             let per = p.max_segment_rays();
             let segment_count = n.div_ceil(per);
             if tris > term.tri_capacity
@@ -839,9 +846,19 @@ impl PdacrtTracer {
             size_of::<LevelTotals>() as u64,
             MemoryKind::Readback,
         )?;
+        // The children's triangle bounds (tight boxes; filter_triangles.comp), 8 words
+        // per child, all ones for "none yet". Without tight boxes the kernels never
+        // touch it: one word stands in.
+        let tight = self.params.tight_boxes;
+        let bounds_bytes = if tight { child_count as u64 * 32 } else { 4 };
+        let bounds = self.pool.take("pdacrt-bounds", bounds_bytes)?;
 
         let mut rec = gpu.recorder(StreamKind::Main)?;
         rec.begin_scope("pdacrt-level")?;
+        if tight {
+            rec.fill_range(&bounds, 0, bounds_bytes, u32::MAX)?;
+            rec.barrier();
+        }
         // Algorithm 2 lines 2–6: status codes (and, ranked, the side flags).
         let (tri_bases, ray_bases) = Ranks::bases(ranks.as_ref());
         let mut bindings: Vec<BufferSlice> = vec![
@@ -851,6 +868,7 @@ impl PdacrtTracer {
             (&level.tris.owner).into(),
         ];
         bindings.extend(ranks.as_ref().map(|r| BufferSlice::from(&r.buffer)));
+        bindings.push((&bounds).into());
         // Ranked: one workgroup per tile; sorted: one invocation per id.
         let groups = |items: u32, tiles: u32, pipeline: &vk::ComputePipeline| {
             if ranked {
@@ -871,6 +889,7 @@ impl PdacrtTracer {
                 eps: self.eps,
                 left_base: tri_bases.0,
                 right_base: tri_bases.1,
+                tight: tight as u32,
             },
             groups(
                 level.tris.total,
@@ -921,6 +940,8 @@ impl PdacrtTracer {
             tri_right_base: tri_bases.1,
             ray_left_base: ray_bases.0,
             ray_right_base: ray_bases.1,
+            tight: tight as u32,
+            cost_rule: self.params.cost_terminal as u32,
         };
         let counts = match &ranks {
             Some(ranks) => {
@@ -940,6 +961,7 @@ impl PdacrtTracer {
                         (&ranks.buffer).into(),
                         (&children).into(),
                         (&channels).into(),
+                        (&bounds).into(),
                     ],
                     &push,
                     child_count as u64,
@@ -956,6 +978,7 @@ impl PdacrtTracer {
                         (&counts.1).into(),
                         (&children).into(),
                         (&channels).into(),
+                        (&bounds).into(),
                     ],
                     &push,
                     child_count as u64,
@@ -993,6 +1016,7 @@ impl PdacrtTracer {
         self.pool.collect();
         let totals = summary.read::<LevelTotals>()?[0];
         self.pool.give(channels);
+        self.pool.give(bounds);
         if let Some((tri_counts, ray_counts)) = counts {
             self.pool.give(tri_counts);
             self.pool.give(ray_counts);

@@ -70,6 +70,20 @@ pub struct PdacrtParams {
     pub split: LevelSplit,
     /// How a flush finds each ray's closest hit (Algorithm 3 lines 12–13).
     pub flush_reduce: FlushReduce,
+    /// A child's box: the bounds of its triangles (each clipped to the child's half of
+    /// the parent's box), or the half itself as in the paper (Algorithm 2 line 4 splits
+    /// the node's box; the children are its halves). Tight boxes shed the empty space
+    /// around the geometry: rays that pass beside it leave the hierarchy a level
+    /// after entering such a half instead of following it down, and the next split
+    /// halves the geometry's extent rather than the empty space's. The bounds are one
+    /// atomic min per coordinate per tile (filter_triangles.comp), order-independent,
+    /// so the hierarchy and the hits stay deterministic.
+    pub tight_boxes: bool,
+    /// When few rays make a node terminal (the β test of Algorithm 1 line 6): below β
+    /// rays (the paper), or only while rays × triangles, the cost of its brute force,
+    /// is also below α·β. The paper's rule brute-forces a node of 200 rays and 20 000
+    /// triangles (4M tests) that a few more levels would cut to a few hundred thousand.
+    pub cost_terminal: bool,
 }
 
 impl Default for PdacrtParams {
@@ -87,6 +101,8 @@ impl Default for PdacrtParams {
             max_depth: 28,
             split: LevelSplit::SortByKey,
             flush_reduce: FlushReduce::SortByRay,
+            tight_boxes: false,
+            cost_terminal: false,
         }
     }
 }
@@ -121,12 +137,22 @@ impl PdacrtParams {
     ///   the scatter from 108 to 58 ms (docs/PERFORMANCE.md). The segmented
     ///   intersection too runs one subgroup per segment there (N = 8 on lavapipe, so
     ///   segments of at most 64 rays): 212–219 → 172–187 ms per frame.
+    /// - Every device boxes children by their triangles ([`Self::tight_boxes`]) and
+    ///   keeps nodes of few rays but many triangles in the loop
+    ///   ([`Self::cost_terminal`]): both only remove work (ray ids that leave sooner,
+    ///   fewer intersection tests) for one fill and a few atomics per tile. On
+    ///   lavapipe, 512² frames, together: the sea of `waves` 128–156 → 80–86 ms
+    ///   (primary) and 92–94 → 61–65 ms (shadow), `swarm` 186–194 → 127–134 and 155 →
+    ///   110–112, the bunny at 1024² 244–261 → 187–196 and 187–207 → 135–157
+    ///   (docs/PERFORMANCE.md).
     /// - The batch must fit shared memory (48 + 4 bytes per staged triangle).
     pub fn for_device(gpu: &Gpu) -> Self {
         let mut p = Self::default();
         let shared = gpu.info().limits.max_compute_shared_memory_size;
         p.batch = p.batch.min(shared / 52);
         p.split = LevelSplit::PrefixSums;
+        p.tight_boxes = true;
+        p.cost_terminal = true;
         if gpu.info().capabilities.buffer_int64_atomics {
             p.flush_reduce = FlushReduce::AtomicMin;
         }
@@ -141,6 +167,17 @@ impl PdacrtParams {
             p.intersect_workgroup = 128;
         }
         p
+    }
+
+    /// Whether a node of `tris` triangles and `rays` rays is terminal by its size
+    /// (children.comp decides the same for every other node).
+    pub fn is_terminal(&self, tris: u32, rays: u32) -> bool {
+        let few_rays = if self.cost_terminal {
+            (rays as f32) * (tris as f32) < (self.alpha as f32) * (self.beta as f32)
+        } else {
+            rays < self.beta
+        };
+        tris < self.alpha || few_rays
     }
 
     /// Rays per terminal segment at most: larger terminal nodes are split so that one
