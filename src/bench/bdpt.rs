@@ -18,6 +18,7 @@ use std::time::Instant;
 
 use serde::Serialize;
 
+use super::{median, EvenMedian};
 use crate::film::{relative_mse, FilmSums};
 use crate::integrator::{Integrator, IntegratorKind};
 use crate::render::{create_integrator, device_description, RenderError, RenderOptions};
@@ -251,20 +252,6 @@ impl Contestant {
     }
 }
 
-fn median(v: &[f64]) -> f64 {
-    let mut s = v.to_vec();
-    s.sort_by(f64::total_cmp);
-    if s.is_empty() {
-        return 0.0;
-    }
-    let n = s.len();
-    if n % 2 == 1 {
-        s[n / 2]
-    } else {
-        0.5 * (s[n / 2 - 1] + s[n / 2])
-    }
-}
-
 /// Runs the benchmark (see the module docs).
 pub fn run(
     gpu: &Gpu,
@@ -305,9 +292,10 @@ pub fn run(
             integrator: c.kind.name().to_string(),
             seconds: c.seconds,
             passes: c.passes,
-            samples_per_second: median(&c.samples),
-            mrays_per_second: median(&c.rays) * 1e-6,
-            basic_contributions_per_second: bidirectional.then(|| median(&c.basic)),
+            samples_per_second: median(c.samples.iter().copied(), EvenMedian::Mean),
+            mrays_per_second: median(c.rays.iter().copied(), EvenMedian::Mean) * 1e-6,
+            basic_contributions_per_second: bidirectional
+                .then(|| median(c.basic.iter().copied(), EvenMedian::Mean)),
             relative_mse: options
                 .reference
                 .as_ref()

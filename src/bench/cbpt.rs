@@ -29,6 +29,7 @@ use std::time::{Duration, Instant};
 use serde::Serialize;
 
 use super::bdpt::{self as bdpt_bench, BdptBenchOptions, BdptBenchReport};
+use super::{median, EvenMedian};
 use crate::bidir::{Counters, CpuScene};
 use crate::integrator::bpt::{BidirMode, BptIntegrator, BptOptions};
 use crate::integrator::cbpt::cpu_kernels::evaluate;
@@ -152,15 +153,6 @@ pub struct CbptBenchReport {
     pub contributions: Vec<ContributionRow>,
     pub steps: Vec<StepRow>,
     pub equal_time: Option<BdptBenchReport>,
-}
-
-fn median(v: &mut [f64]) -> f64 {
-    v.sort_by(f64::total_cmp);
-    match v.len() {
-        0 => 0.0,
-        n if n % 2 == 1 => v[n / 2],
-        n => 0.5 * (v[n / 2 - 1] + v[n / 2]),
-    }
 }
 
 fn ms(d: Duration, steps: u64) -> f64 {
@@ -310,8 +302,8 @@ fn throughput(
             kind: ["visibility", "camera shading", "light shading"][kind].into(),
             tracer: (kind == 0).then(|| tracer.name().to_string()),
             segments,
-            gpu: rate(median(&mut g)),
-            cpu: rate(median(&mut p)),
+            gpu: rate(median(g, EvenMedian::Mean)),
+            cpu: rate(median(p, EvenMedian::Mean)),
         });
     }
     Ok((rows, checked))
@@ -330,10 +322,10 @@ fn batch_sweep(
         let mut c = GpuCombiner::new(gpu, tracer, cpu_scene, batch)?;
         time_gpu(&mut c, tables, Kinds::ALL)?;
         let mut rate = |kind: usize| -> Result<f64, RenderError> {
-            let mut t: Vec<f64> = (0..options.rounds.max(1))
+            let t: Vec<f64> = (0..options.rounds.max(1))
                 .map(|_| time_gpu(&mut c, tables, kinds_of(kind)))
                 .collect::<Result<_, _>>()?;
-            Ok(tables.segments() as f64 / median(&mut t) * 1e-6)
+            Ok(tables.segments() as f64 / median(t, EvenMedian::Mean) * 1e-6)
         };
         rows.push(BatchRow {
             batch,
@@ -454,9 +446,9 @@ fn contributions(
     }
     Ok(contestants
         .into_iter()
-        .map(|(c, mut rates, seconds)| ContributionRow {
+        .map(|(c, rates, seconds)| ContributionRow {
             name: c.name(),
-            per_second: median(&mut rates),
+            per_second: median(rates, EvenMedian::Mean),
             seconds,
         })
         .collect())

@@ -21,6 +21,7 @@ use serde::Serialize;
 
 use super::trace::BenchResult;
 use super::workloads::{self, Workload};
+use super::{median, EvenMedian};
 use crate::render::frames::{move_triangles, FrameRange};
 use crate::scene::{AnimatedScene, Scene};
 use crate::trace::{
@@ -434,11 +435,6 @@ fn run_frame(
     Ok((update_ms, trace_ms))
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
-
 /// Runs the benchmark on `animated` (which must move).
 pub fn run(
     gpu: &Gpu,
@@ -566,12 +562,12 @@ fn row(c: &Timed, frames: &[(f64, f64, u32)]) -> DynamicRow {
         .collect();
     DynamicRow {
         tracer: c.contender,
-        frame_ms: median(totals.clone()),
+        frame_ms: median(totals.iter().copied(), EvenMedian::Upper),
         min_ms: totals.iter().copied().fold(f64::INFINITY, f64::min),
         max_ms: totals.iter().copied().fold(0.0, f64::max),
-        update_ms: median(frames.iter().map(|f| f.0).collect()),
-        trace_ms: median(frames.iter().map(|f| f.1).collect()),
-        mrays_per_s: median(rates),
+        update_ms: median(frames.iter().map(|f| f.0), EvenMedian::Upper),
+        trace_ms: median(frames.iter().map(|f| f.1), EvenMedian::Upper),
+        mrays_per_s: median(rates, EvenMedian::Upper),
         verified_rays: c.verified,
         mismatches: c.mismatches,
         frames_ms: totals,

@@ -7,6 +7,7 @@
 
 use serde::Serialize;
 
+use super::{median, EvenMedian};
 use crate::film::FilmSums;
 use crate::integrator::lvc::sort_pays;
 use crate::integrator::{Integrator, IntegratorKind};
@@ -154,15 +155,6 @@ pub fn stream_use(log: &ProfileLog) -> (Vec<(String, f64)>, f64) {
     (busy, overlap * 1e-6)
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    match v.len() {
-        0 => 0.0,
-        n if n % 2 == 1 => v[n / 2],
-        n => 0.5 * (v[n / 2 - 1] + v[n / 2]),
-    }
-}
-
 struct Config {
     kind: IntegratorKind,
     streams: u32,
@@ -225,7 +217,7 @@ pub fn equal_spp(
                 integrator: c.kind.name().to_string(),
                 streams: c.streams,
                 sorted: c.sorted,
-                seconds: median(c.seconds),
+                seconds: median(c.seconds, EvenMedian::Mean),
                 passes,
                 stream_busy_ms,
                 overlap_ms,

@@ -10,6 +10,7 @@ use rayon::slice::ParallelSliceMut;
 use serde::Serialize;
 
 use super::host;
+use super::{median, EvenMedian};
 use crate::primitives::compact::Kept;
 use crate::primitives::gather::Direction;
 use crate::primitives::reduce_by_key::{Reduction, RunOutputs};
@@ -147,16 +148,8 @@ impl fmt::Display for PrimitivesReport {
 
 pub type BenchResult<T> = std::result::Result<T, Box<dyn std::error::Error + Send + Sync>>;
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    v[v.len() / 2]
-}
-
 fn time_cpu(runs: usize, mut f: impl FnMut() -> f64) -> f64 {
-    median((0..runs).map(|_| f()).collect())
+    median((0..runs).map(|_| f()), EvenMedian::Upper)
 }
 
 /// One submission: `prepare` (e.g. restoring an input from a pristine copy on the
@@ -282,7 +275,11 @@ fn time_against(
             ref_ms.push(reference()?);
         }
     }
-    Ok((median(gpu_ms), median(wall_ms), median(ref_ms)))
+    Ok((
+        median(gpu_ms, EvenMedian::Upper),
+        median(wall_ms, EvenMedian::Upper),
+        median(ref_ms, EvenMedian::Upper),
+    ))
 }
 
 /// As [`time_gpu`], the minimum GPU time instead of the median.
@@ -520,7 +517,7 @@ pub fn run(gpu: &Gpu, opts: &PrimitivesBenchOptions) -> BenchResult<PrimitivesRe
         copy_walls.borrow_mut().push(w);
         Ok(g)
     })?;
-    let copy_t = (copy_ms, median(copy_walls.into_inner()));
+    let copy_t = (copy_ms, median(copy_walls.into_inner(), EvenMedian::Upper));
     let t = (scan_gpu, scan_wall);
     let r = row(
         "scan (exclusive)",

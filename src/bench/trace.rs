@@ -11,6 +11,7 @@ use std::time::Instant;
 use serde::Serialize;
 
 use super::workloads::{self, RayBatch, Workload};
+use super::{median, EvenMedian};
 use crate::scene::Scene;
 use crate::trace::{
     cpu, BruteForceTracer, GpuTriangle, Hit, HostTiming, LevelSplit, PdacrtParams, PdacrtTracer,
@@ -552,20 +553,16 @@ fn host_row(frames: &[HostTiming]) -> Option<HostRow> {
     if frames.is_empty() {
         return None;
     }
-    let median = |mut v: Vec<f64>| {
-        v.sort_by(f64::total_cmp);
-        v[v.len() / 2]
-    };
     let ms = |d: std::time::Duration| d.as_secs_f64() * 1e3;
-    let trace_ms = median(frames.iter().map(|h| ms(h.trace)).collect());
+    let trace_ms = median(frames.iter().map(|h| ms(h.trace)), EvenMedian::Upper);
     Some(HostRow {
-        build_ms: median(frames.iter().map(|h| ms(h.build)).collect()),
+        build_ms: median(frames.iter().map(|h| ms(h.build)), EvenMedian::Upper),
         trace_ms,
         trace_mrays_per_s: median(
             frames
                 .iter()
-                .map(|h| h.rays as f64 / (h.trace.as_secs_f64().max(1e-9) * 1e6))
-                .collect(),
+                .map(|h| h.rays as f64 / (h.trace.as_secs_f64().max(1e-9) * 1e6)),
+            EvenMedian::Upper,
         ),
         threads: rayon::current_num_threads(),
     })

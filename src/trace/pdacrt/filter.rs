@@ -1,0 +1,333 @@
+//! Filtering a level (Algorithm 2): each triangle and ray is classified against its
+//! node's two halves, the level is split by those codes, and its children are sized,
+//! with the one host round trip per level reading back the totals.
+
+use super::kernels::*;
+use super::level::{Filtered, Level, Ranks};
+use super::types::{LevelTotals, CHANNELS, CHILD_BYTES, TILE_ITEMS};
+use super::{bits_for, Chunk, LevelSplit, PdacrtTracer};
+use crate::primitives::{
+    reduce_by_key::{Reduction, RunOutputs},
+    ScanKind,
+};
+use crate::trace::Query;
+use crate::vk::{self, grid_for, Buffer, BufferSlice, MemoryKind, Recorder, StreamKind};
+
+impl PdacrtTracer {
+    /// Filters one level (Algorithm 1 lines 4–6, Algorithm 2) and reads its totals back:
+    /// the loop's one host round trip per level.
+    pub(super) fn filter_level(
+        &mut self,
+        level: &Level,
+        chunk: &Chunk<'_>,
+        depth: u32,
+    ) -> vk::Result<Filtered> {
+        let &Chunk {
+            rays,
+            hits,
+            offset: ray_offset,
+            query,
+            ..
+        } = chunk;
+        let gpu = self.gpu.clone();
+        let max_list = level.tris.total.max(level.rays.total);
+        let child_count = level.node_count * 2;
+        // Channel stride: a multiple of 64 words keeps every channel slice aligned.
+        let stride = child_count.next_multiple_of(64);
+        let ranked = self.params.split == LevelSplit::PrefixSums;
+        let ranks = ranked
+            .then(|| -> vk::Result<Ranks> {
+                let (t, r) = (level.tris.tiles + 1, level.rays.tiles + 1);
+                Ok(Ranks {
+                    buffer: self.pool.take("pdacrt-ranks", 2 * (t + r) as u64 * 4)?,
+                    tri_left: 0,
+                    tri_right: t,
+                    ray_left: 2 * t,
+                    ray_right: 2 * t + r,
+                })
+            })
+            .transpose()?;
+        let scan_n = ranks.as_ref().map_or(0, Ranks::len);
+        if !ranked {
+            self.sort_scratch(max_list)?;
+        }
+        let scanned = if ranked { scan_n } else { max_list };
+        self.misc_scratch(scanned.max(CHANNELS * stride), !ranked)?;
+        let children = self
+            .pool
+            .take("pdacrt-children", child_count as u64 * CHILD_BYTES)?;
+        let channels = self
+            .pool
+            .take("pdacrt-channels", (stride * CHANNELS) as u64 * 4)?;
+        let offsets = self
+            .pool
+            .take("pdacrt-offsets", (stride * CHANNELS) as u64 * 4)?;
+        let summary = gpu.create_buffer(
+            "pdacrt-level-totals",
+            size_of::<LevelTotals>() as u64,
+            MemoryKind::Readback,
+        )?;
+        // The children's triangle bounds (tight boxes; filter_triangles.comp), 8 words
+        // per child, all ones for "none yet". Without tight boxes the kernels never
+        // touch it: one word stands in.
+        let tight = self.params.tight_boxes;
+        let bounds_bytes = if tight { child_count as u64 * 32 } else { 4 };
+        let bounds = self.pool.take("pdacrt-bounds", bounds_bytes)?;
+
+        let mut rec = gpu.recorder(StreamKind::Main)?;
+        rec.begin_scope("pdacrt-level")?;
+        if tight {
+            rec.fill_range(&bounds, 0, bounds_bytes, u32::MAX)?;
+            rec.barrier();
+        }
+        // Algorithm 2 lines 2–6: status codes (and, ranked, the side flags).
+        let (tri_bases, ray_bases) = Ranks::bases(ranks.as_ref());
+        let mut bindings: Vec<BufferSlice> = vec![
+            (&self.triangles).into(),
+            (&level.nodes).into(),
+            (&level.tris.ids).into(),
+            (&level.tris.owner).into(),
+        ];
+        bindings.extend(ranks.as_ref().map(|r| BufferSlice::from(&r.buffer)));
+        bindings.push((&bounds).into());
+        // Ranked: one workgroup per tile; sorted: one invocation per id.
+        let groups = |items: u32, tiles: u32, pipeline: &vk::ComputePipeline| {
+            if ranked {
+                grid_for(&gpu, tiles as u64, 1)
+            } else {
+                grid_for(&gpu, items as u64, pipeline.workgroup_size())
+            }
+        };
+        rec.dispatch(
+            &self.kernels.filter_triangles,
+            &bindings,
+            &FilterTrianglesPush {
+                n: if ranked {
+                    level.tris.tiles
+                } else {
+                    level.tris.total
+                },
+                eps: self.eps,
+                left_base: tri_bases.0,
+                right_base: tri_bases.1,
+                tight: tight as u32,
+            },
+            groups(
+                level.tris.total,
+                level.tris.tiles,
+                &self.kernels.filter_triangles,
+            ),
+        )?;
+        let mut bindings: Vec<BufferSlice> = vec![
+            rays.into(),
+            (&level.nodes).into(),
+            (&level.rays.ids).into(),
+            (&level.rays.owner).into(),
+            hits.into(),
+        ];
+        bindings.extend(ranks.as_ref().map(|r| BufferSlice::from(&r.buffer)));
+        rec.dispatch(
+            &self.kernels.filter_rays,
+            &bindings,
+            &FilterRaysPush {
+                n: if ranked {
+                    level.rays.tiles
+                } else {
+                    level.rays.total
+                },
+                eps: self.eps,
+                occlusion: (query == Query::Occlusion) as u32,
+                ray_offset,
+                left_base: ray_bases.0,
+                right_base: ray_bases.1,
+            },
+            groups(
+                level.rays.total,
+                level.rays.tiles,
+                &self.kernels.filter_rays,
+            ),
+        )?;
+        let min_extent = self.eps * 4.0;
+        let push = ChildrenPush {
+            child_count,
+            stride,
+            alpha: self.params.alpha,
+            beta: self.params.beta,
+            last_level: (depth + 1 >= self.params.max_depth) as u32,
+            min_extent,
+            max_segment_rays: self.params.max_segment_rays(),
+            tile_items: TILE_ITEMS,
+            tri_left_base: tri_bases.0,
+            tri_right_base: tri_bases.1,
+            ray_left_base: ray_bases.0,
+            ray_right_base: ray_bases.1,
+            tight: tight as u32,
+            cost_rule: self.params.cost_terminal as u32,
+        };
+        let counts = match &ranks {
+            Some(ranks) => {
+                rec.barrier();
+                // Every tile-count array in one exclusive scan: each array's ranks come
+                // out offset by the arrays before it, which cancels in every use (a
+                // child's size and an element's offset are differences of ranks).
+                let misc = self.scratch.misc.as_ref().unwrap();
+                let all = (&ranks.buffer).into();
+                self.scan
+                    .record(&mut rec, scan_n, all, all, ScanKind::Exclusive, misc)?;
+                // Algorithm 2 lines 13–15 and Algorithm 1 line 6.
+                rec.dispatch_items(
+                    &self.kernels.children,
+                    &[
+                        (&level.nodes).into(),
+                        (&ranks.buffer).into(),
+                        (&children).into(),
+                        (&channels).into(),
+                        (&bounds).into(),
+                    ],
+                    &push,
+                    child_count as u64,
+                )?;
+                None
+            }
+            None => {
+                let counts = self.record_sort_split(&mut rec, level)?;
+                rec.dispatch_items(
+                    &self.kernels.children,
+                    &[
+                        (&level.nodes).into(),
+                        (&counts.0).into(),
+                        (&counts.1).into(),
+                        (&children).into(),
+                        (&channels).into(),
+                        (&bounds).into(),
+                    ],
+                    &push,
+                    child_count as u64,
+                )?;
+                Some(counts)
+            }
+        };
+        rec.barrier();
+        // Algorithm 1 line 11: positions of the next level and of the terminal nodes.
+        // One scan runs through all the channels back to back; each channel's offsets
+        // come out raised by the channels before it (and by the unwritten padding up to
+        // `stride`), which the readers subtract (channel_offset in pdacrt.glsl).
+        let misc = self.scratch.misc.as_ref().unwrap();
+        self.scan.record(
+            &mut rec,
+            CHANNELS * stride,
+            (&channels).into(),
+            (&offsets).into(),
+            ScanKind::Exclusive,
+            misc,
+        )?;
+        rec.dispatch(
+            &self.kernels.level_summary,
+            &[(&channels).into(), (&offsets).into(), (&summary).into()],
+            &SummaryPush {
+                child_count,
+                stride,
+            },
+            [1, 1, 1],
+        )?;
+        rec.end_scope()?;
+        let done = rec.submit(&[])?;
+        gpu.wait(&done)?;
+        self.scratch.retired.clear();
+        self.pool.collect();
+        let totals = summary.read::<LevelTotals>()?[0];
+        self.pool.give(channels);
+        self.pool.give(bounds);
+        if let Some((tri_counts, ray_counts)) = counts {
+            self.pool.give(tri_counts);
+            self.pool.give(ray_counts);
+        }
+        Ok(Filtered {
+            totals,
+            children,
+            offsets,
+            stride,
+            ranks,
+        })
+    }
+
+    /// The paper's split ([`LevelSplit::SortByKey`]): sorts each list by status key
+    /// (Figure 4) and counts each (node, code) run (Algorithm 2 lines 9–12) into
+    /// per-node, per-code tables for `children`. Returns the triangle and ray tables.
+    fn record_sort_split(
+        &mut self,
+        rec: &mut Recorder,
+        level: &Level,
+    ) -> vk::Result<(Buffer, Buffer)> {
+        let max_list = level.tris.total.max(level.rays.total);
+        // At most 4 runs per node: one per status code.
+        let max_runs = max_list.min(level.node_count * 4) as u64;
+        let run_keys = self.pool.take("pdacrt-run-keys", max_runs * 4)?;
+        let run_counts = self.pool.take("pdacrt-run-counts", max_runs * 4)?;
+        let run_total = self.pool.take("pdacrt-run-total", 4)?;
+        let tri_counts = self
+            .pool
+            .take("pdacrt-tri-counts", level.node_count as u64 * 16)?;
+        let ray_counts = self
+            .pool
+            .take("pdacrt-ray-counts", level.node_count as u64 * 16)?;
+        let (_, sort_scratch) = self.scratch.sort.as_ref().unwrap();
+        let misc = self.scratch.misc.as_ref().unwrap();
+        rec.fill(&tri_counts, 0);
+        rec.fill(&ray_counts, 0);
+        rec.barrier();
+        let key_bits = 2 + bits_for(level.node_count);
+        for (list_n, keys, ids, counts) in [
+            (
+                level.tris.total,
+                &level.tris.owner,
+                &level.tris.ids,
+                &tri_counts,
+            ),
+            (
+                level.rays.total,
+                &level.rays.owner,
+                &level.rays.ids,
+                &ray_counts,
+            ),
+        ] {
+            self.sort.record(
+                rec,
+                list_n,
+                keys.into(),
+                Some(ids.into()),
+                0..key_bits,
+                sort_scratch,
+            )?;
+            self.reduce.record(
+                rec,
+                list_n,
+                keys.into(),
+                Reduction::Count,
+                RunOutputs {
+                    keys: (&run_keys).into(),
+                    a: (&run_counts).into(),
+                    b: None,
+                    count: (&run_total).into(),
+                },
+                misc,
+            )?;
+            rec.dispatch_items(
+                &self.kernels.child_counts,
+                &[
+                    (&run_keys).into(),
+                    (&run_counts).into(),
+                    (&run_total).into(),
+                    counts.into(),
+                ],
+                &MaxRunsPush { max_runs: list_n },
+                (level.node_count * 4) as u64,
+            )?;
+            rec.barrier();
+        }
+        for b in [run_keys, run_counts, run_total] {
+            self.pool.give(b);
+        }
+        Ok((tri_counts, ray_counts))
+    }
+}
