@@ -269,7 +269,7 @@ fn split_planes_flat_triangles_and_axis_parallel_rays() {
             &rays,
             PdacrtParams {
                 tight_boxes: true,
-                cost_terminal: true,
+                terminal_cost: 64,
                 split,
                 ..deep()
             },
@@ -383,20 +383,20 @@ fn results_do_not_depend_on_the_parameters() {
         },
         PdacrtParams {
             tight_boxes: true,
-            cost_terminal: true,
+            terminal_cost: 64,
             split: LevelSplit::PrefixSums,
             tile_workgroup: 3,
             ..deep()
         },
         PdacrtParams {
-            cost_terminal: true,
+            terminal_cost: 8,
             alpha: 2,
             beta: 64,
             ..deep()
         },
         PdacrtParams {
             tight_boxes: false,
-            cost_terminal: false,
+            terminal_cost: 0,
             ..PdacrtParams::for_device(&gpu)
         },
     ];

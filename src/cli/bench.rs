@@ -226,10 +226,12 @@ enum BenchCommand {
         #[arg(long)]
         tight_boxes: Option<bool>,
         /// PDACRT: a node with fewer than β rays is terminal only while rays × triangles
-        /// is below α·β (true) or always (false, the paper's rule); the default depends
-        /// on the device.
+        /// is below this many tests (0: always, the paper's rule).
         #[arg(long)]
-        cost_terminal: Option<bool>,
+        terminal_cost: Option<u32>,
+        /// PDACRT: the fewest ray ids a level must hold for --terminal-cost to apply.
+        #[arg(long)]
+        terminal_cost_min_rays: Option<u32>,
         /// PDACRT: split levels by `sort` (the paper's sort by status key) or `scan`
         /// (one prefix scan of side flags); the default is `scan`.
         #[arg(long)]
@@ -547,7 +549,8 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             chunk,
             stage_triangles,
             tight_boxes,
-            cost_terminal,
+            terminal_cost,
+            terminal_cost_min_rays,
             split,
             flush,
             ..
@@ -564,7 +567,9 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             params.max_rays_per_chunk = chunk.unwrap_or(params.max_rays_per_chunk);
             params.stage_triangles = stage_triangles.unwrap_or(params.stage_triangles);
             params.tight_boxes = tight_boxes.unwrap_or(params.tight_boxes);
-            params.cost_terminal = cost_terminal.unwrap_or(params.cost_terminal);
+            params.terminal_cost = terminal_cost.unwrap_or(params.terminal_cost);
+            params.terminal_cost_min_rays =
+                terminal_cost_min_rays.unwrap_or(params.terminal_cost_min_rays);
             if let Some(split) = split {
                 params.split = match split {
                     SplitArg::Sort => LevelSplit::SortByKey,

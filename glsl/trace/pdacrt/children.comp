@@ -36,7 +36,7 @@ struct ChildrenPush {
     uint ray_left_base;
     uint ray_right_base;
     uint tight;  // 1: the child's box is its triangles' bounds (`bounds`)
-    uint cost_rule;  // 1: few rays make a child terminal only if rays × triangles < αβ
+    uint terminal_cost;  // > 0: few rays make a child terminal only below this many tests
 };
 layout(push_constant) uniform Push {
     ChildrenPush pc;
@@ -65,13 +65,12 @@ BUFFER_BINDING(4, writeonly, uint, channels)
 BUFFER_BINDING(5, readonly, uint, bounds)
 #endif
 
-// Whether a child has too few rays to split (the β test, Algorithm 1 line 6). With
-// `cost_rule` (PdacrtParams::cost_terminal) a child below β rays still splits while its
-// brute force would cost more than α·β tests, the most any child below both
-// thresholds costs: a handful of rays over thousands of triangles goes on down.
+// Whether a child has too few rays to split (the β test, Algorithm 1 line 6). With a
+// `terminal_cost` (PdacrtParams::terminal_cost) a child below β rays still splits while
+// its brute force would cost that many ray-triangle tests or more: a handful of rays
+// over thousands of triangles goes on down.
 bool few_rays(uint rays, uint tris) {
-    if (pc.cost_rule == 0u) return rays < pc.beta;
-    return float(rays) * float(tris) < float(pc.alpha) * float(pc.beta);
+    return rays < pc.beta && (pc.terminal_cost == 0u || float(rays) * float(tris) < float(pc.terminal_cost));
 }
 
 void main() {

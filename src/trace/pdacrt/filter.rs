@@ -162,7 +162,7 @@ impl PdacrtTracer {
             ray_left_base: ray_bases.0,
             ray_right_base: ray_bases.1,
             tight: tight as u32,
-            cost_rule: self.params.cost_terminal as u32,
+            terminal_cost: self.params.terminal_cost_at(level.rays.total),
         };
         let counts = match &ranks {
             Some(ranks) => {

@@ -68,8 +68,8 @@ pub struct ChildrenPush {
     pub ray_right_base: u32,
     /// 1: children take their triangles' bounds as their boxes.
     pub tight: u32,
-    /// 1: [`PdacrtParams::cost_terminal`].
-    pub cost_rule: u32,
+    /// [`PdacrtParams::terminal_cost`] (0: the paper's β test).
+    pub terminal_cost: u32,
 }
 
 #[derive(Clone, Copy, Pod, Zeroable)]

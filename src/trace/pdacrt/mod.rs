@@ -44,9 +44,9 @@
 //!   parent's box (the default), or the half itself as in the paper (Algorithm 2 line
 //!   4). Rays passing beside the geometry leave a level later, and the next split
 //!   halves the geometry rather than empty space.
-//! - `cost_terminal`: a node below β rays stays in the loop while rays × triangles
-//!   exceeds α·β (the default), or is terminal as in the paper (Algorithm 1 line 6),
-//!   however many triangles it brute-forces.
+//! - `terminal_cost`: a node below β rays stays in the loop while rays × triangles
+//!   exceeds a budget of tests (the default), or is terminal as in the paper
+//!   (Algorithm 1 line 6), however many triangles it brute-forces.
 
 mod filter;
 mod kernels;
@@ -375,7 +375,7 @@ impl PdacrtTracer {
         let tris = self.triangle_count;
         if tris == 0 {
             Ok(None) // every ray misses
-        } else if self.params.is_terminal(tris, n) {
+        } else if self.params.is_terminal(tris, n, n) {
             self.root_terminal(rec, term, n)?;
             Ok(None)
         } else {

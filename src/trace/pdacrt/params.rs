@@ -6,6 +6,16 @@ use serde::Serialize;
 use super::types::MAX_IDS;
 use crate::vk::{self, Gpu};
 
+/// The default [`PdacrtParams::terminal_cost`], in ray-triangle tests: α·β of CPU
+/// devices, the most a node below both thresholds costs. Larger budgets (2¹⁶–2²⁰) gave
+/// back most of the gain on the sea's shadow rays (docs/PERFORMANCE.md).
+const TERMINAL_COST: u32 = 64 * 256;
+/// The default [`PdacrtParams::terminal_cost_min_rays`]: on lavapipe the budget on
+/// every level cost a 64² batch of `lamps`' path rays 1.3–1.6× its time (few nodes
+/// per deep level), and from 2¹⁴ or 2¹⁶ ids on it cost nothing there and kept the
+/// gain at 512².
+const TERMINAL_COST_MIN_RAYS: u32 = 1 << 15;
+
 /// How a level's lists are split into the children's lists.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 pub enum LevelSplit {
@@ -79,11 +89,18 @@ pub struct PdacrtParams {
     /// atomic min per coordinate per tile (filter_triangles.comp), order-independent,
     /// so the hierarchy and the hits stay deterministic.
     pub tight_boxes: bool,
-    /// When few rays make a node terminal (the β test of Algorithm 1 line 6): below β
-    /// rays (the paper), or only while rays × triangles, the cost of its brute force,
-    /// is also below α·β. The paper's rule brute-forces a node of 200 rays and 20 000
-    /// triangles (4M tests) that a few more levels would cut to a few hundred thousand.
-    pub cost_terminal: bool,
+    /// When few rays make a node terminal (the β test of Algorithm 1 line 6): 0, below
+    /// β rays (the paper); else only while rays × triangles, the cost of its brute
+    /// force, is also below this many tests. The paper's rule brute-forces a node of
+    /// 200 rays and 20 000 triangles (4M tests) that a few more levels would cut to a
+    /// few hundred thousand; but every level has a fixed cost (a dozen dispatches and
+    /// a host round trip), which a budget too small spends on nodes of a few rays.
+    pub terminal_cost: u32,
+    /// The fewest ray ids a level must hold for [`Self::terminal_cost`] to apply in it;
+    /// below, the paper's β test. A level's fixed cost is shared by its nodes: on a
+    /// level of many rays the nodes the budget keeps in the loop ride along almost for
+    /// free, while on a small batch's deep levels a few such nodes pay whole levels.
+    pub terminal_cost_min_rays: u32,
 }
 
 impl Default for PdacrtParams {
@@ -102,7 +119,8 @@ impl Default for PdacrtParams {
             split: LevelSplit::SortByKey,
             flush_reduce: FlushReduce::SortByRay,
             tight_boxes: false,
-            cost_terminal: false,
+            terminal_cost: 0,
+            terminal_cost_min_rays: 0,
         }
     }
 }
@@ -139,7 +157,7 @@ impl PdacrtParams {
     ///   segments of at most 64 rays): 212–219 → 172–187 ms per frame.
     /// - Every device boxes children by their triangles ([`Self::tight_boxes`]) and
     ///   keeps nodes of few rays but many triangles in the loop
-    ///   ([`Self::cost_terminal`]): both only remove work (ray ids that leave sooner,
+    ///   ([`Self::terminal_cost`]): both only remove work (ray ids that leave sooner,
     ///   fewer intersection tests) for one fill and a few atomics per tile. On
     ///   lavapipe, 512² frames, together: the sea of `waves` 128–156 → 80–86 ms
     ///   (primary) and 92–94 → 61–65 ms (shadow), `swarm` 186–194 → 127–134 and 155 →
@@ -152,7 +170,8 @@ impl PdacrtParams {
         p.batch = p.batch.min(shared / 52);
         p.split = LevelSplit::PrefixSums;
         p.tight_boxes = true;
-        p.cost_terminal = true;
+        p.terminal_cost = TERMINAL_COST;
+        p.terminal_cost_min_rays = TERMINAL_COST_MIN_RAYS;
         if gpu.info().capabilities.buffer_int64_atomics {
             p.flush_reduce = FlushReduce::AtomicMin;
         }
@@ -169,15 +188,23 @@ impl PdacrtParams {
         p
     }
 
-    /// Whether a node of `tris` triangles and `rays` rays is terminal by its size
-    /// (children.comp decides the same for every other node).
-    pub fn is_terminal(&self, tris: u32, rays: u32) -> bool {
-        let few_rays = if self.cost_terminal {
-            (rays as f32) * (tris as f32) < (self.alpha as f32) * (self.beta as f32)
+    /// The budget of [`Self::terminal_cost`] on a level of `level_rays` ray ids (0: the
+    /// paper's β test).
+    pub fn terminal_cost_at(&self, level_rays: u32) -> u32 {
+        if level_rays >= self.terminal_cost_min_rays {
+            self.terminal_cost
         } else {
-            rays < self.beta
-        };
-        tris < self.alpha || few_rays
+            0
+        }
+    }
+
+    /// Whether a node of `tris` triangles and `rays` rays, on a level of `level_rays`
+    /// ray ids, is terminal by its size (children.comp decides the same for every
+    /// other node).
+    pub fn is_terminal(&self, tris: u32, rays: u32, level_rays: u32) -> bool {
+        let budget = self.terminal_cost_at(level_rays);
+        let costly = budget != 0 && (rays as f32) * (tris as f32) >= budget as f32;
+        tris < self.alpha || (rays < self.beta && !costly)
     }
 
     /// Rays per terminal segment at most: larger terminal nodes are split so that one
