@@ -206,7 +206,14 @@ pub fn render_frames(
             let changed = animated.advance(&mut scene, t, next);
             t = next;
             changed_triangles = move_triangles(&mut triangles, &scene, &changed);
-            tracer.borrow_mut().current = k;
+            {
+                // Where nothing moved, the tracer already holds this frame's geometry.
+                let mut shared = tracer.borrow_mut();
+                shared.current = k;
+                if changed_triangles == 0 {
+                    shared.holds = k;
+                }
+            }
             next_frame(integrator.as_mut(), &scene, &triangles, &changed, options)?;
             // The CPU integrators trace without it: the AOVs still need it moved.
             SharedTracer(tracer.clone()).update_geometry(&triangles, &changed)?;
@@ -345,10 +352,17 @@ impl Tracer for SharedTracer {
         query: Query,
         after: &[&TimelinePoint],
     ) -> vk::Result<TimelinePoint> {
-        self.0
-            .borrow_mut()
-            .tracer
-            .trace(rays, hits, ray_count, query, after)
+        let mut shared = self.0.borrow_mut();
+        // An integrator that traces in `set_frame` (the light vertex cache's prepass)
+        // must move the geometry first: rays of frame k against frame j's triangles
+        // would render a pose that never was.
+        if shared.holds != shared.current {
+            return Err(vk::VkError::Usage(format!(
+                "frame {}: traced against frame {}'s geometry (set_frame traced before moving the tracer)",
+                shared.current, shared.holds
+            )));
+        }
+        shared.tracer.trace(rays, hits, ray_count, query, after)
     }
     fn level_stats(&self) -> Option<&pdacrt::TraceStats> {
         // The statistics live behind the shared borrow; the sequence does not report them.
