@@ -6,10 +6,6 @@ use serde::Serialize;
 use super::types::MAX_IDS;
 use crate::vk::{self, Gpu};
 
-/// The default [`PdacrtParams::terminal_cost`], in ray-triangle tests: α·β of CPU
-/// devices, the most a node below both thresholds costs. Larger budgets (2¹⁶–2²⁰) gave
-/// back most of the gain on the sea's shadow rays (docs/PERFORMANCE.md).
-const TERMINAL_COST: u32 = 64 * 256;
 /// The default [`PdacrtParams::terminal_cost_min_rays`]: on lavapipe the budget on
 /// every level cost a 64² batch of `lamps`' path rays 1.3–1.6× its time (few nodes
 /// per deep level), and from 2¹⁴ or 2¹⁶ ids on it cost nothing there and kept the
@@ -170,7 +166,6 @@ impl PdacrtParams {
         p.batch = p.batch.min(shared / 52);
         p.split = LevelSplit::PrefixSums;
         p.tight_boxes = true;
-        p.terminal_cost = TERMINAL_COST;
         p.terminal_cost_min_rays = TERMINAL_COST_MIN_RAYS;
         if gpu.info().capabilities.buffer_int64_atomics {
             p.flush_reduce = FlushReduce::AtomicMin;
@@ -185,6 +180,10 @@ impl PdacrtParams {
         } else {
             p.intersect_workgroup = 128;
         }
+        // The cost rule's budget is α·β, the most a node below both thresholds costs
+        // (larger budgets, 2¹⁶–2²⁰ tests on lavapipe, gave back most of the gain on the
+        // sea's shadow rays: docs/PERFORMANCE.md).
+        p.terminal_cost = p.alpha * p.beta;
         p
     }
 
