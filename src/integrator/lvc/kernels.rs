@@ -26,7 +26,6 @@ pub struct Kernels {
     pub camera_accumulate: ComputePipeline,
     pub finish: ComputePipeline,
     /// `pt`'s: the material key of each live path's hit and the identity order.
-    pub sort_keys: ComputePipeline,
     /// `pt`'s: survivors' rays and ids to the front of the other list.
     pub gather: ComputePipeline,
 }
@@ -68,7 +67,6 @@ impl Kernels {
             camera_bounce: lvc(shaders::INTEGRATOR_LVC_CAMERA_BOUNCE, 9)?,
             camera_accumulate: lvc(shaders::INTEGRATOR_LVC_CAMERA_ACCUMULATE, 7)?,
             finish: lvc(shaders::INTEGRATOR_LVC_FINISH, 5)?,
-            sort_keys: pt(shaders::INTEGRATOR_PT_SORT_KEYS, 5)?,
             gather: pt(shaders::INTEGRATOR_PT_GATHER, 5)?,
         })
     }

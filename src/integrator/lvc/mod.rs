@@ -65,7 +65,7 @@ use crate::vk::{self, Buffer, Gpu, Recorder};
 use self::cache::LightCache;
 use self::camera_pass::{trace_camera_paths, CameraRange, CameraTargets, Streams};
 use self::gpu::{LvcConstants, FLAG_SORTED};
-use self::kernels::{pt_params, Kernels};
+use self::kernels::Kernels;
 use self::light_pass::trace_light_paths;
 use self::light_tracing::splat_cache;
 pub use self::observe::{ChunkView, NoObserver, Observer};
@@ -167,31 +167,11 @@ impl Shared<'_> {
     /// keys (type << 24 | id, misses last) and the ids that the shading kernels read
     /// their items through. Ids move; ray data stays.
     pub fn record_sort(&self, rec: &mut Recorder, n: u32) -> vk::Result<()> {
-        let Some((sort, scratch)) = &self.wave.sorter else {
-            return Ok(());
-        };
-        let (s, w) = (self.scene, self.wave);
-        rec.dispatch_items(
-            &self.kernels.sort_keys,
-            &[
-                (&w.hits).into(),
-                (&s.triangle_material).into(),
-                (&s.materials).into(),
-                (&w.keys).into(),
-                (&w.order).into(),
-            ],
-            &pt_params(n),
-            n as u64,
-        )?;
-        rec.barrier();
-        sort.record(
-            rec,
-            n,
-            (&w.keys).into(),
-            Some((&w.order).into()),
-            0..32,
-            scratch,
-        )
+        let w = self.wave;
+        match &w.sorter {
+            Some(sorter) => sorter.record(rec, n, &w.hits, self.scene, &w.keys, &w.order),
+            None => Ok(()),
+        }
     }
 }
 

@@ -4,8 +4,9 @@
 //! with one ray per cache vertex of a batch.
 
 use super::gpu::{Contribution, LvcVertex, WalkState};
+use crate::integrator::pt::MaterialSort;
 use crate::primitives::compact::Kept;
-use crate::primitives::{Compact, RadixSort, SortScratch, Tuning};
+use crate::primitives::{Compact, Tuning};
 use crate::trace::{Hit, Ray};
 use crate::vk::{self, Buffer, Gpu, MemoryKind, Recorder};
 
@@ -48,7 +49,7 @@ pub struct Wavefront {
     pub counts_readback: Buffer,
     pub compact: Compact,
     compact_scratch: Buffer,
-    pub sorter: Option<(RadixSort, SortScratch)>,
+    pub(crate) sorter: Option<MaterialSort>,
 }
 
 impl Wavefront {
@@ -63,13 +64,9 @@ impl Wavefront {
             compact.scratch_bytes(c as u32),
             MemoryKind::Device,
         )?;
-        let sorter = if sort {
-            let sort = RadixSort::new(gpu, &tuning)?;
-            let scratch = sort.alloc_scratch(gpu, c as u32)?;
-            Some((sort, scratch))
-        } else {
-            None
-        };
+        let sorter = sort
+            .then(|| MaterialSort::new(gpu, &tuning, c as u32))
+            .transpose()?;
         Ok(Self {
             capacity: c as u32,
             shadow_capacity: shadow as u32,

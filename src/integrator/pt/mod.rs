@@ -33,6 +33,7 @@
 mod frame;
 pub mod gpu;
 pub mod lights;
+mod material_sort;
 pub mod materials;
 
 use std::sync::Arc;
@@ -42,11 +43,12 @@ use glam::Vec3;
 
 use self::gpu::{PathState, PtMaterial, PtParams, FLAG_BSDF, FLAG_NEE, FLAG_NORMALS, FLAG_SORTED};
 pub use self::lights::LightTable;
+pub(crate) use self::material_sort::MaterialSort;
 use super::{check_film_size, Integrator, IntegratorError, IntegratorStats, SceneFrame};
 use crate::bsdf::BsdfParams;
 use crate::film::{DeviceFilm, FilmSums};
 use crate::primitives::compact::Kept;
-use crate::primitives::{Compact, RadixSort, Tuning};
+use crate::primitives::{Compact, Tuning};
 use crate::scene::{CameraFrame, Scene};
 use crate::shaders;
 use crate::trace::{GpuTriangle, Hit, Query, Ray, Tracer};
@@ -196,7 +198,6 @@ impl PtOutput {
 
 struct Pipelines {
     generate: ComputePipeline,
-    sort_keys: ComputePipeline,
     shade: ComputePipeline,
     nee_accumulate: ComputePipeline,
     gather: ComputePipeline,
@@ -216,7 +217,6 @@ impl Pipelines {
         };
         Ok(Self {
             generate: make(shaders::INTEGRATOR_PT_GENERATE, 3)?,
-            sort_keys: make(shaders::INTEGRATOR_PT_SORT_KEYS, 5)?,
             shade: make(shaders::INTEGRATOR_PT_SHADE, 16)?,
             nee_accumulate: make(shaders::INTEGRATOR_PT_NEE_ACCUMULATE, 4)?,
             gather: make(shaders::INTEGRATOR_PT_GATHER, 5)?,
@@ -283,7 +283,7 @@ struct Wavefront {
     count: Buffer,
     compact: Compact,
     compact_scratch: Buffer,
-    sorter: Option<(RadixSort, crate::primitives::radix_sort::SortScratch)>,
+    sorter: Option<MaterialSort>,
 }
 
 impl Wavefront {
@@ -295,13 +295,9 @@ impl Wavefront {
             compact.scratch_bytes(c as u32),
             MemoryKind::Device,
         )?;
-        let sorter = if sort {
-            let sort = RadixSort::new(gpu, &tuning)?;
-            let scratch = sort.alloc_scratch(gpu, c as u32)?;
-            Some((sort, scratch))
-        } else {
-            None
-        };
+        let sorter = sort
+            .then(|| MaterialSort::new(gpu, &tuning, c as u32))
+            .transpose()?;
         Ok(Self {
             rays: [
                 gpu.zeroed::<Ray>("pt-rays-0", c)?,
@@ -480,28 +476,8 @@ impl<'t> PtIntegrator<'t> {
         self.rays_traced += n as u64;
 
         let mut rec = gpu.recorder(StreamKind::Main)?;
-        if let Some((sort, scratch)) = &w.sorter {
-            rec.dispatch_items(
-                &pl.sort_keys,
-                &[
-                    (&w.hits).into(),
-                    (&s.triangle_material).into(),
-                    (&s.materials).into(),
-                    (&w.keys).into(),
-                    (&w.order).into(),
-                ],
-                params,
-                n as u64,
-            )?;
-            rec.barrier();
-            sort.record(
-                &mut rec,
-                n,
-                (&w.keys).into(),
-                Some((&w.order).into()),
-                0..32,
-                scratch,
-            )?;
+        if let Some(sorter) = &w.sorter {
+            sorter.record(&mut rec, n, &w.hits, s, &w.keys, &w.order)?;
         }
         rec.dispatch_items(
             &pl.shade,
