@@ -55,6 +55,16 @@ pub struct IntegratorStats {
     pub counters: BTreeMap<String, u64>,
 }
 
+impl IntegratorStats {
+    /// `rays_traced` and the named counts, as an integrator lists them.
+    pub fn with_counters(rays_traced: u64, counters: &[(&str, u64)]) -> Self {
+        Self {
+            rays_traced,
+            counters: counters.iter().map(|(k, v)| (k.to_string(), *v)).collect(),
+        }
+    }
+}
+
 /// An image an integrator writes beside the render (e.g. one per BPT technique).
 #[derive(Clone, Debug, PartialEq)]
 pub struct NamedImage {

@@ -191,10 +191,7 @@ impl Integrator for BptIntegrator {
             ("basic_contributions", c.basic_contributions),
             ("non_finite_dropped", c.non_finite),
         ];
-        IntegratorStats {
-            rays_traced: c.rays,
-            counters: counters.iter().map(|(k, v)| (k.to_string(), *v)).collect(),
-        }
+        IntegratorStats::with_counters(c.rays, &counters)
     }
 
     fn settings(&self) -> Vec<(String, String)> {

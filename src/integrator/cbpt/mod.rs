@@ -402,10 +402,7 @@ impl Integrator for CbptIntegrator {
             ("non_finite_dropped", c.non_finite),
             ("steps", self.times.steps),
         ];
-        IntegratorStats {
-            rays_traced: c.rays,
-            counters: counters.iter().map(|(k, v)| (k.to_string(), *v)).collect(),
-        }
+        IntegratorStats::with_counters(c.rays, &counters)
     }
 
     /// The CPU scene (its BVH built again, as `bpt`'s, and with it the emitter table,

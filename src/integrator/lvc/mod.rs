@@ -492,10 +492,7 @@ impl Integrator for LvcIntegrator<'_> {
             ("non_finite_dropped", kernel[gpu::COUNTER_NON_FINITE] as u64),
             ("splats_clamped", kernel[gpu::COUNTER_CLAMPED] as u64),
         ];
-        IntegratorStats {
-            rays_traced: c.rays,
-            counters: counters.iter().map(|(k, v)| (k.to_string(), *v)).collect(),
-        }
+        IntegratorStats::with_counters(c.rays, &counters)
     }
 
     fn settings(&self) -> Vec<(String, String)> {
