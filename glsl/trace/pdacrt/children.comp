@@ -108,10 +108,8 @@ void main() {
     float extent = ch.box_max[axis] - ch.box_min[axis];
     if (pc.tight != 0u && ch.tri_count != 0u) {
         uint w = 8u * c;
-        ch.box_min.xyz = vec3(from_ordered_bits(bounds.data[w]), from_ordered_bits(bounds.data[w + 1u]),
-                              from_ordered_bits(bounds.data[w + 2u]));
-        ch.box_max.xyz = vec3(from_ordered_bits(~bounds.data[w + 4u]), from_ordered_bits(~bounds.data[w + 5u]),
-                              from_ordered_bits(~bounds.data[w + 6u]));
+        ch.box_min.xyz = child_bounds_min(uvec3(bounds.data[w], bounds.data[w + 1u], bounds.data[w + 2u]));
+        ch.box_max.xyz = child_bounds_max(uvec3(bounds.data[w + 4u], bounds.data[w + 5u], bounds.data[w + 6u]));
         vec3 e = ch.box_max.xyz - ch.box_min.xyz;
         extent = max(e.x, max(e.y, e.z));
     }

@@ -13,6 +13,13 @@
 // scatter_elements.comp ranks the elements within their tile). The first workgroup also
 // writes the zero counts at n (the tile count) that close each array, so the scan's
 // value at n is the array's total.
+//
+// With `tight` set (PdacrtParams::tight_boxes) the two sides are the children's own
+// boxes — their triangles' bounds, which filter_triangles.comp has just written to
+// `bounds` — instead of the halves of the node's box: exactly the boxes children.comp
+// gives the children, padded by eps as the next level pads its node's box. A ray that
+// meets a half but not the triangles in it leaves now instead of one level later, and
+// a side without triangles takes no rays.
 //! variant ranked: RANKED=1
 #include "grid.glsl"
 #include "geometry.glsl"
@@ -32,6 +39,7 @@ struct FilterRaysPush {
     uint ray_offset;
     uint left_base;
     uint right_base;
+    uint tight;  // 1: test against the children's triangle bounds in `bounds`
 };
 layout(push_constant) uniform Push {
     FilterRaysPush pc;
@@ -49,6 +57,7 @@ layout(push_constant) uniform Push {
 #ifdef RANKED
     BUFFER_REF(UintsOutRef, ranks)
 #endif
+    BUFFER_REF(UintsInRef, bounds)
 };
 BUFFER_BINDING(0, restrict readonly, vec4, rays4)
 BUFFER_BINDING(1, restrict readonly, vec4, nodes4)
@@ -62,27 +71,60 @@ BUFFER_BINDING(3, restrict, uint, keys)
 BUFFER_BINDING(4, restrict readonly, uvec2, best)
 #ifdef RANKED
 BUFFER_BINDING(5, restrict writeonly, uint, ranks)
+BUFFER_BINDING(6, restrict readonly, uint, bounds)
+#else
+BUFFER_BINDING(5, restrict readonly, uint, bounds)
 #endif
 
-// The status code of ray `id` against the two halves of the node's box (lines 4–5).
-uint ray_code(uint id, vec3 box_min, vec3 box_max) {
-    uvec2 closest = best.data[BEST_SLOT(pc.ray_offset + id)];
-    if (pc.occlusion != 0u && has_hit(closest)) return CODE_NONE;
+// The two boxes a node's rays are sorted into (line 4), padded by eps; a side without
+// a box takes no rays.
+struct Sides {
+    vec3 lo[2];
+    vec3 hi[2];
+    bool present[2];
+};
+
+// The paper's sides: the halves of the node's box.
+Sides halves(vec3 box_min, vec3 box_max) {
     vec3 lo = box_min - pc.eps;
     vec3 hi = box_max + pc.eps;
     uint axis = split_axis(box_min, box_max);
     bvec3 on_axis = axis_mask(axis);
     float mid = split_position(box_min, box_max, axis);
+    vec3 left_hi = mix(hi, vec3(mid + pc.eps), on_axis);
+    vec3 right_lo = mix(lo, vec3(mid - pc.eps), on_axis);
+    return Sides(vec3[2](lo, right_lo), vec3[2](left_hi, hi), bool[2](true, true));
+}
+
+// Tight sides: the boxes of node `node`'s children (children.comp), padded by eps.
+Sides child_boxes(uint node) {
+    Sides s;
+    for (uint side = 0u; side < 2u; ++side) {
+        uint w = 8u * (2u * node + side);
+        s.present[side] = has_child_bounds(bounds.data[w]);
+        s.lo[side] = child_bounds_min(uvec3(bounds.data[w], bounds.data[w + 1u], bounds.data[w + 2u])) - pc.eps;
+        s.hi[side] = child_bounds_max(uvec3(bounds.data[w + 4u], bounds.data[w + 5u], bounds.data[w + 6u])) + pc.eps;
+    }
+    return s;
+}
+
+Sides node_sides(uint node) {
+    if (pc.tight != 0u) return child_boxes(node);
+    return halves(nodes4.data[3u * node].xyz, nodes4.data[3u * node + 1u].xyz);  // Node.box_min, box_max
+}
+
+// The status code of ray `id` against the node's two sides (lines 4–5).
+uint ray_code(uint id, Sides sides) {
+    uvec2 closest = best.data[BEST_SLOT(pc.ray_offset + id)];
+    if (pc.occlusion != 0u && has_hit(closest)) return CODE_NONE;
     vec4 origin_tmin = rays4.data[2u * (pc.ray_offset + id)];
     vec4 dir_tmax = rays4.data[2u * (pc.ray_offset + id) + 1u];
     Ray r = Ray(origin_tmin.xyz, origin_tmin.w, dir_tmax.xyz, dir_tmax.w);
     float t1 = min(r.tmax, hit_t(closest) + pc.eps);
-    vec3 left_hi = mix(hi, vec3(mid + pc.eps), on_axis);
-    vec3 right_lo = mix(lo, vec3(mid - pc.eps), on_axis);
     bvec3 parallel = equal(r.dir, vec3(0.0));
     vec3 inv = 1.0 / mix(r.dir, vec3(1.0), parallel);
-    bool left = ray_meets_box_inv(r.origin, inv, parallel, r.tmin, t1, lo, left_hi);
-    bool right = ray_meets_box_inv(r.origin, inv, parallel, r.tmin, t1, right_lo, hi);
+    bool left = sides.present[0] && ray_meets_box_inv(r.origin, inv, parallel, r.tmin, t1, sides.lo[0], sides.hi[0]);
+    bool right = sides.present[1] && ray_meets_box_inv(r.origin, inv, parallel, r.tmin, t1, sides.lo[1], sides.hi[1]);
     return (left && right) ? CODE_BOTH : (left ? CODE_LEFT : (right ? CODE_RIGHT : CODE_NONE));
 }
 
@@ -91,13 +133,12 @@ void main() {
     uint tile_index = linear_group_id();
     uvec4 tile = tiles.data[tile_index];
     uint lid = gl_LocalInvocationID.x;
-    vec3 box_min = nodes4.data[3u * tile.x].xyz;      // Node.box_min
-    vec3 box_max = nodes4.data[3u * tile.x + 1u].xyz; // Node.box_max
+    Sides sides = node_sides(tile.x);
     uvec2 counts = uvec2(0u);
     for (uint k = lid; k < tile.z; k += WORKGROUP_SIZE) {
         uint i = tile.y + k;
         uint id = ids.data[i] & ID_MASK;
-        uint code = ray_code(id, box_min, box_max);
+        uint code = ray_code(id, sides);
         ids.data[i] = id | (code << ID_BITS);
         counts += side_flags(code);
     }
@@ -114,7 +155,7 @@ void main() {
     uint i = linear_invocation_id();
     if (i >= pc.n) return;
     uint node = keys.data[i] >> 2;
-    uint code = ray_code(ids.data[i], nodes4.data[3u * node].xyz, nodes4.data[3u * node + 1u].xyz);
+    uint code = ray_code(ids.data[i], node_sides(node));
     keys.data[i] = (node << 2) | code;
 #endif
 }

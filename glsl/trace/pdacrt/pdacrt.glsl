@@ -100,6 +100,21 @@ float from_ordered_bits(uint o) {
     return uintBitsToFloat((o & 0x80000000u) != 0u ? (o & 0x7FFFFFFFu) : ~o);
 }
 
+// A child's tight box (PdacrtParams::tight_boxes) from its eight words in the level's
+// bounds buffer (filter_triangles.comp): min.xyz as order-preserving bits, then ~max.xyz
+// from word 4. `min_x_bits` all ones means that no triangle reached the child.
+bool has_child_bounds(uint min_x_bits) {
+    return min_x_bits != 0xFFFFFFFFu;
+}
+
+vec3 child_bounds_min(uvec3 bits) {
+    return vec3(from_ordered_bits(bits.x), from_ordered_bits(bits.y), from_ordered_bits(bits.z));
+}
+
+vec3 child_bounds_max(uvec3 inverted_bits) {
+    return child_bounds_min(~inverted_bits);
+}
+
 // The chunk's global closest hits (the paper's mints and hitid, Algorithm 1 line 9), one
 // uvec2 per ray: (triangle, ordered_bits(t)). Read as a uint64 it is
 // ordered_bits(t) << 32 | triangle, so one 64-bit atomicMin keeps the smaller t and,

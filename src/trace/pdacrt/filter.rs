@@ -118,6 +118,10 @@ impl PdacrtTracer {
                 &self.kernels.filter_triangles,
             ),
         )?;
+        if tight {
+            // The rays are filtered against the children's boxes the triangles just gave.
+            rec.barrier();
+        }
         let mut bindings: Vec<BufferSlice> = vec![
             rays.into(),
             (&level.nodes).into(),
@@ -126,6 +130,7 @@ impl PdacrtTracer {
             hits.into(),
         ];
         bindings.extend(ranks.as_ref().map(|r| BufferSlice::from(&r.buffer)));
+        bindings.push((&bounds).into());
         rec.dispatch(
             &self.kernels.filter_rays,
             &bindings,
@@ -140,6 +145,7 @@ impl PdacrtTracer {
                 ray_offset,
                 left_base: ray_bases.0,
                 right_base: ray_bases.1,
+                tight: tight as u32,
             },
             groups(
                 level.rays.total,

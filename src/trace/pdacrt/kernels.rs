@@ -36,6 +36,7 @@ pub struct FilterRaysPush {
     pub ray_offset: u32,
     pub left_base: u32,
     pub right_base: u32,
+    pub tight: u32,
 }
 
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -172,7 +173,7 @@ impl Kernels {
                     shaders::TRACE_PDACRT_FILTER_RAYS,
                     shaders::TRACE_PDACRT_FILTER_RAYS__RANKED,
                 ),
-                5 + ranked as u32,
+                6 + ranked as u32, // ranked: the ranks; the bounds
                 size_of::<FilterRaysPush>(),
                 tile_wg,
             )?,
