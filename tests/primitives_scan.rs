@@ -3,7 +3,7 @@
 
 mod common;
 
-use splitray::primitives::{cpu, Scan, ScanKind, Tuning};
+use splitray::primitives::{cpu, scan::SMALL_SCAN_MAX, Scan, ScanKind, Tuning};
 use splitray::vk::{Gpu, MemoryKind, StreamKind};
 
 const SIZES: [usize; 9] = [0, 1, 2, 255, 256, 257, 1000, 65_537, 1_000_003];
@@ -48,7 +48,9 @@ fn scan_matches_cpu_at_awkward_sizes() {
     let tuning = Tuning::for_device(gpu.info());
     println!("variant: {}", tuning.describe());
     let scan = Scan::new(&gpu, &tuning).unwrap();
-    for n in SIZES.into_iter().chain([1 << 22]) {
+    // Both sides of the one-workgroup scan's limit, then the three-pass scan.
+    let limit = SMALL_SCAN_MAX as usize;
+    for n in SIZES.into_iter().chain([limit, limit + 1, 1 << 22]) {
         let data = common::random_u32s(n, n as u64);
         for kind in [ScanKind::Exclusive, ScanKind::Inclusive] {
             assert_eq!(
