@@ -40,6 +40,7 @@ struct FilterRaysPush {
     uint left_base;
     uint right_base;
     uint tight;  // 1: test against the children's triangle bounds in `bounds`
+    uint hits_written;  // 0: no flush has written a closest hit yet, all are "none"
 };
 layout(push_constant) uniform Push {
     FilterRaysPush pc;
@@ -115,7 +116,9 @@ Sides node_sides(uint node) {
 
 // The status code of ray `id` against the node's two sides (lines 4–5).
 uint ray_code(uint id, Sides sides) {
-    uvec2 closest = best.data[BEST_SLOT(pc.ray_offset + id)];
+    // Before the chunk's first flush every closest hit is the initial "none" (all
+    // ones): one gather per ray saved on the levels above it.
+    uvec2 closest = pc.hits_written != 0u ? best.data[BEST_SLOT(pc.ray_offset + id)] : uvec2(0xFFFFFFFFu);
     if (pc.occlusion != 0u && has_hit(closest)) return CODE_NONE;
     vec4 origin_tmin = rays4.data[2u * (pc.ray_offset + id)];
     vec4 dir_tmax = rays4.data[2u * (pc.ray_offset + id) + 1u];

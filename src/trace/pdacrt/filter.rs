@@ -15,12 +15,14 @@ use crate::vk::{self, grid_for, Buffer, BufferSlice, MemoryKind, Recorder, Strea
 
 impl PdacrtTracer {
     /// Filters one level (Algorithm 1 lines 4–6, Algorithm 2) and reads its totals back:
-    /// the loop's one host round trip per level.
+    /// the loop's one host round trip per level. `hits_written`: whether a flush has
+    /// written closest hits for the chunk (before that the ray filter skips reading them).
     pub(super) fn filter_level(
         &mut self,
         level: &Level,
         chunk: &Chunk<'_>,
         depth: u32,
+        hits_written: bool,
     ) -> vk::Result<Filtered> {
         let &Chunk {
             rays,
@@ -146,6 +148,7 @@ impl PdacrtTracer {
                 left_base: ray_bases.0,
                 right_base: ray_bases.1,
                 tight: tight as u32,
+                hits_written: hits_written as u32,
             },
             groups(
                 level.rays.total,
@@ -238,10 +241,9 @@ impl PdacrtTracer {
         )?;
         rec.end_scope()?;
         let done = rec.submit(&[])?;
-        gpu.wait(&done)?;
+        let totals = summary.read_after::<LevelTotals>(&done)?[0];
         self.scratch.retired.clear();
         self.pool.collect();
-        let totals = summary.read::<LevelTotals>()?[0];
         self.pool.give(channels);
         self.pool.give(bounds);
         if let Some((tri_counts, ray_counts)) = counts {

@@ -37,6 +37,7 @@ pub struct FilterRaysPush {
     pub left_base: u32,
     pub right_base: u32,
     pub tight: u32,
+    pub hits_written: u32,
 }
 
 #[derive(Clone, Copy, Pod, Zeroable)]

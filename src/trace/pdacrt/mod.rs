@@ -476,7 +476,7 @@ impl PdacrtTracer {
         depth: u32,
     ) -> vk::Result<Option<Level>> {
         let started = Instant::now();
-        let filtered = self.filter_level(&current, chunk, depth)?;
+        let filtered = self.filter_level(&current, chunk, depth, term.hits_written)?;
         self.stats.host_round_trips += 1;
         let totals = filtered.totals;
         let child_count = current.node_count * 2;

@@ -22,6 +22,9 @@ pub(super) struct TerminalBuffer {
     pub(super) tris: u32,
     pub(super) rays: u32,
     pub(super) segment_count: u32,
+    /// Whether a flush has written closest hits for the chunk yet: until then every
+    /// ray's is "none", and the ray filter need not read them.
+    pub(super) hits_written: bool,
 }
 
 impl TerminalBuffer {
@@ -37,6 +40,7 @@ impl TerminalBuffer {
         self.tris = 0;
         self.rays = 0;
         self.segment_count = 0;
+        self.hits_written = true;
     }
 }
 
@@ -67,6 +71,7 @@ impl PdacrtTracer {
             tris: 0,
             rays: 0,
             segment_count: 0,
+            hits_written: false,
         })
     }
 
@@ -89,11 +94,12 @@ impl PdacrtTracer {
     ) -> vk::Result<()> {
         if tris > term.tri_capacity || rays > term.ray_capacity || segments > term.segment_capacity
         {
-            let bigger = self.new_terminal_buffer(
+            let mut bigger = self.new_terminal_buffer(
                 tris.max(term.tri_capacity),
                 rays.max(term.ray_capacity),
                 segments.max(term.segment_capacity),
             )?;
+            bigger.hits_written = term.hits_written;
             let old = std::mem::replace(term, bigger);
             self.give_terminal(old);
         }
