@@ -180,7 +180,8 @@ pub fn trace_camera_paths(
         rec.barrier();
         w.record_compact(&mut rec, n, &w.alive, &w.kept, &w.count_alive)?;
         w.record_counts_readback(&mut rec);
-        gpu.wait(&rec.submit(&[&occluded])?)?;
+        let counted = rec.submit(&[&occluded])?;
+        gpu.wait(&counted)?;
         hook(
             shared,
             &BounceView {
@@ -191,7 +192,7 @@ pub fn trace_camera_paths(
                 connection_base: push.base,
             },
         )?;
-        let (_, survivors) = w.read_counts(n)?;
+        let (_, survivors) = w.read_counts(n, &counted)?;
         if survivors == 0 {
             break;
         }

@@ -116,8 +116,8 @@ pub fn trace_light_paths(
         )?;
         w.record_compact(&mut rec, n, &w.alive, &w.kept, &w.count_alive)?;
         w.record_counts_readback(&mut rec);
-        gpu.wait(&rec.submit(&[&traced])?)?;
-        let (marked, survivors) = w.read_counts(n)?;
+        let counted = rec.submit(&[&traced])?;
+        let (marked, survivors) = w.read_counts(n, &counted)?;
         outcome.vertices += marked as u64;
         if survivors == 0 {
             break;

@@ -8,7 +8,7 @@ use crate::integrator::pt::MaterialSort;
 use crate::primitives::compact::Kept;
 use crate::primitives::{Compact, Tuning};
 use crate::trace::{Hit, Ray};
-use crate::vk::{self, Buffer, Gpu, MemoryKind, Recorder};
+use crate::vk::{self, Buffer, Gpu, MemoryKind, Recorder, TimelinePoint};
 
 /// Slots the connections' region may start after the direct-lighting slots (it starts
 /// at a storage-buffer offset the device can bind: up to 2 KiB of 32-byte slots).
@@ -128,9 +128,10 @@ impl Wavefront {
         rec.copy(&self.count_alive, 0, &self.counts_readback, 4, 4);
     }
 
-    /// (vertices marked, paths alive) as the last readback left them, each at most `n`.
-    pub fn read_counts(&self, n: u32) -> vk::Result<(u32, u32)> {
-        let c = self.counts_readback.read::<u32>()?;
+    /// (vertices marked, paths alive), each at most `n`, as the readback recorded in the
+    /// submission that ends at `done` left them.
+    pub fn read_counts(&self, n: u32, done: &TimelinePoint) -> vk::Result<(u32, u32)> {
+        let c = self.counts_readback.read_after::<u32>(done)?;
         Ok((c[0].min(n), c[1].min(n)))
     }
 }

@@ -538,8 +538,8 @@ impl<'t> PtIntegrator<'t> {
             (&w.count).into(),
             &w.compact_scratch,
         )?;
-        gpu.wait(&rec.submit(&[&after])?)?;
-        Ok(w.count.read::<u32>()?[0].min(n))
+        let done = rec.submit(&[&after])?;
+        Ok(w.count.read_after::<u32>(&done)?[0].min(n))
     }
 
     /// Moves the `survivors` paths' rays and ids of list `cur` to the front of the
