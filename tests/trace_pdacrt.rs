@@ -395,6 +395,10 @@ fn results_do_not_depend_on_the_parameters() {
             ..deep()
         },
         PdacrtParams {
+            one_dispatch_plan: false,
+            ..PdacrtParams::for_device(&gpu)
+        },
+        PdacrtParams {
             tight_boxes: false,
             terminal_cost: 0,
             ..PdacrtParams::for_device(&gpu)
@@ -416,6 +420,63 @@ fn results_do_not_depend_on_the_parameters() {
         let mut tracer = PdacrtTracer::with_params(&gpu, &soup, params).unwrap();
         let hits = common::trace_hits(&gpu, &mut tracer, &rays, Query::ClosestHit);
         common::assert_same_hits(&hits, &expected, &format!("variant {i}: {params:?}"));
+    }
+    common::assert_clean(&gpu);
+}
+
+/// The one-dispatch level plan (level_plan.comp) builds the hierarchy the four-dispatch
+/// plan builds, level for level, and the same hits: with the device's tiles, with tiles
+/// of three invocations (runs of odd lengths in its workgroup scans) and with one.
+#[test]
+fn the_one_dispatch_plan_builds_the_same_levels() {
+    let gpu = common::gpu();
+    let soup = common::triangle_soup(4000, 41);
+    let rays = common::random_rays(12_000, 42);
+    let expected = brute_force(&gpu, &soup, &rays);
+    let shapes = [
+        PdacrtParams::for_device(&gpu),
+        PdacrtParams {
+            split: LevelSplit::PrefixSums,
+            tight_boxes: true,
+            tile_workgroup: 3,
+            ..deep()
+        },
+        PdacrtParams {
+            split: LevelSplit::PrefixSums,
+            tile_workgroup: 1,
+            ..deep()
+        },
+    ];
+    for base in shapes {
+        let levels = [true, false].map(|one_dispatch_plan| {
+            let params = PdacrtParams {
+                one_dispatch_plan,
+                ..base
+            };
+            let mut tracer = PdacrtTracer::with_params(&gpu, &soup, params).unwrap();
+            let hits = common::trace_hits(&gpu, &mut tracer, &rays, Query::ClosestHit);
+            common::assert_same_hits(&hits, &expected, &format!("{params:?}"));
+            let stats = tracer.stats();
+            stats
+                .levels
+                .iter()
+                .map(|l| {
+                    (
+                        l.chunk,
+                        l.level,
+                        l.nodes,
+                        l.triangles,
+                        l.rays,
+                        l.terminal_nodes,
+                    )
+                })
+                .collect::<Vec<_>>()
+        });
+        assert!(levels[0].len() > 3, "{base:?}: a hierarchy of a few levels");
+        assert_eq!(
+            levels[0], levels[1],
+            "{base:?}: levels with and without the plan"
+        );
     }
     common::assert_clean(&gpu);
 }

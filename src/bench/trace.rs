@@ -184,7 +184,7 @@ impl fmt::Display for TraceReport {
             if let (true, Some(p)) = (r.tracer == "pdacrt", &self.pdacrt_params) {
                 writeln!(
                     f,
-                    "{:<12} α {} β {} η {} λ {} N {} T {}, chunks of {} rays, split {}, flush {:?}, triangles {}, {} boxes",
+                    "{:<12} α {} β {} η {} λ {} N {} T {}, chunks of {} rays, split {}, flush {:?}, triangles {}, {} boxes, level plan in {}",
                     "",
                     p.alpha,
                     p.beta,
@@ -200,7 +200,8 @@ impl fmt::Display for TraceReport {
                     },
                     p.flush_reduce,
                     if p.stage_triangles { "staged" } else { "direct" },
-                    if p.tight_boxes { "tight" } else { "half" }
+                    if p.tight_boxes { "tight" } else { "half" },
+                    if p.one_dispatch_plan { "one dispatch" } else { "four dispatches" }
                 )?;
                 let triangles = (self.triangles * size_of::<GpuTriangle>()) as u64;
                 let working = r.tracer_peak_bytes.saturating_sub(triangles);

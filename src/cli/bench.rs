@@ -232,6 +232,10 @@ enum BenchCommand {
         /// PDACRT: the fewest ray ids a level must hold for --terminal-cost to apply.
         #[arg(long)]
         terminal_cost_min_rays: Option<u32>,
+        /// PDACRT: scan, make the children and total a level in one dispatch where its
+        /// scans fit one workgroup (true), or in four (false); the default is true.
+        #[arg(long)]
+        one_dispatch_plan: Option<bool>,
         /// PDACRT: split levels by `sort` (the paper's sort by status key) or `scan`
         /// (one prefix scan of side flags); the default is `scan`.
         #[arg(long)]
@@ -551,6 +555,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             tight_boxes,
             terminal_cost,
             terminal_cost_min_rays,
+            one_dispatch_plan,
             split,
             flush,
             ..
@@ -570,6 +575,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             params.terminal_cost = terminal_cost.unwrap_or(params.terminal_cost);
             params.terminal_cost_min_rays =
                 terminal_cost_min_rays.unwrap_or(params.terminal_cost_min_rays);
+            params.one_dispatch_plan = one_dispatch_plan.unwrap_or(params.one_dispatch_plan);
             if let Some(split) = split {
                 params.split = match split {
                     SplitArg::Sort => LevelSplit::SortByKey,

@@ -1,8 +1,5 @@
 #version 460
-// The eight totals of a level (next-level nodes, triangle ids, ray ids; terminal nodes,
-// triangle ids, ray ids; next-level triangle and ray tiles): exclusive sum at the last child plus its own value. The host
-// reads these 32 bytes once per level to size the next level (Algorithm 1 line 11) and
-// to decide whether the terminal-node buffer must be flushed first (line 7).
+// The level's totals (level_totals.glsl) by one invocation, after the channels' scan.
 #include "pdacrt.glsl"
 layout(local_size_x = 1) in;
 struct SummaryPush {
@@ -14,15 +11,13 @@ layout(push_constant) uniform Push {
     BUFFER_REF(UintsInRef, channels)
     BUFFER_REF(UintsInRef, offsets)
     BUFFER_REF(UintsOutRef, totals)  // CHANNELS words
-
 };
 BUFFER_BINDING(0, readonly, uint, channels)
 BUFFER_BINDING(1, readonly, uint, offsets)
 BUFFER_BINDING(2, writeonly, uint, totals)
+
+#include "level_totals.glsl"
+
 void main() {
-    uint last = pc.child_count - 1u;
-    for (uint k = 0u; k < CHANNELS; ++k) {
-        totals.data[k] = CHANNEL_OFFSET(offsets.data, pc.stride, k, last)
-                          + channels.data[k * pc.stride + last];
-    }
+    write_level_totals(pc.child_count, pc.stride);
 }

@@ -73,6 +73,25 @@ struct Child {
     uint pad2;
 };
 
+// What children.glsl decides a level's children by (ChildrenPush in kernels.rs).
+struct ChildrenPush {
+    uint child_count;
+    uint stride;
+    uint alpha;
+    uint beta;
+    uint last_level;  // 1: every surviving child is terminal (depth limit)
+    float min_extent;
+    uint max_segment_rays;
+    uint tile_items;
+    // ranked: where each side-flag array starts in `ranks`
+    uint tri_left_base;
+    uint tri_right_base;
+    uint ray_left_base;
+    uint ray_right_base;
+    uint tight;  // 1: the child's box is its triangles' bounds (`bounds`)
+    uint terminal_cost;  // > 0: few rays make a child terminal only below this many tests
+};
+
 // A terminal node in the terminal-node buffer: ranges of its triangle and ray ids.
 struct Segment {
     uint tri_start;

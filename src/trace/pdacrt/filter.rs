@@ -3,15 +3,28 @@
 //! with the one host round trip per level reading back the totals.
 
 use super::kernels::*;
-use super::level::{Filtered, Level, Ranks};
+use super::level::{Filtered, IdList, Level, Ranks};
 use super::types::{LevelTotals, CHANNELS, CHILD_BYTES, TILE_ITEMS};
-use super::{bits_for, Chunk, LevelSplit, PdacrtTracer};
+use super::{bits_for, Chunk, PdacrtTracer};
 use crate::primitives::{
     reduce_by_key::{Reduction, RunOutputs},
+    scan::SMALL_SCAN_MAX,
     ScanKind,
 };
 use crate::trace::Query;
 use crate::vk::{self, grid_for, Buffer, BufferSlice, MemoryKind, Recorder, StreamKind};
+
+/// The buffers filtering a level writes: its side counts (prefix-sum split), its
+/// children, their channels and the channels' scan, and the totals the host reads back
+/// (the children's triangle bounds are the level's own: [`Level::bounds`]).
+struct LevelOutputs {
+    ranks: Option<Ranks>,
+    children: Buffer,
+    channels: Buffer,
+    offsets: Buffer,
+    stride: u32,
+    summary: Buffer,
+}
 
 impl PdacrtTracer {
     /// Filters one level (Algorithm 1 lines 4–6, Algorithm 2) and reads its totals back:
@@ -24,19 +37,37 @@ impl PdacrtTracer {
         depth: u32,
         hits_written: bool,
     ) -> vk::Result<Filtered> {
-        let &Chunk {
-            rays,
-            hits,
-            offset: ray_offset,
-            query,
-            ..
-        } = chunk;
         let gpu = self.gpu.clone();
-        let max_list = level.tris.total.max(level.rays.total);
+        let out = self.take_level_outputs(level)?;
+        let mut rec = gpu.recorder(StreamKind::Main)?;
+        rec.begin_scope("pdacrt-level")?;
+        self.record_filters(&mut rec, level, chunk, &out, hits_written)?;
+        let counts = self.record_plan(&mut rec, level, depth, &out)?;
+        rec.end_scope()?;
+        let done = rec.submit(&[])?;
+        let totals = out.summary.read_after::<LevelTotals>(&done)?[0];
+        self.scratch.retired.clear();
+        self.pool.collect();
+        self.pool.give(out.channels);
+        if let Some((tri_counts, ray_counts)) = counts {
+            self.pool.give(tri_counts);
+            self.pool.give(ray_counts);
+        }
+        Ok(Filtered {
+            totals,
+            children: out.children,
+            offsets: out.offsets,
+            stride: out.stride,
+            ranks: out.ranks,
+        })
+    }
+
+    /// The buffers [`LevelOutputs`] for `level`, and scratch for its scans and sorts.
+    fn take_level_outputs(&mut self, level: &Level) -> vk::Result<LevelOutputs> {
         let child_count = level.node_count * 2;
         // Channel stride: a multiple of 64 words keeps every channel slice aligned.
         let stride = child_count.next_multiple_of(64);
-        let ranked = self.params.split == LevelSplit::PrefixSums;
+        let ranked = self.tiled();
         let ranks = ranked
             .then(|| -> vk::Result<Ranks> {
                 let (t, r) = (level.tris.tiles + 1, level.rays.tiles + 1);
@@ -49,149 +80,172 @@ impl PdacrtTracer {
                 })
             })
             .transpose()?;
-        let scan_n = ranks.as_ref().map_or(0, Ranks::len);
+        let max_list = level.tris.total.max(level.rays.total);
         if !ranked {
             self.sort_scratch(max_list)?;
         }
-        let scanned = if ranked { scan_n } else { max_list };
+        let scanned = ranks.as_ref().map_or(max_list, Ranks::len);
         self.misc_scratch(scanned.max(CHANNELS * stride), !ranked)?;
-        let children = self
-            .pool
-            .take("pdacrt-children", child_count as u64 * CHILD_BYTES)?;
-        let channels = self
-            .pool
-            .take("pdacrt-channels", (stride * CHANNELS) as u64 * 4)?;
-        let offsets = self
-            .pool
-            .take("pdacrt-offsets", (stride * CHANNELS) as u64 * 4)?;
-        let summary = gpu.create_buffer(
-            "pdacrt-level-totals",
-            size_of::<LevelTotals>() as u64,
-            MemoryKind::Readback,
-        )?;
-        // The children's triangle bounds (tight boxes; filter_triangles.comp), 8 words
-        // per child, all ones for "none yet". Without tight boxes the kernels never
-        // touch it: one word stands in.
-        let tight = self.params.tight_boxes;
-        let bounds_bytes = if tight { child_count as u64 * 32 } else { 4 };
-        let bounds = self.pool.take("pdacrt-bounds", bounds_bytes)?;
+        let channel_bytes = (stride * CHANNELS) as u64 * 4;
+        Ok(LevelOutputs {
+            ranks,
+            children: self
+                .pool
+                .take("pdacrt-children", child_count as u64 * CHILD_BYTES)?,
+            channels: self.pool.take("pdacrt-channels", channel_bytes)?,
+            offsets: self.pool.take("pdacrt-offsets", channel_bytes)?,
+            stride,
+            summary: self.gpu.create_buffer(
+                "pdacrt-level-totals",
+                size_of::<LevelTotals>() as u64,
+                MemoryKind::Readback,
+            )?,
+        })
+    }
 
-        let mut rec = gpu.recorder(StreamKind::Main)?;
-        rec.begin_scope("pdacrt-level")?;
-        if tight {
-            rec.fill_range(&bounds, 0, bounds_bytes, u32::MAX)?;
-            rec.barrier();
-        }
-        // Algorithm 2 lines 2–6: status codes (and, ranked, the side flags).
-        let (tri_bases, ray_bases) = Ranks::bases(ranks.as_ref());
+    /// Algorithm 2 lines 2–6: the status codes of the level's triangles, then of its
+    /// rays (and, split by prefix sums, each tile's side counts).
+    fn record_filters(
+        &self,
+        rec: &mut Recorder,
+        level: &Level,
+        chunk: &Chunk<'_>,
+        out: &LevelOutputs,
+        hits_written: bool,
+    ) -> vk::Result<()> {
+        let ranked = out.ranks.is_some();
+        let tight = self.params.tight_boxes;
+        let (tri_bases, ray_bases) = Ranks::bases(out.ranks.as_ref());
+        let ranks = out.ranks.as_ref().map(|r| BufferSlice::from(&r.buffer));
+        // Ranked: one workgroup per tile; sorted: one invocation per id.
+        let groups = |list: &IdList, pipeline: &vk::ComputePipeline| {
+            if ranked {
+                grid_for(&self.gpu, list.tiles as u64, 1)
+            } else {
+                grid_for(&self.gpu, list.total as u64, pipeline.workgroup_size())
+            }
+        };
+        let dispatched = |list: &IdList| if ranked { list.tiles } else { list.total };
         let mut bindings: Vec<BufferSlice> = vec![
             (&self.triangles).into(),
             (&level.nodes).into(),
             (&level.tris.ids).into(),
             (&level.tris.owner).into(),
         ];
-        bindings.extend(ranks.as_ref().map(|r| BufferSlice::from(&r.buffer)));
-        bindings.push((&bounds).into());
-        // Ranked: one workgroup per tile; sorted: one invocation per id.
-        let groups = |items: u32, tiles: u32, pipeline: &vk::ComputePipeline| {
-            if ranked {
-                grid_for(&gpu, tiles as u64, 1)
-            } else {
-                grid_for(&gpu, items as u64, pipeline.workgroup_size())
-            }
-        };
+        bindings.extend(ranks);
+        bindings.push((&level.bounds).into());
         rec.dispatch(
             &self.kernels.filter_triangles,
             &bindings,
             &FilterTrianglesPush {
-                n: if ranked {
-                    level.tris.tiles
-                } else {
-                    level.tris.total
-                },
+                n: dispatched(&level.tris),
                 eps: self.eps,
                 left_base: tri_bases.0,
                 right_base: tri_bases.1,
                 tight: tight as u32,
             },
-            groups(
-                level.tris.total,
-                level.tris.tiles,
-                &self.kernels.filter_triangles,
-            ),
+            groups(&level.tris, &self.kernels.filter_triangles),
         )?;
         if tight {
             // The rays are filtered against the children's boxes the triangles just gave.
             rec.barrier();
         }
         let mut bindings: Vec<BufferSlice> = vec![
-            rays.into(),
+            chunk.rays.into(),
             (&level.nodes).into(),
             (&level.rays.ids).into(),
             (&level.rays.owner).into(),
-            hits.into(),
+            chunk.hits.into(),
         ];
-        bindings.extend(ranks.as_ref().map(|r| BufferSlice::from(&r.buffer)));
-        bindings.push((&bounds).into());
+        bindings.extend(ranks);
+        bindings.push((&level.bounds).into());
         rec.dispatch(
             &self.kernels.filter_rays,
             &bindings,
             &FilterRaysPush {
-                n: if ranked {
-                    level.rays.tiles
-                } else {
-                    level.rays.total
-                },
+                n: dispatched(&level.rays),
                 eps: self.eps,
-                occlusion: (query == Query::Occlusion) as u32,
-                ray_offset,
+                occlusion: (chunk.query == Query::Occlusion) as u32,
+                ray_offset: chunk.offset,
                 left_base: ray_bases.0,
                 right_base: ray_bases.1,
                 tight: tight as u32,
                 hits_written: hits_written as u32,
             },
-            groups(
-                level.rays.total,
-                level.rays.tiles,
-                &self.kernels.filter_rays,
-            ),
+            groups(&level.rays, &self.kernels.filter_rays),
         )?;
-        let min_extent = self.eps * 4.0;
+        rec.barrier();
+        Ok(())
+    }
+
+    /// Algorithm 2 lines 7–15 and Algorithm 1 lines 6 and 11, after the filters: the
+    /// split (ranked: the scan of the side counts; sorted: sorting and counting each
+    /// list), the children, the scan of their channels into positions and the level's
+    /// totals. Sorted, returns the per-node count tables (the caller frees them).
+    fn record_plan(
+        &mut self,
+        rec: &mut Recorder,
+        level: &Level,
+        depth: u32,
+        out: &LevelOutputs,
+    ) -> vk::Result<Option<(Buffer, Buffer)>> {
+        let child_count = level.node_count * 2;
+        let (tri_bases, ray_bases) = Ranks::bases(out.ranks.as_ref());
         let push = ChildrenPush {
             child_count,
-            stride,
+            stride: out.stride,
             alpha: self.params.alpha,
             beta: self.params.beta,
             last_level: (depth + 1 >= self.params.max_depth) as u32,
-            min_extent,
+            min_extent: self.eps * 4.0,
             max_segment_rays: self.params.max_segment_rays(),
             tile_items: TILE_ITEMS,
             tri_left_base: tri_bases.0,
             tri_right_base: tri_bases.1,
             ray_left_base: ray_bases.0,
             ray_right_base: ray_bases.1,
-            tight: tight as u32,
+            tight: self.params.tight_boxes as u32,
             terminal_cost: self.params.terminal_cost_at(level.rays.total),
         };
-        let counts = match &ranks {
+        let misc = self.scratch.misc.as_ref().unwrap();
+        let channel_words = CHANNELS * out.stride;
+        let counts = match &out.ranks {
             Some(ranks) => {
-                rec.barrier();
+                let all = (&ranks.buffer).into();
+                if self.params.one_dispatch_plan && ranks.len().max(channel_words) <= SMALL_SCAN_MAX
+                {
+                    rec.dispatch(
+                        &self.kernels.level_plan,
+                        &[
+                            (&level.nodes).into(),
+                            all,
+                            (&out.children).into(),
+                            (&out.channels).into(),
+                            (&level.bounds).into(),
+                            (&out.offsets).into(),
+                            (&out.summary).into(),
+                        ],
+                        &LevelPlanPush {
+                            children: push,
+                            ranks_len: ranks.len(),
+                        },
+                        [1, 1, 1],
+                    )?;
+                    return Ok(None);
+                }
                 // Every tile-count array in one exclusive scan: each array's ranks come
                 // out offset by the arrays before it, which cancels in every use (a
                 // child's size and an element's offset are differences of ranks).
-                let misc = self.scratch.misc.as_ref().unwrap();
-                let all = (&ranks.buffer).into();
                 self.scan
-                    .record(&mut rec, scan_n, all, all, ScanKind::Exclusive, misc)?;
-                // Algorithm 2 lines 13–15 and Algorithm 1 line 6.
+                    .record(rec, ranks.len(), all, all, ScanKind::Exclusive, misc)?;
                 rec.dispatch_items(
                     &self.kernels.children,
                     &[
                         (&level.nodes).into(),
-                        (&ranks.buffer).into(),
-                        (&children).into(),
-                        (&channels).into(),
-                        (&bounds).into(),
+                        all,
+                        (&out.children).into(),
+                        (&out.channels).into(),
+                        (&level.bounds).into(),
                     ],
                     &push,
                     child_count as u64,
@@ -199,16 +253,16 @@ impl PdacrtTracer {
                 None
             }
             None => {
-                let counts = self.record_sort_split(&mut rec, level)?;
+                let counts = self.record_sort_split(rec, level)?;
                 rec.dispatch_items(
                     &self.kernels.children,
                     &[
                         (&level.nodes).into(),
                         (&counts.0).into(),
                         (&counts.1).into(),
-                        (&children).into(),
-                        (&channels).into(),
-                        (&bounds).into(),
+                        (&out.children).into(),
+                        (&out.channels).into(),
+                        (&level.bounds).into(),
                     ],
                     &push,
                     child_count as u64,
@@ -223,40 +277,27 @@ impl PdacrtTracer {
         // `stride`), which the readers subtract (channel_offset in pdacrt.glsl).
         let misc = self.scratch.misc.as_ref().unwrap();
         self.scan.record(
-            &mut rec,
-            CHANNELS * stride,
-            (&channels).into(),
-            (&offsets).into(),
+            rec,
+            channel_words,
+            (&out.channels).into(),
+            (&out.offsets).into(),
             ScanKind::Exclusive,
             misc,
         )?;
         rec.dispatch(
             &self.kernels.level_summary,
-            &[(&channels).into(), (&offsets).into(), (&summary).into()],
+            &[
+                (&out.channels).into(),
+                (&out.offsets).into(),
+                (&out.summary).into(),
+            ],
             &SummaryPush {
                 child_count,
-                stride,
+                stride: out.stride,
             },
             [1, 1, 1],
         )?;
-        rec.end_scope()?;
-        let done = rec.submit(&[])?;
-        let totals = summary.read_after::<LevelTotals>(&done)?[0];
-        self.scratch.retired.clear();
-        self.pool.collect();
-        self.pool.give(channels);
-        self.pool.give(bounds);
-        if let Some((tri_counts, ray_counts)) = counts {
-            self.pool.give(tri_counts);
-            self.pool.give(ray_counts);
-        }
-        Ok(Filtered {
-            totals,
-            children,
-            offsets,
-            stride,
-            ranks,
-        })
+        Ok(counts)
     }
 
     /// The paper's split ([`LevelSplit::SortByKey`]): sorts each list by status key

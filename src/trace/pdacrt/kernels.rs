@@ -74,6 +74,14 @@ pub struct ChildrenPush {
     pub terminal_cost: u32,
 }
 
+/// level_plan.comp's push: the children's, and the words of the side-count arrays.
+#[derive(Clone, Copy, Pod, Zeroable)]
+#[repr(C)]
+pub struct LevelPlanPush {
+    pub children: ChildrenPush,
+    pub ranks_len: u32,
+}
+
 #[derive(Clone, Copy, Pod, Zeroable)]
 #[repr(C)]
 pub struct SummaryPush {
@@ -126,6 +134,7 @@ pub struct Kernels {
     pub child_counts: ComputePipeline,
     pub children: ComputePipeline,
     pub level_summary: ComputePipeline,
+    pub level_plan: ComputePipeline,
     pub write_nodes: ComputePipeline,
     pub scatter: ComputePipeline,
     pub segmented_intersect: ComputePipeline,
@@ -198,6 +207,14 @@ impl Kernels {
                 3,
                 size_of::<SummaryPush>(),
                 &[],
+            )?,
+            // One subgroup on CPU devices, like the tile kernels: lavapipe switches
+            // between a workgroup's subgroups at every barrier.
+            level_plan: make(
+                shaders::TRACE_PDACRT_LEVEL_PLAN,
+                7,
+                size_of::<LevelPlanPush>(),
+                &[params.tile_workgroup],
             )?,
             write_nodes: make(
                 pick(

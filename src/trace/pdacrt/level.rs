@@ -10,6 +10,44 @@ pub(super) struct Level {
     pub(super) node_count: u32,
     pub(super) tris: IdList,
     pub(super) rays: IdList,
+    /// The children's triangle bounds with tight boxes (filter_triangles.comp): 8 words
+    /// per child, all ones ("none yet") when the level is made — filled in the
+    /// submission that writes the level, so filtering it needs no fill and barrier of
+    /// its own. Without tight boxes the kernels never touch it: one word stands in.
+    pub(super) bounds: Buffer,
+}
+
+impl Level {
+    /// Bytes of the bounds of a level of `node_count` nodes.
+    pub(super) fn bounds_bytes(node_count: u32, tight_boxes: bool) -> u64 {
+        if tight_boxes {
+            node_count as u64 * 2 * 32
+        } else {
+            4
+        }
+    }
+
+    /// Records the fill that readies the bounds ("none yet"), when they are used; the
+    /// caller's barrier orders it before the filters.
+    pub(super) fn record_bounds_fill(
+        &self,
+        rec: &mut vk::Recorder,
+        tight_boxes: bool,
+    ) -> vk::Result<()> {
+        if tight_boxes {
+            let bytes = Self::bounds_bytes(self.node_count, true);
+            rec.fill_range(&self.bounds, 0, bytes, u32::MAX)?;
+        }
+        Ok(())
+    }
+
+    /// Returns the level's buffers to the pool.
+    pub(super) fn give(self, pool: &mut BufferPool) {
+        self.tris.give(pool);
+        self.rays.give(pool);
+        pool.give(self.nodes);
+        pool.give(self.bounds);
+    }
 }
 
 /// One of a level's two id lists and which node owns each id.

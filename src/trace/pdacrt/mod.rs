@@ -439,13 +439,16 @@ impl PdacrtTracer {
         };
         let pool = &mut self.pool;
         let tiles = |count: u32| tiled.then(|| count.div_ceil(TILE_ITEMS));
+        let tight = self.params.tight_boxes;
         let level = Level {
             nodes: pool.take("pdacrt-nodes", size_of::<Node>() as u64)?,
             node_count: 1,
             tris: IdList::take(pool, ListKind::Triangles, tris, tiles(tris), false)?,
             rays: IdList::take(pool, ListKind::Rays, n, tiles(n), false)?,
+            bounds: pool.take("pdacrt-bounds", Level::bounds_bytes(1, tight))?,
         };
         rec.update(&level.nodes, 0, &[root])?;
+        level.record_bounds_fill(rec, tight)?;
         for (ids, owner, count) in [
             (&level.tris.ids, &level.tris.owner, tris),
             (&level.rays.ids, &level.rays.owner, n),
@@ -498,6 +501,7 @@ impl PdacrtTracer {
         child_count: u32,
     ) -> vk::Result<(Option<Level>, Buffer)> {
         let tiled = self.tiled();
+        let tight = self.params.tight_boxes;
         let pool = &mut self.pool;
         // Lines 11–15 (recorded by record_write_and_scatter): the next level's lists.
         // Taken while nothing is in flight (filter_level waited), so the buffers the pool
@@ -529,6 +533,10 @@ impl PdacrtTracer {
                     node_count: totals.next_nodes,
                     tris,
                     rays,
+                    bounds: pool.take_while_idle(
+                        "pdacrt-bounds",
+                        Level::bounds_bytes(totals.next_nodes, tight),
+                    )?,
                 })
             })
             .transpose()?;
@@ -549,6 +557,10 @@ impl PdacrtTracer {
         term: &TerminalBuffer,
     ) -> vk::Result<()> {
         let mut rec = self.gpu.recorder(StreamKind::Main)?;
+        if let Some(next) = next {
+            // Ordered before the next level's filters by the barriers below.
+            next.record_bounds_fill(&mut rec, self.params.tight_boxes)?;
+        }
         let empty = &term.segments; // bound where a list is empty; never written then
         let next = NextBuffers::new(next, empty);
         let child_count = current.node_count * 2;
@@ -699,9 +711,8 @@ impl PdacrtTracer {
     /// Returns a finished level's buffers, and what filtering and routing it left, to
     /// the pool.
     fn give_level(&mut self, current: Level, filtered: Filtered, routes: Buffer) {
-        current.tris.give(&mut self.pool);
-        current.rays.give(&mut self.pool);
-        for b in [current.nodes, filtered.children, filtered.offsets, routes] {
+        current.give(&mut self.pool);
+        for b in [filtered.children, filtered.offsets, routes] {
             self.pool.give(b);
         }
         if let Some(ranks) = filtered.ranks {

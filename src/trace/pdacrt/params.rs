@@ -97,6 +97,13 @@ pub struct PdacrtParams {
     /// level of many rays the nodes the budget keeps in the loop ride along almost for
     /// free, while on a small batch's deep levels a few such nodes pay whole levels.
     pub terminal_cost_min_rays: u32,
+    /// With [`LevelSplit::PrefixSums`], where a level's two scans (the tiles' side
+    /// counts, the children's channels) hold at most
+    /// [`SMALL_SCAN_MAX`](crate::primitives::scan::SMALL_SCAN_MAX) words each, one
+    /// dispatch of one workgroup scans the side counts, makes the children, scans their
+    /// channels and writes the totals (level_plan.comp) instead of four dispatches with
+    /// barriers between them. The hierarchy and the hits are the same either way.
+    pub one_dispatch_plan: bool,
 }
 
 impl Default for PdacrtParams {
@@ -117,6 +124,7 @@ impl Default for PdacrtParams {
             tight_boxes: false,
             terminal_cost: 0,
             terminal_cost_min_rays: 0,
+            one_dispatch_plan: true,
         }
     }
 }
