@@ -426,7 +426,8 @@ fn results_do_not_depend_on_the_parameters() {
 
 /// The one-dispatch level plan (level_plan.comp) builds the hierarchy the four-dispatch
 /// plan builds, level for level, and the same hits: with the device's tiles, with tiles
-/// of three invocations (runs of odd lengths in its workgroup scans) and with one.
+/// of three invocations and with one (on CPU devices the plan's workgroup is the
+/// tiles', so its workgroup scans see runs of odd lengths too).
 #[test]
 fn the_one_dispatch_plan_builds_the_same_levels() {
     let gpu = common::gpu();

@@ -7,6 +7,8 @@ use crate::shaders;
 use crate::vk::{self, ComputePipeline, Gpu};
 
 const WORKGROUP: u32 = 64;
+/// Invocations of level_plan.comp's one workgroup on GPUs.
+const PLAN_WORKGROUP_GPU: u32 = 256;
 
 #[derive(Clone, Copy, Pod, Zeroable)]
 #[repr(C)]
@@ -208,13 +210,18 @@ impl Kernels {
                 size_of::<SummaryPush>(),
                 &[],
             )?,
-            // One subgroup on CPU devices, like the tile kernels: lavapipe switches
-            // between a workgroup's subgroups at every barrier.
+            // One subgroup on CPU devices, like the tile kernels (lavapipe switches
+            // between a workgroup's subgroups at every barrier); 256 invocations on
+            // GPUs, so that a 16K-word scan is 64 items per invocation, not 256.
             level_plan: make(
                 shaders::TRACE_PDACRT_LEVEL_PLAN,
                 7,
                 size_of::<LevelPlanPush>(),
-                &[params.tile_workgroup],
+                &[if gpu.info().is_cpu() {
+                    params.tile_workgroup
+                } else {
+                    PLAN_WORKGROUP_GPU
+                }],
             )?,
             write_nodes: make(
                 pick(
