@@ -209,6 +209,8 @@ impl PdacrtTracer {
         };
         let misc = self.scratch.misc.as_ref().unwrap();
         let channel_words = CHANNELS * out.stride;
+        // The split: ranked, the scan of the side counts (or all of the plan in one
+        // dispatch); sorted, the sort and the per-node count tables.
         let counts = match &out.ranks {
             Some(ranks) => {
                 let all = (&ranks.buffer).into();
@@ -238,38 +240,25 @@ impl PdacrtTracer {
                 // child's size and an element's offset are differences of ranks).
                 self.scan
                     .record(rec, ranks.len(), all, all, ScanKind::Exclusive, misc)?;
-                rec.dispatch_items(
-                    &self.kernels.children,
-                    &[
-                        (&level.nodes).into(),
-                        all,
-                        (&out.children).into(),
-                        (&out.channels).into(),
-                        (&level.bounds).into(),
-                    ],
-                    &push,
-                    child_count as u64,
-                )?;
                 None
             }
-            None => {
-                let counts = self.record_sort_split(rec, level)?;
-                rec.dispatch_items(
-                    &self.kernels.children,
-                    &[
-                        (&level.nodes).into(),
-                        (&counts.0).into(),
-                        (&counts.1).into(),
-                        (&out.children).into(),
-                        (&out.channels).into(),
-                        (&level.bounds).into(),
-                    ],
-                    &push,
-                    child_count as u64,
-                )?;
-                Some(counts)
-            }
+            None => Some(self.record_sort_split(rec, level)?),
         };
+        // The children read the split's tables: the scanned side counts, or the
+        // triangle and ray count tables.
+        let mut bindings: Vec<BufferSlice> = vec![(&level.nodes).into()];
+        match &counts {
+            Some((tri_counts, ray_counts)) => {
+                bindings.extend([BufferSlice::from(tri_counts), ray_counts.into()])
+            }
+            None => bindings.extend(out.ranks.iter().map(|r| BufferSlice::from(&r.buffer))),
+        }
+        bindings.extend([
+            BufferSlice::from(&out.children),
+            (&out.channels).into(),
+            (&level.bounds).into(),
+        ]);
+        rec.dispatch_items(&self.kernels.children, &bindings, &push, child_count as u64)?;
         rec.barrier();
         // Algorithm 1 line 11: positions of the next level and of the terminal nodes.
         // One scan runs through all the channels back to back; each channel's offsets
