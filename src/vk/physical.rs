@@ -150,7 +150,10 @@ impl PhysicalDeviceInfo {
     }
 }
 
-/// Which calibrated-timestamps extension a device offers (the KHR one where both are).
+/// Which calibrated-timestamps extension a device offers (the EXT one where both are:
+/// they are the same functions, and validation layers older than the KHR promotion, such
+/// as Debian 12's 1.3.239, warn that they do not know the KHR name, a warning that fails
+/// every validated run on drivers offering both, NVIDIA's among them).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum CalibrationExtension {
     Khr,
@@ -183,10 +186,10 @@ fn calibrateable_domains(
     pd: vk::PhysicalDevice,
     exts: &[vk::ExtensionProperties],
 ) -> (Option<CalibrationExtension>, Vec<vk::TimeDomainKHR>) {
-    let extension = if has_extension(exts, khr::calibrated_timestamps::NAME) {
-        CalibrationExtension::Khr
-    } else if has_extension(exts, ext::calibrated_timestamps::NAME) {
+    let extension = if has_extension(exts, ext::calibrated_timestamps::NAME) {
         CalibrationExtension::Ext
+    } else if has_extension(exts, khr::calibrated_timestamps::NAME) {
+        CalibrationExtension::Khr
     } else {
         return (None, Vec::new());
     };

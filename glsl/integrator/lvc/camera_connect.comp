@@ -20,7 +20,8 @@
 // (luminance of a non-negative RGB value with positive weights). Only those N are traced,
 // a candidate drawn more than once with one shadow ray. Keeping the best N instead would
 // be biased. With M = N = 1 the sum over p^ is p^(y)
-// itself, the weight exactly 1 and the result bit for bit the uniform one.
+// itself, the weight exactly 1 and the result the uniform one (bit for bit where the
+// compiler fuses the two variants' arithmetic alike: lavapipe does, NVIDIA's not always).
 //
 // The MIS weight is the path's alone, as if the selection were uniform (count
 // C.count_connection = N N_L / E|C_q|), so the weights of a path's techniques sum to 1.
