@@ -13,7 +13,9 @@
 //!   connections (`camera_vertex`, `camera_direct`, `camera_connect`, uniform and
 //!   resampled) against `Connector` on the GPU's own records, with the cache vertices the
 //!   selection must have drawn; `camera_accumulate` and `finish` against sums of the
-//!   dumped contributions.
+//!   dumped contributions; with sorting on, every bounce's `order` (`sort_keys` and the
+//!   radix sort of the keys' ranks) against a stable CPU sort of the 32-bit material
+//!   keys of the same hits.
 //!
 //! Sizes: one pixel, a non-power-of-two film, several passes per chunk, a scene whose
 //! light paths leave nothing to cache, bounded and unbounded depth. A walk may leave
@@ -162,7 +164,9 @@ fn options(variant: Variant, connections: u32, max_depth: i32) -> LvcOptions {
     o
 }
 
-fn check_case(case: Case) {
+/// Checks every kernel of `case`; returns the most distinct material keys one sorted
+/// bounce ordered (0 without sorting).
+fn check_case(case: Case) -> usize {
     let gpu = common::gpu();
     let (dumps, mut lvc) = render(
         &gpu,
@@ -193,6 +197,7 @@ fn check_case(case: Case) {
     let pixels = case.width * case.height;
     let (mut light, mut cam) = (Agreement::default(), Agreement::default());
     let mut film = vec![[0.0f32; 4]; pixels as usize];
+    let mut sorted_keys = 0;
     for d in &dumps.chunks {
         let ch = d.chunk;
         check_index(d);
@@ -215,6 +220,12 @@ fn check_case(case: Case) {
         }
         check_light_tracing(d, &connector, &open, c.light_paths, pixels);
         check_splat_film(d, pixels);
+        if case.options.sort {
+            let pt = PtScene::new(&case.scene);
+            for b in &d.bounces {
+                sorted_keys = sorted_keys.max(check_material_order(b, &pt, case.name));
+            }
+        }
         let radiance = check_camera(
             d, &case, &connector, &cpu_scene, &open, seed, scale, &mut cam,
         );
@@ -249,6 +260,31 @@ fn check_case(case: Case) {
     assert_eq!(lvc.kernel_counters().unwrap(), [0, 0], "{}", case.name);
     drop(lvc);
     common::assert_clean(&gpu);
+    sorted_keys
+}
+
+/// The live paths' positions in the order of their hits' material keys (type << 24 | id,
+/// misses last), equal keys in position order: what a stable sort of the 32-bit keys
+/// gives, which the GPU must reach sorting only the keys' ranks.
+/// Returns how many distinct keys the bounce sorted.
+fn check_material_order(b: &BounceDump, pt: &PtScene, name: &str) -> usize {
+    let key = |i: u32| {
+        let tri = b.closest[i as usize].triangle;
+        if tri == MISS {
+            u32::MAX
+        } else {
+            pt.materials[pt.triangle_material[tri as usize] as usize].key
+        }
+    };
+    let mut expected: Vec<u32> = (0..b.view_paths).collect();
+    expected.sort_by_key(|&i| key(i));
+    assert_eq!(
+        b.order, expected,
+        "{name}: bounce {} material order",
+        b.bounce
+    );
+    let distinct: std::collections::BTreeSet<u32> = expected.iter().map(|&i| key(i)).collect();
+    distinct.len()
 }
 
 /// The index lists every cache vertex once, each light path's contiguously and in order.
@@ -580,14 +616,22 @@ fn check_connections(
 
 #[test]
 fn lamps_with_a_point_light_unbounded() {
-    check_case(Case {
+    let sorted_keys = check_case(Case {
         name: "lamps",
         scene: lamps_with_point_light(),
         width: 13,
         height: 7,
-        options: options(Variant::LvcBdpt, 3, -1),
+        // Sorted: the scene of the most materials checks the material order.
+        options: LvcOptions {
+            sort: true,
+            ..options(Variant::LvcBdpt, 3, -1)
+        },
         passes: 3,
     });
+    assert!(
+        sorted_keys >= 4,
+        "a bounce of lamps sorted only {sorted_keys} distinct keys"
+    );
 }
 
 #[test]

@@ -19,6 +19,10 @@ pub struct BounceDump {
     pub pixel_count: u32,
     pub bounce: u32,
     pub active: Vec<u32>,
+    /// The bounce's closest hits and, when sorting is on, the live paths' positions in
+    /// material order (the shading kernels' `order`).
+    pub closest: Vec<Hit>,
+    pub order: Vec<u32>,
     pub vertices: Vec<LvcVertex>,
     pub emitted: Vec<Contribution>,
     pub contributions: Vec<Contribution>,
@@ -95,6 +99,8 @@ impl Observer for Dumps {
             pixel_count: v.range.pixel_count,
             bounce: v.bounce,
             active: read(&w.active[v.list], n)?,
+            closest: read(&w.hits, n)?,
+            order: read(&w.order, n)?,
             vertices: read(&w.vertices, n)?,
             emitted: read(&w.emitted, n)?,
             contributions: read(&w.contributions, slots)?,

@@ -72,8 +72,8 @@ struct PtMaterial {
     vec4 emission;       // rgb emitted radiance (one-sided, front = geometric normal)
     uint key;            // material_key(type, id): the sort key
     uint all_delta;      // 1 when every layer is a delta lobe (no NEE)
+    uint sort_rank;      // the key's rank among the scene's keys (misses: the count)
     uint pad0;
-    uint pad1;
 };
 
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer PtMaterialsInRef { PtMaterial data[]; };

@@ -1,6 +1,9 @@
 #version 460
-// Stage `sort keys`: the material key of each live path's hit (misses sort last) and
-// its position, for the radix sort that groups shading work by material.
+// Stage `sort keys`: the rank of the material key of each live path's hit among the
+// scene's keys (src/integrator/pt/materials.rs `sort_ranks`: the keys' order in
+// sort_rank_bits bits) and its position, for the radix sort that groups shading work by
+// material. A miss writes all ones: its low sort_rank_bits bits exceed every rank, so it
+// sorts last.
 #include "grid.glsl"
 #include "geometry.glsl"
 #include "pt.glsl"
@@ -23,6 +26,6 @@ void main() {
     uint i = linear_invocation_id();
     if (i >= params.active_count) return;
     uint tri = hits.data[i].triangle;
-    keys.data[i] = tri == MISS ? 0xFFFFFFFFu : materials.data[triangle_material.data[tri]].key;
+    keys.data[i] = tri == MISS ? 0xFFFFFFFFu : materials.data[triangle_material.data[tri]].sort_rank;
     order.data[i] = i;
 }

@@ -95,7 +95,11 @@ pub struct PtMaterial {
     pub key: u32,
     /// 1 when every layer is a delta lobe (no next-event estimation there).
     pub all_delta: u32,
-    pub pad: [u32; 2],
+    /// The key's rank among the scene's keys: what the radix sort sorts ([`sort_ranks`]).
+    ///
+    /// [`sort_ranks`]: super::materials::sort_ranks
+    pub sort_rank: u32,
+    pub pad: u32,
 }
 
 const _: () = assert!(size_of::<PtMaterial>() == 32);

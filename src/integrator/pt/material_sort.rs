@@ -1,10 +1,14 @@
 //! Material sorting of a wavefront's live paths (thesis §4.4.2): each path's hit gets
-//! its material's key (`sort_keys.comp`; misses sort last), and a radix sort orders the
-//! path positions by key, so that shading kernels read `order` and neighbouring
-//! invocations evaluate the same material. Shared by `pt` and the light-vertex-cache
+//! its material key's rank (`sort_keys.comp`; misses sort last), and a radix sort orders
+//! the path positions by it — the order of the 32-bit keys (type, then id) in the few
+//! bits a scene's materials need ([`sort_ranks`]) — so that shading kernels read `order`
+//! and neighbouring invocations evaluate the same material. Shared by `pt` and the light-vertex-cache
 //! integrators, whose wavefronts hold the same hit and order buffers.
 
 use super::gpu::PtParams;
+use super::materials::sort_rank_bits;
+#[cfg(doc)]
+use super::materials::sort_ranks;
 use super::SceneBuffers;
 use crate::primitives::radix_sort::SortScratch;
 use crate::primitives::{RadixSort, Tuning};
@@ -35,8 +39,8 @@ impl MaterialSort {
         })
     }
 
-    /// Records, for the first `n` paths: their keys from `hits` into `keys`, then
-    /// `order` (their positions) sorted by key.
+    /// Records, for the first `n` paths: their key ranks from `hits` into `keys`, then
+    /// `order` (their positions) sorted by them.
     pub(crate) fn record(
         &self,
         rec: &mut Recorder,
@@ -67,7 +71,7 @@ impl MaterialSort {
             n,
             keys.into(),
             Some(order.into()),
-            0..32,
+            0..sort_rank_bits(scene.material_count),
             &self.scratch,
         )
     }

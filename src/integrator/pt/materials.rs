@@ -186,7 +186,7 @@ pub fn all_delta(p: &BsdfParams) -> bool {
 }
 
 /// The GPU tables of a scene's materials: BSDF stacks and per-material records (with
-/// the sort key `material_key(type, index)`).
+/// the sort key `material_key(type, index)` and its rank).
 pub fn material_tables(materials: &[Material]) -> (Vec<BsdfParams>, Vec<PtMaterial>) {
     let mut bsdfs = Vec::with_capacity(materials.len());
     let mut records = Vec::with_capacity(materials.len());
@@ -197,11 +197,38 @@ pub fn material_tables(materials: &[Material]) -> (Vec<BsdfParams>, Vec<PtMateri
             emission: m.emission.max(Vec3::ZERO).extend(0.0).into(),
             key: material_key(ty, i as u32),
             all_delta: all_delta(&p) as u32,
-            pad: [0; 2],
+            sort_rank: 0,
+            pad: 0,
         });
         bsdfs.push(p);
     }
+    let keys: Vec<u32> = records.iter().map(|r| r.key).collect();
+    for (r, rank) in records.iter_mut().zip(sort_ranks(&keys)) {
+        r.sort_rank = rank;
+    }
     (bsdfs, records)
+}
+
+/// Each key's rank among `keys` (equal keys share one), in key order; a miss ranks
+/// after every key, at `keys.len()`.
+///
+/// Sorting the ranks orders paths exactly as sorting the 32-bit keys (type << 24 | id)
+/// would, ties included, but a scene's ranks need only [`sort_rank_bits`] bits: one
+/// radix pass of 8-bit digits for up to 255 materials instead of four for the keys,
+/// whose middle bits are zero in every scene and whose miss key (all ones) makes every
+/// digit vary.
+pub fn sort_ranks(keys: &[u32]) -> Vec<u32> {
+    let mut distinct = keys.to_vec();
+    distinct.sort_unstable();
+    distinct.dedup();
+    keys.iter()
+        .map(|k| distinct.partition_point(|d| d < k) as u32)
+        .collect()
+}
+
+/// The bits of a rank of [`sort_ranks`] for `materials` materials (misses included).
+pub fn sort_rank_bits(materials: u32) -> u32 {
+    u32::BITS - materials.leading_zeros()
 }
 
 #[cfg(test)]
@@ -278,5 +305,47 @@ mod tests {
         assert_eq!(recs[0].key, material_key(MaterialType::Lambert, 0));
         assert_eq!(recs[1].key, material_key(MaterialType::Mirror, 1));
         assert_eq!(recs[1].all_delta, 1);
+        assert_eq!((recs[0].sort_rank, recs[1].sort_rank), (0, 1));
+    }
+
+    #[test]
+    fn ranks_order_like_the_keys_and_misses_last() {
+        let keys = [
+            material_key(MaterialType::Mirror, 0),
+            material_key(MaterialType::Lambert, 1),
+            material_key(MaterialType::Layered, 2),
+            material_key(MaterialType::Lambert, 3),
+            material_key(MaterialType::Lambert, 1),
+        ];
+        let ranks = sort_ranks(&keys);
+        const MISS: u32 = u32::MAX;
+        let miss_rank = keys.len() as u32;
+        for (a, ra) in keys
+            .iter()
+            .chain([&MISS])
+            .zip(ranks.iter().chain([&miss_rank]))
+        {
+            for (b, rb) in keys
+                .iter()
+                .chain([&MISS])
+                .zip(ranks.iter().chain([&miss_rank]))
+            {
+                assert_eq!(a.cmp(b), ra.cmp(rb), "keys {a:#x} {b:#x}");
+            }
+        }
+        assert!(ranks
+            .iter()
+            .all(|&r| r < 1 << sort_rank_bits(keys.len() as u32)));
+        assert!(miss_rank < 1 << sort_rank_bits(keys.len() as u32));
+        assert_eq!(
+            (
+                sort_rank_bits(0),
+                sort_rank_bits(1),
+                sort_rank_bits(255),
+                sort_rank_bits(256)
+            ),
+            (0, 1, 8, 9)
+        );
+        assert!(sort_ranks(&[]).is_empty());
     }
 }

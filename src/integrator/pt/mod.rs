@@ -249,6 +249,8 @@ pub struct SceneBuffers {
     pub(crate) lights: Buffer,
     pub(crate) light_cdf: Buffer,
     pub(crate) tri_pmf: Buffer,
+    /// Entries of `materials`.
+    pub(crate) material_count: u32,
 }
 
 impl SceneBuffers {
@@ -262,6 +264,7 @@ impl SceneBuffers {
             lights: upload_or_dummy(gpu, "pt-lights", &scene.lights.lights)?,
             light_cdf: upload_or_dummy(gpu, "pt-light-cdf", &scene.lights.cdf)?,
             tri_pmf: upload_or_dummy(gpu, "pt-tri-light-pmf", &scene.lights.tri_pmf)?,
+            material_count: scene.materials.len() as u32,
         })
     }
 }
