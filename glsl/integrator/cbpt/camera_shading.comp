@@ -27,7 +27,9 @@ void main() {
     float pdf_rev = 0.0;
     if (dist2 > 0.0) {
         precise vec3 dir = to / sqrt(dist2);
-        cbpt_endpoint(bsdfs[z.material], z, dir, TRANSPORT_RADIANCE, f, pdf_fwd, pdf_rev);
+        BsdfParams bsdf;
+        BSDF_LOAD(bsdf, bsdfs[z.material]);
+        cbpt_endpoint(bsdf, z, dir, TRANSPORT_RADIANCE, f, pdf_fwd, pdf_rev);
     }
     results[i] = f.r;
     results[pc.plane + i] = f.g;

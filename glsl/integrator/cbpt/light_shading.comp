@@ -28,7 +28,9 @@ void main() {
     float pdf_rev = 0.0;
     if (dist2 > 0.0) {
         precise vec3 dir = to / sqrt(dist2);
-        cbpt_endpoint(bsdfs[y.material], y, -dir, TRANSPORT_IMPORTANCE, f, pdf_fwd, pdf_rev);
+        BsdfParams bsdf;
+        BSDF_LOAD(bsdf, bsdfs[y.material]);
+        cbpt_endpoint(bsdf, y, -dir, TRANSPORT_IMPORTANCE, f, pdf_fwd, pdf_rev);
     }
     results[i] = f.r;
     results[pc.plane + i] = f.g;

@@ -130,11 +130,12 @@ void main() {
     uint j = z.depth;
     vec3 z_ng = triangle_normal(z.triangle);
     EndpointBsdf zb = endpoint_bsdf(z);
+    uint threshold = uniform_threshold(size);
 
 #ifndef LVC_RESAMPLE
     float scale = float(size) / (float(n) * float(C.light_paths));
     for (uint k = 0u; k < n; ++k) {
-        uint pick = uniform_index(pixel, pass, select_dim(j, k), C.seed, size);
+        uint pick = uniform_index_below(pixel, pass, select_dim(j, k), C.seed, size, threshold);
         uint slot = cache_index[start + pick];
         float weight;
         vec3 g = connection(z, z_ng, zb, cache[slot], weight);
@@ -147,7 +148,7 @@ void main() {
     uint own = gl_LocalInvocationIndex * MAX_CANDIDATES;
     float total = 0.0;
     for (uint m = 0u; m < m_count; ++m) {
-        uint pick = uniform_index(pixel, pass, select_dim(j, m), C.seed, size);
+        uint pick = uniform_index_below(pixel, pass, select_dim(j, m), C.seed, size, threshold);
         uint slot = cache_index[start + pick];
         float weight;
         vec3 g = connection(z, z_ng, zb, cache[slot], weight);

@@ -19,7 +19,7 @@ struct EndpointBsdf {
 
 EndpointBsdf endpoint_bsdf(LvcVertex v) {
     EndpointBsdf e;
-    e.b = bsdfs[v.material];
+    BSDF_LOAD(e.b, bsdfs[v.material]);
     e.frame = bsdf_frame(v.ns);
     e.wo = bsdf_to_local(e.frame, v.wo);
     return e;

@@ -63,7 +63,8 @@ bool walk_arrive(inout WalkState s, Ray ray, Hit hit, uint path, out LvcVertex v
 bool walk_scatter(inout WalkState s, LvcVertex v, vec3 ng, uint index, uint sample_index,
                   uint mode, out Ray next) {
     next = no_ray();
-    BsdfParams b = bsdfs[v.material];
+    BsdfParams b;
+    BSDF_LOAD(b, bsdfs[v.material]);
     mat3 frame = bsdf_frame(v.ns);
     vec3 wo = bsdf_to_local(frame, v.wo);
     uint i = v.depth;

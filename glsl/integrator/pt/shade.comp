@@ -137,7 +137,8 @@ void main() {
         }
     }
     mat3 frame = bsdf_frame(ns);
-    BsdfParams bsdf = bsdfs.data[mat];
+    BsdfParams bsdf;
+    BSDF_LOAD(bsdf, bsdfs.data[mat]);
     vec3 wo = bsdf_to_local(frame, -ray.dir);
     float eps = params.ray_epsilon;
 
