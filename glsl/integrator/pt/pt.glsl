@@ -72,7 +72,7 @@ struct PtMaterial {
     vec4 emission;       // rgb emitted radiance (one-sided, front = geometric normal)
     uint key;            // material_key(type, id): the sort key
     uint all_delta;      // 1 when every layer is a delta lobe (no NEE)
-    uint sort_rank;      // the key's rank among the scene's keys (misses: the count)
+    uint sort_rank;      // the key's rank among the scene's keys (what sort_keys sorts)
     uint pad0;
 };
 

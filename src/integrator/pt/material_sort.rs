@@ -1,9 +1,10 @@
 //! Material sorting of a wavefront's live paths (thesis §4.4.2): each path's hit gets
 //! its material key's rank (`sort_keys.comp`; misses sort last), and a radix sort orders
 //! the path positions by it — the order of the 32-bit keys (type, then id) in the few
-//! bits a scene's materials need ([`sort_ranks`]) — so that shading kernels read `order`
-//! and neighbouring invocations evaluate the same material. Shared by `pt` and the light-vertex-cache
-//! integrators, whose wavefronts hold the same hit and order buffers.
+//! bits a scene's materials need ([`sort_ranks`]) — so that shading kernels read
+//! `order` and neighbouring invocations evaluate the same material. Shared by `pt` and
+//! the light-vertex-cache integrators, whose wavefronts hold the same hit and order
+//! buffers.
 
 use super::gpu::PtParams;
 use super::materials::sort_rank_bits;

@@ -209,8 +209,9 @@ pub fn material_tables(materials: &[Material]) -> (Vec<BsdfParams>, Vec<PtMateri
     (bsdfs, records)
 }
 
-/// Each key's rank among `keys` (equal keys share one), in key order; a miss ranks
-/// after every key, at `keys.len()`.
+/// Each key's rank among `keys` (equal keys share one), in key order. Every rank is
+/// below `keys.len()`, so a miss sorts after every key with any value from `keys.len()`
+/// up in [`sort_rank_bits`] bits (`sort_keys.comp` writes all ones).
 ///
 /// Sorting the ranks orders paths exactly as sorting the 32-bit keys (type << 24 | id)
 /// would, ties included, but a scene's ranks need only [`sort_rank_bits`] bits: one
