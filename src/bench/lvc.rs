@@ -205,8 +205,19 @@ pub fn equal_spp(
             let start = std::time::Instant::now();
             c.integrator.render_passes(1, passes)?;
             gpu.wait_idle()?;
-            c.seconds.push(start.elapsed().as_secs_f64());
+            let seconds = start.elapsed().as_secs_f64();
+            c.seconds.push(seconds);
             c.log.extend(gpu.take_profile());
+            // Each timing as it comes, on stderr: a run cut short by a job's time limit
+            // keeps what it measured.
+            eprintln!(
+                "equal spp, round {}/{}: {} {} stream(s) {}: {seconds:.3} s",
+                round + 1,
+                plan.rounds.max(1),
+                c.kind.name(),
+                c.streams,
+                if c.sorted { "sorted" } else { "unsorted" }
+            );
         }
     }
     Ok(configs
