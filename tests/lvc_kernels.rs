@@ -198,6 +198,8 @@ fn check_case(case: Case) -> usize {
     let (mut light, mut cam) = (Agreement::default(), Agreement::default());
     let mut film = vec![[0.0f32; 4]; pixels as usize];
     let mut sorted_keys = 0;
+    // The material keys the sorted bounces are checked against.
+    let sorted_scene = case.options.sort.then(|| PtScene::new(&case.scene));
     for d in &dumps.chunks {
         let ch = d.chunk;
         check_index(d);
@@ -220,10 +222,9 @@ fn check_case(case: Case) -> usize {
         }
         check_light_tracing(d, &connector, &open, c.light_paths, pixels);
         check_splat_film(d, pixels);
-        if case.options.sort {
-            let pt = PtScene::new(&case.scene);
+        if let Some(pt) = &sorted_scene {
             for b in &d.bounces {
-                sorted_keys = sorted_keys.max(check_material_order(b, &pt, case.name));
+                sorted_keys = sorted_keys.max(check_material_order(b, pt, case.name));
             }
         }
         let radiance = check_camera(
