@@ -124,6 +124,58 @@ fn empty_batches_and_empty_scenes() {
     common::assert_clean(&gpu);
 }
 
+/// Empty segments (tmax <= tmin, as the integrators' "no ray", or a NaN tmax) miss, and
+/// leave at the root: a batch with them added builds the same levels below the root as
+/// the batch without them, even where their origins lie on the geometry (a zero-length
+/// segment there passes every box test around its origin).
+#[test]
+fn empty_segments_leave_at_the_root() {
+    let gpu = common::gpu();
+    let soup = common::triangle_soup(2000, 61);
+    let rays = common::random_rays(2500, 62);
+    let empties: Vec<Ray> = soup
+        .iter()
+        .take(1500)
+        .enumerate()
+        .map(|(i, t)| {
+            let (tmin, tmax) = match i % 3 {
+                0 => (0.0, 0.0),
+                1 => (0.5, 0.25),
+                _ => (0.0, f32::NAN),
+            };
+            Ray::new(t.v0(), Vec3::new(0.3, -0.5, 0.8).normalize(), tmin, tmax)
+        })
+        .collect();
+    let mixed: Vec<Ray> = rays.iter().chain(&empties).copied().collect();
+    let below_root = |batch: &[Ray], query: Query| {
+        let mut tracer = PdacrtTracer::with_params(&gpu, &soup, deep()).unwrap();
+        let hits = common::trace_hits(&gpu, &mut tracer, batch, query);
+        let levels: Vec<_> = tracer
+            .stats()
+            .levels
+            .iter()
+            .filter(|l| l.level > 0)
+            .map(|l| (l.level, l.nodes, l.triangles, l.rays, l.terminal_nodes))
+            .collect();
+        (hits, levels)
+    };
+    for query in [Query::ClosestHit, Query::Occlusion] {
+        let (hits, levels) = below_root(&mixed, query);
+        let (alone_hits, alone_levels) = below_root(&rays, query);
+        assert!(levels.len() > 3, "{query:?}: a hierarchy of a few levels");
+        assert_eq!(levels, alone_levels, "{query:?}: levels below the root");
+        assert_eq!(
+            hits[..rays.len()],
+            alone_hits[..],
+            "{query:?}: the real rays"
+        );
+        for (i, hit) in hits[rays.len()..].iter().enumerate() {
+            assert!(!hit.is_hit(), "{query:?}: empty segment {i} hit {hit:?}");
+        }
+    }
+    common::assert_clean(&gpu);
+}
+
 fn scene_triangles(scene: &scene::Scene) -> Vec<GpuTriangle> {
     scene
         .triangles

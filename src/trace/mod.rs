@@ -34,7 +34,9 @@ pub enum Query {
     Occlusion,
 }
 
-/// Casts batches of rays against one scene's triangles.
+/// Casts batches of rays against one scene's triangles. A ray whose segment is empty
+/// (tmax <= tmin, NaN included) hits nothing: the integrators write such rays (tmax = 0)
+/// into slots that have no ray, and the tracers drop them without traversal.
 pub trait Tracer {
     fn name(&self) -> &'static str;
 
