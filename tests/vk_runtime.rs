@@ -156,6 +156,55 @@ fn streams_on_their_default_queues_are_ordered_by_timelines_under_sync_validatio
     common::assert_clean(&gpu);
 }
 
+/// Recorders reuse finished command buffers: two hundred submissions, each waited for,
+/// allocate one, and bursts of twenty in flight at once at most twenty. (Allocating a
+/// buffer per submission from a reused pool left every earlier one allocated there, and
+/// each pool reset walked them all: on NVIDIA long renders slowed down pass by pass.)
+#[test]
+fn finished_command_buffers_are_reused() {
+    let gpu = common::gpu();
+    let n = 1000usize;
+    let pipeline = copy_pipeline(&gpu, 64);
+    let a = gpu.upload("a", &vec![0u32; n]).unwrap();
+    let b = gpu.zeroed::<u32>("b", n).unwrap();
+    let push = CopyPush {
+        n: n as u32,
+        add: 1,
+    };
+    // a → b → a, adding 1 each time: 2 per submission.
+    let submit = || {
+        let mut rec = gpu.recorder(StreamKind::Main).unwrap();
+        rec.dispatch_items(&pipeline, &[(&a).into(), (&b).into()], &push, n as u64)
+            .unwrap();
+        rec.barrier();
+        rec.dispatch_items(&pipeline, &[(&b).into(), (&a).into()], &push, n as u64)
+            .unwrap();
+        rec.submit(&[]).unwrap()
+    };
+    let before = gpu.command_buffers_allocated();
+    for _ in 0..200 {
+        gpu.wait(&submit()).unwrap();
+    }
+    let serial = gpu.command_buffers_allocated() - before;
+    assert!(
+        serial <= 1,
+        "200 submissions one at a time allocated {serial}"
+    );
+    for _ in 0..5 {
+        let points: Vec<_> = (0..20).map(|_| submit()).collect();
+        gpu.wait(points.last().unwrap()).unwrap();
+    }
+    let bursts = gpu.command_buffers_allocated() - before;
+    assert!(bursts <= 20, "bursts of 20 in flight allocated {bursts}");
+    let out = a.read::<u32>().unwrap();
+    assert!(
+        out.iter().all(|&v| v == 2 * 300),
+        "the work ran: {}",
+        out[0]
+    );
+    common::assert_clean(&gpu);
+}
+
 #[test]
 fn profiler_times_named_dispatches_without_stalling() {
     let gpu = common::gpu();

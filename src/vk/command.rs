@@ -1,10 +1,12 @@
 //! Command recording: dispatches, barriers, copies, timestamp scopes, submission.
 
+use std::sync::atomic::Ordering;
+
 use ash::vk;
 
 use super::accel::AccelerationStructure;
 use super::buffer::{Buffer, BufferSlice};
-use super::device::{Gpu, InFlight, QUERIES_PER_POOL};
+use super::device::{CommandSlot, Gpu, InFlight, QUERIES_PER_POOL};
 use super::error::{CallContext, Result, VkError};
 use super::pipeline::{ComputePipeline, Variant};
 use super::profiler::{QueryBatch, ScopeInfo, ScopeQueries};
@@ -16,8 +18,8 @@ use super::stream::{StreamKind, TimelinePoint};
 pub struct Recorder {
     gpu: Gpu,
     stream: StreamKind,
-    pool: vk::CommandPool,
-    cmd: vk::CommandBuffer,
+    /// The pool and its command buffer, being recorded.
+    slot: CommandSlot,
     queries: QueryBatch,
     /// Indices into `queries.scopes` of the scopes still open, outermost first.
     open_scopes: Vec<usize>,
@@ -47,33 +49,47 @@ impl Gpu {
         self.reclaim(stream)?;
         let state = self.stream(stream);
         let device = &self.0.raw;
-        let reused = state.state.lock().unwrap().free_pools.pop();
-        let pool = match reused {
-            Some(p) => p,
+        let reused = state.state.lock().unwrap().free_slots.pop();
+        let slot = match reused {
+            // Reset when its last submission finished (Gpu::reclaim): initial state.
+            Some(slot) => slot,
             None => {
                 let info = vk::CommandPoolCreateInfo::default()
                     .queue_family_index(state.family)
                     .flags(vk::CommandPoolCreateFlags::TRANSIENT);
                 // SAFETY: valid device and family.
-                unsafe { device.create_command_pool(&info, None) }.call("vkCreateCommandPool")?
+                let pool = unsafe { device.create_command_pool(&info, None) }
+                    .call("vkCreateCommandPool")?;
+                let alloc = vk::CommandBufferAllocateInfo::default()
+                    .command_pool(pool)
+                    .level(vk::CommandBufferLevel::PRIMARY)
+                    .command_buffer_count(1);
+                // SAFETY: the pool was just created; this recorder owns it until the
+                // submission completes.
+                let allocated = unsafe { device.allocate_command_buffers(&alloc) }
+                    .call("vkAllocateCommandBuffers");
+                match allocated {
+                    Ok(cmds) => {
+                        self.0.command_buffers.fetch_add(1, Ordering::Relaxed);
+                        CommandSlot { pool, cmd: cmds[0] }
+                    }
+                    Err(e) => {
+                        // SAFETY: nothing was allocated from or submitted with the pool.
+                        unsafe { device.destroy_command_pool(pool, None) };
+                        return Err(e);
+                    }
+                }
             }
         };
-        let alloc = vk::CommandBufferAllocateInfo::default()
-            .command_pool(pool)
-            .level(vk::CommandBufferLevel::PRIMARY)
-            .command_buffer_count(1);
-        // SAFETY: the pool is owned by this recorder exclusively until completion.
-        let cmd =
-            unsafe { device.allocate_command_buffers(&alloc) }.call("vkAllocateCommandBuffers")?[0];
+        let cmd = slot.cmd;
         let begin = vk::CommandBufferBeginInfo::default()
             .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
-        // SAFETY: freshly allocated command buffer.
+        // SAFETY: the command buffer is in the initial state (new, or its pool reset).
         unsafe { device.begin_command_buffer(cmd, &begin) }.call("vkBeginCommandBuffer")?;
         Ok(Recorder {
             gpu: self.clone(),
             stream,
-            pool,
-            cmd,
+            slot,
             queries: QueryBatch::default(),
             open_scopes: Vec::new(),
             submitted: false,
@@ -97,7 +113,7 @@ impl Recorder {
 
     /// The command buffer being recorded (for sibling modules such as `accel`).
     pub(crate) fn raw_cmd(&self) -> vk::CommandBuffer {
-        self.cmd
+        self.slot.cmd
     }
 
     /// Allocates the next timestamp query and writes it.
@@ -130,7 +146,7 @@ impl Recorder {
             // SAFETY: recording; the reset precedes every write to the pool below.
             unsafe {
                 self.device()
-                    .cmd_reset_query_pool(self.cmd, pool, 0, QUERIES_PER_POOL)
+                    .cmd_reset_query_pool(self.slot.cmd, pool, 0, QUERIES_PER_POOL)
             };
             self.queries.pools.push(pool);
         }
@@ -138,7 +154,7 @@ impl Recorder {
         // SAFETY: recording; the query was reset in this command buffer.
         unsafe {
             self.device().cmd_write_timestamp2(
-                self.cmd,
+                self.slot.cmd,
                 vk::PipelineStageFlags2::ALL_COMMANDS,
                 pool,
                 query,
@@ -153,7 +169,7 @@ impl Recorder {
             if let Ok(cname) = std::ffi::CString::new(name) {
                 let label = vk::DebugUtilsLabelEXT::default().label_name(&cname);
                 // SAFETY: recording.
-                unsafe { du.cmd_begin_debug_utils_label(self.cmd, &label) };
+                unsafe { du.cmd_begin_debug_utils_label(self.slot.cmd, &label) };
             }
         }
     }
@@ -161,7 +177,7 @@ impl Recorder {
     fn label_end(&self) {
         if let Some(du) = &self.gpu.0.debug_utils {
             // SAFETY: recording; paired with label_begin.
-            unsafe { du.cmd_end_debug_utils_label(self.cmd) };
+            unsafe { du.cmd_end_debug_utils_label(self.slot.cmd) };
         }
     }
 
@@ -217,7 +233,7 @@ impl Recorder {
         // (borrowed by the caller) and built earlier on the timeline.
         unsafe {
             self.device()
-                .cmd_dispatch(self.cmd, groups[0], groups[1], groups[2])
+                .cmd_dispatch(self.slot.cmd, groups[0], groups[1], groups[2])
         };
         self.end_scope()
     }
@@ -328,10 +344,10 @@ impl Recorder {
         // SAFETY: recording; the pipeline and buffers are alive; counts were checked.
         unsafe {
             let d = self.device();
-            d.cmd_bind_pipeline(self.cmd, vk::PipelineBindPoint::COMPUTE, variant.raw);
+            d.cmd_bind_pipeline(self.slot.cmd, vk::PipelineBindPoint::COMPUTE, variant.raw);
             if !writes.is_empty() {
                 self.gpu.0.push_descriptor.cmd_push_descriptor_set(
-                    self.cmd,
+                    self.slot.cmd,
                     vk::PipelineBindPoint::COMPUTE,
                     variant.layout,
                     0,
@@ -340,7 +356,7 @@ impl Recorder {
             }
             if !push.is_empty() {
                 d.cmd_push_constants(
-                    self.cmd,
+                    self.slot.cmd,
                     variant.layout,
                     vk::ShaderStageFlags::COMPUTE,
                     0,
@@ -441,7 +457,7 @@ impl Recorder {
         // SAFETY: recording; args is an indirect-capable buffer of this device.
         unsafe {
             self.device()
-                .cmd_dispatch_indirect(self.cmd, args.raw, offset)
+                .cmd_dispatch_indirect(self.slot.cmd, args.raw, offset)
         };
         self.end_scope()
     }
@@ -475,7 +491,7 @@ impl Recorder {
         let barriers = [barrier];
         let dep = vk::DependencyInfo::default().memory_barriers(&barriers);
         // SAFETY: recording.
-        unsafe { self.device().cmd_pipeline_barrier2(self.cmd, &dep) };
+        unsafe { self.device().cmd_pipeline_barrier2(self.slot.cmd, &dep) };
     }
 
     /// Copies `size` bytes between buffers.
@@ -499,7 +515,7 @@ impl Recorder {
         // (checked by validation in tests).
         unsafe {
             self.device()
-                .cmd_copy_buffer(self.cmd, src.raw, dst.raw, &region)
+                .cmd_copy_buffer(self.slot.cmd, src.raw, dst.raw, &region)
         };
     }
 
@@ -530,7 +546,7 @@ impl Recorder {
         // SAFETY: recording; size and alignment checked above.
         unsafe {
             self.device()
-                .cmd_update_buffer(self.cmd, buffer.raw, offset, bytes)
+                .cmd_update_buffer(self.slot.cmd, buffer.raw, offset, bytes)
         };
         Ok(())
     }
@@ -556,7 +572,7 @@ impl Recorder {
         // SAFETY: recording; alignment and range checked above.
         unsafe {
             self.device()
-                .cmd_fill_buffer(self.cmd, buffer.raw, offset, size, value)
+                .cmd_fill_buffer(self.slot.cmd, buffer.raw, offset, size, value)
         };
         Ok(())
     }
@@ -566,7 +582,7 @@ impl Recorder {
         // SAFETY: recording; the Vulkan buffer size is a multiple of 4.
         unsafe {
             self.device()
-                .cmd_fill_buffer(self.cmd, buffer.raw, 0, vk::WHOLE_SIZE, value)
+                .cmd_fill_buffer(self.slot.cmd, buffer.raw, 0, vk::WHOLE_SIZE, value)
         };
     }
 
@@ -597,7 +613,7 @@ impl Recorder {
         let gpu = self.gpu.clone();
         let device = &gpu.0.raw;
         // SAFETY: recording started in Gpu::recorder.
-        unsafe { device.end_command_buffer(self.cmd) }.call("vkEndCommandBuffer")?;
+        unsafe { device.end_command_buffer(self.slot.cmd) }.call("vkEndCommandBuffer")?;
         // Recording ends here; the submission is a span of its own.
         drop(std::mem::replace(&mut self.span, tracing::Span::none()));
         let stream = gpu.stream(self.stream);
@@ -638,7 +654,7 @@ impl Recorder {
                     .stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS),
             );
         }
-        let cmds = [vk::CommandBufferSubmitInfo::default().command_buffer(self.cmd)];
+        let cmds = [vk::CommandBufferSubmitInfo::default().command_buffer(self.slot.cmd)];
         let submit = vk::SubmitInfo2::default()
             .wait_semaphore_infos(&wait_infos)
             .command_buffer_infos(&cmds)
@@ -654,7 +670,7 @@ impl Recorder {
         state.last_value = value;
         state.in_flight.push_back(InFlight {
             value,
-            pool: self.pool,
+            slot: self.slot,
             queries: std::mem::take(&mut self.queries),
             submitted,
         });
@@ -684,15 +700,15 @@ impl Drop for Recorder {
         // Abandoned without submitting (an error path): nothing of it ever ran.
         // SAFETY: the pool and query pools were never submitted.
         unsafe {
-            let _ = self.gpu.0.raw.end_command_buffer(self.cmd);
+            let _ = self.gpu.0.raw.end_command_buffer(self.slot.cmd);
             let _ = self
                 .gpu
                 .0
                 .raw
-                .reset_command_pool(self.pool, vk::CommandPoolResetFlags::empty());
+                .reset_command_pool(self.slot.pool, vk::CommandPoolResetFlags::empty());
         }
         let mut st = self.gpu.stream(self.stream).state.lock().unwrap();
-        st.free_pools.push(self.pool);
+        st.free_slots.push(self.slot);
         st.free_query_pools.append(&mut self.queries.pools);
     }
 }

@@ -59,10 +59,21 @@ pub(crate) struct AccelSupport {
     pub(crate) scratch_alignment: u64,
 }
 
+/// A command pool with the one command buffer ever allocated from it. Resetting the
+/// pool returns that buffer to the initial state, ready to record again; allocating a
+/// fresh buffer at each reuse instead would leave every earlier one allocated in the
+/// pool (a reset recycles buffers, it does not free them), and each reset would then
+/// walk all of them: on NVIDIA's driver a long render slowed down pass by pass.
+#[derive(Clone, Copy)]
+pub(crate) struct CommandSlot {
+    pub(crate) pool: vk::CommandPool,
+    pub(crate) cmd: vk::CommandBuffer,
+}
+
 /// A submitted command buffer that may still run.
 pub(crate) struct InFlight {
     pub(crate) value: u64,
-    pub(crate) pool: vk::CommandPool,
+    pub(crate) slot: CommandSlot,
     pub(crate) queries: QueryBatch,
     /// When the host submitted it (timelines align GPU clocks at submission where the
     /// device cannot calibrate them).
@@ -84,7 +95,7 @@ pub(crate) struct StreamState {
 pub(crate) struct StreamInner {
     pub(crate) last_value: u64,
     pub(crate) in_flight: VecDeque<InFlight>,
-    pub(crate) free_pools: Vec<vk::CommandPool>,
+    pub(crate) free_slots: Vec<CommandSlot>,
     pub(crate) free_query_pools: Vec<vk::QueryPool>,
 }
 
@@ -98,6 +109,8 @@ pub(crate) struct GpuInner {
     pub(crate) debug_utils: Option<ext::debug_utils::Device>,
     pub(crate) allocator: ManuallyDrop<Mutex<Allocator>>,
     pub(crate) memory: MemoryCounters,
+    /// Command buffers allocated since the device opened (one per command pool).
+    pub(crate) command_buffers: AtomicU64,
     pub(crate) mapping: StreamMapping,
     /// One entry per distinct queue; submissions to a queue are serialised by its mutex.
     pub(crate) queues: Vec<Mutex<vk::Queue>>,
@@ -311,6 +324,7 @@ impl Gpu {
             debug_utils,
             allocator: ManuallyDrop::new(Mutex::new(allocator)),
             memory: MemoryCounters::default(),
+            command_buffers: AtomicU64::new(0),
             mapping,
             queues,
             streams,
@@ -366,6 +380,13 @@ impl Gpu {
             m.current.load(Ordering::Relaxed),
             m.peak.load(Ordering::Relaxed),
         )
+    }
+
+    /// Command buffers allocated since the device opened. Recorders reuse finished
+    /// command buffers, so this is the most ever in flight at once, not the number of
+    /// submissions.
+    pub fn command_buffers_allocated(&self) -> u64 {
+        self.0.command_buffers.load(Ordering::Relaxed)
     }
 
     /// Restarts peak tracking from the current allocation level.
@@ -474,7 +495,7 @@ impl Gpu {
             unsafe {
                 self.0
                     .raw
-                    .reset_command_pool(f.pool, vk::CommandPoolResetFlags::empty())
+                    .reset_command_pool(f.slot.pool, vk::CommandPoolResetFlags::empty())
             }
             .call("vkResetCommandPool")?;
             if let Some(batches) = self.0.timeline.lock().unwrap().as_mut() {
@@ -487,7 +508,7 @@ impl Gpu {
             }
             self.0.profile.lock().unwrap().records.extend(records);
             let mut st = stream.state.lock().unwrap();
-            st.free_pools.push(f.pool);
+            st.free_slots.push(f.slot);
             st.free_query_pools.extend(f.queries.pools);
         }
         Ok(())
@@ -522,13 +543,13 @@ impl Drop for GpuInner {
             for s in &mut self.streams {
                 let st = s.state.get_mut().unwrap();
                 for f in st.in_flight.drain(..) {
-                    self.raw.destroy_command_pool(f.pool, None);
+                    self.raw.destroy_command_pool(f.slot.pool, None);
                     for q in f.queries.pools {
                         self.raw.destroy_query_pool(q, None);
                     }
                 }
-                for p in st.free_pools.drain(..) {
-                    self.raw.destroy_command_pool(p, None);
+                for slot in st.free_slots.drain(..) {
+                    self.raw.destroy_command_pool(slot.pool, None);
                 }
                 for q in st.free_query_pools.drain(..) {
                     self.raw.destroy_query_pool(q, None);
