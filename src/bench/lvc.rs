@@ -207,11 +207,16 @@ pub fn equal_spp(
             gpu.wait_idle()?;
             let seconds = start.elapsed().as_secs_f64();
             c.seconds.push(seconds);
-            c.log.extend(gpu.take_profile());
+            let log = gpu.take_profile();
+            let (busy, _) = stream_use(&log);
+            let busy_ms: f64 = busy.iter().map(|(_, ms)| ms).sum();
+            c.log.extend(log);
             // Each timing as it comes, on stderr: a run cut short by a job's time limit
-            // keeps what it measured.
+            // keeps what it measured. The GPU's busy time beside it tells host time
+            // (waits, recording) from GPU time.
             eprintln!(
-                "equal spp, round {}/{}: {} {} stream(s) {}: {seconds:.3} s",
+                "equal spp, round {}/{}: {} {} stream(s) {}: {seconds:.3} s, GPU busy {busy_ms:.0} ms \
+                 (streams summed)",
                 round + 1,
                 plan.rounds.max(1),
                 c.kind.name(),
