@@ -230,6 +230,10 @@ fn a_scene_past_one_storage_binding_renders() {
     let filler = (binding / size_of::<GpuTriangle>() as u64 + 1) as usize;
     let behind = scene.camera.position - 10.0 * (scene.camera.look_at - scene.camera.position);
     let t = Triangle::new(behind, behind + Vec3::X, behind + Vec3::Y, 0);
+    let bytes = ((filler + scene.triangles.len()) * size_of::<GpuTriangle>()) as u64;
+    if !common::holds_past_one_binding(&gpu, bytes, "the scene's triangles") {
+        return;
+    }
     let visible = std::mem::replace(&mut scene.triangles, vec![t; filler]);
     scene.triangles.extend(visible);
     let (w, h) = (8, 8);

@@ -264,11 +264,12 @@ fn oversized_buffers_are_refused_with_the_limit_named() {
     let gpu = common::gpu();
     // One storage binding is no limit: a buffer past it is made (and bound by address).
     let binding = gpu.info().limits.max_storage_buffer_range;
-    let past_binding = gpu
-        .create_buffer("past-binding", binding + 4, MemoryKind::Device)
-        .unwrap();
-    assert_eq!(past_binding.size(), binding + 4);
-    drop(past_binding);
+    if common::holds_past_one_binding(&gpu, binding + 4, "a buffer past one binding") {
+        let past_binding = gpu
+            .create_buffer("past-binding", binding + 4, MemoryKind::Device)
+            .unwrap();
+        assert_eq!(past_binding.size(), binding + 4);
+    }
     // One allocation is: the smaller of maxBufferSize and maxMemoryAllocationSize.
     let (limit, which) = gpu.max_buffer_bytes();
     let l = &gpu.info().limits;
@@ -345,6 +346,10 @@ fn buffers_past_one_storage_binding_are_read_and_written_by_address() {
         // Past one binding: the words around the binding's end and the buffer's last.
         let binding_words = (gpu.info().limits.max_storage_buffer_range / 4) as u32;
         let words = binding_words + 4096;
+        if !common::holds_past_one_binding(&gpu, words as u64 * 4, "copies past one binding") {
+            common::assert_clean(&gpu);
+            continue;
+        }
         let src = gpu
             .create_buffer("big-src", words as u64 * 4, MemoryKind::Device)
             .unwrap();

@@ -24,6 +24,26 @@ pub fn gpu_with(placement: StreamPlacement, sync: bool) -> Gpu {
     .expect("a Vulkan device with the validation layer (run `make deps`)")
 }
 
+/// Whether the device can hold a buffer of `bytes` that is past one storage binding
+/// (maxStorageBufferRange), the premise of the tests of kernels taking buffers by
+/// address at full size. Not where one allocation is no larger than one binding: on
+/// NVIDIA (maxMemoryAllocationSize 4 GiB − 2 MiB, maxStorageBufferRange 4 GiB − 1) every
+/// buffer fits one binding; the tests that force `BufferAccess::Addresses` still run
+/// the by-address kernels there. Says on stderr why a test stops short.
+pub fn holds_past_one_binding(gpu: &Gpu, bytes: u64, what: &str) -> bool {
+    let binding = gpu.info().limits.max_storage_buffer_range;
+    let (limit, which) = gpu.max_buffer_bytes();
+    let holds = bytes > binding && bytes <= limit;
+    if !holds {
+        eprintln!(
+            "{what}: not run on {}: {bytes} bytes are not both past one binding ({binding} \
+             bytes) and within one buffer ({which}, {limit} bytes)",
+            gpu.info().name
+        );
+    }
+    holds
+}
+
 pub fn gpu() -> Gpu {
     gpu_with(StreamPlacement::Spread, false)
 }
