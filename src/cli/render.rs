@@ -79,7 +79,8 @@ pub struct RenderArgs {
     #[arg(long, conflicts_with = "sort")]
     no_sort: bool,
     /// lvc-bdpt, cis-lbdpt: sort paths by material before shading (cis-lbdpt's default
-    /// where it pays: on GPUs, not on CPU devices such as lavapipe).
+    /// where it pays: on GPUs, but not on CPU devices such as lavapipe nor on NVIDIA's
+    /// driver, where it measured as overhead).
     #[arg(long)]
     sort: bool,
     /// lvc-bdpt, cis-lbdpt: connections (shadow rays) to light-vertex-cache vertices per

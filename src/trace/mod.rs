@@ -36,7 +36,8 @@ pub enum Query {
 
 /// Casts batches of rays against one scene's triangles. A ray whose segment is empty
 /// (tmax <= tmin, NaN included) hits nothing: the integrators write such rays (tmax = 0)
-/// into slots that have no ray, and the tracers drop them without traversal.
+/// into slots that have no ray, and a tracer should spend no traversal on them (PDACRT
+/// drops them at its root).
 pub trait Tracer {
     fn name(&self) -> &'static str;
 
