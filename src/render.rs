@@ -72,8 +72,9 @@ pub struct RenderOptions {
     pub max_depth: i32,
     /// `pt`, `bpt`, `light`: Russian roulette from this depth on (Mitsuba's default 5).
     pub rr_depth: u32,
-    /// `pt`: sort paths by material key before shading.
-    pub sort_materials: bool,
+    /// `pt`: sort paths by material key before shading; `None`: where it pays on the
+    /// device (`pt::sort_pays`). The cache integrators' setting is `lvc.sort`.
+    pub sort_materials: Option<bool>,
     /// `pt`: which estimators contribute light.
     pub strategy: integrator::pt::Strategy,
     /// Stop after the pass during which this many seconds ran out (`spp` is then the
@@ -127,7 +128,7 @@ impl RenderOptions {
             ao_rays: 8,
             max_depth: s.max_depth.map_or(-1, |d| d.min(i32::MAX as u32) as i32),
             rr_depth: 5,
-            sort_materials: true,
+            sort_materials: None,
             strategy: Default::default(),
             time_limit: None,
             reference: None,
@@ -508,7 +509,9 @@ fn integrator_on(
                 seed: options.seed,
                 max_depth: options.max_depth,
                 rr_depth: options.rr_depth,
-                sort: options.sort_materials,
+                sort: options
+                    .sort_materials
+                    .unwrap_or_else(|| integrator::pt::sort_pays(gpu)),
                 strategy: options.strategy,
                 ..Default::default()
             },

@@ -78,9 +78,9 @@ pub struct RenderArgs {
     /// other speed).
     #[arg(long, conflicts_with = "sort")]
     no_sort: bool,
-    /// lvc-bdpt, cis-lbdpt: sort paths by material before shading (cis-lbdpt's default
-    /// where it pays: on GPUs, but not on CPU devices such as lavapipe nor on NVIDIA's
-    /// driver, where it measured as overhead).
+    /// pt, lvc-bdpt, cis-lbdpt: sort paths by material before shading (same image). By
+    /// default pt and cis-lbdpt sort where it pays, as measured: pt on GPUs but not on CPU
+    /// devices such as lavapipe; cis-lbdpt on neither lavapipe nor NVIDIA's driver.
     #[arg(long)]
     sort: bool,
     /// lvc-bdpt, cis-lbdpt: connections (shadow rays) to light-vertex-cache vertices per

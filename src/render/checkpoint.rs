@@ -54,7 +54,9 @@ pub struct SavedOptions {
     pub ao_rays: u32,
     pub max_depth: i32,
     pub rr_depth: u32,
-    pub sort_materials: bool,
+    /// `None`: the device's default (checkpoints that predate it hold a bool).
+    #[serde(default)]
+    pub sort_materials: Option<bool>,
     pub strategy: String,
     pub time_limit: Option<f64>,
     #[serde(default)]

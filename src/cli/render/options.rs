@@ -53,10 +53,11 @@ pub(super) fn render_options(
         options.rr_depth = r;
     }
     if args.no_sort {
-        options.sort_materials = false;
+        options.sort_materials = Some(false);
         options.lvc.sort = Some(false);
     }
     if args.sort {
+        options.sort_materials = Some(true);
         options.lvc.sort = Some(true);
     }
     if args.connections.is_some() {

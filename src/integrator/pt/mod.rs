@@ -117,6 +117,14 @@ impl Default for PtOptions {
     }
 }
 
+/// Whether sorting paths by material pays for `pt` on `gpu`, as measured
+/// (docs/PERFORMANCE.md): not on CPU implementations (lavapipe), where it costs 5–20 %
+/// (`splitray bench pt` on the Cornell box and lamps); on GPUs, where divergent shading
+/// serialises SIMT groups, it stays the default (`pt` is not measured on one yet).
+pub fn sort_pays(gpu: &Gpu) -> bool {
+    !gpu.info().is_cpu()
+}
+
 /// The scene as the path tracer's kernels read it.
 pub struct PtScene {
     pub triangles: Vec<GpuTriangle>,
@@ -638,6 +646,9 @@ impl Integrator for PtIntegrator<'_> {
         })
     }
 
+    /// Material sorting is not among them: it never changes the image
+    /// (tests/pt_analytic.rs), so parts rendered with it and without (on devices whose
+    /// defaults differ) merge.
     fn settings(&self) -> Vec<(String, String)> {
         let o = &self.options;
         vec![
@@ -647,7 +658,6 @@ impl Integrator for PtIntegrator<'_> {
                 "strategy".into(),
                 format!("{:?}", o.strategy).to_lowercase(),
             ),
-            ("sort_materials".into(), o.sort.to_string()),
         ]
     }
 }
