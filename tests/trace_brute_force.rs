@@ -42,8 +42,24 @@ fn results_do_not_depend_on_batching() {
     use splitray::trace::brute_force::BruteForceTuning;
     let gpu = common::gpu();
     let soup = common::triangle_soup(777, 9);
-    let rays = common::random_rays(3001, 10);
+    // Every seventh ray an empty segment starting on a triangle (tmin = tmax, tmin >
+    // tmax, NaN tmax): it misses, and skips its tests in a workgroup whose other rays
+    // keep testing (the barriers stay uniform).
+    let rays: Vec<Ray> = common::random_rays(3001, 10)
+        .into_iter()
+        .enumerate()
+        .map(|(i, r)| match (i % 7, (i / 7) % 3) {
+            (0, 0) => Ray::new(soup[i % soup.len()].v0(), Vec3::from(r.dir), 0.0, 0.0),
+            (0, 1) => Ray::new(soup[i % soup.len()].v0(), Vec3::from(r.dir), 0.5, 0.25),
+            (0, _) => Ray::new(soup[i % soup.len()].v0(), Vec3::from(r.dir), 0.0, f32::NAN),
+            _ => r,
+        })
+        .collect();
     let expected = cpu::closest_hits(&rays, &soup);
+    assert!(rays
+        .iter()
+        .zip(&expected)
+        .all(|(r, h)| !r.is_empty() || !h.is_hit()));
     for (workgroup_size, batch) in [(1, 1), (8, 7), (64, 512), (256, 64)] {
         let mut tracer = BruteForceTracer::with_tuning(
             &gpu,

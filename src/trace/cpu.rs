@@ -42,6 +42,11 @@ pub fn intersect_triangle(
 
 /// Closest hit of one ray by testing every triangle; ties go to the smaller index.
 pub fn closest_hit(ray: &Ray, triangles: &[GpuTriangle]) -> Hit {
+    // An empty segment (tmax <= tmin, NaN included) meets nothing; `f32::min` below would
+    // otherwise take a NaN tmax for an unbounded one.
+    if ray.is_empty() {
+        return Hit::NONE;
+    }
     let o = Vec3::from(ray.origin);
     let d = Vec3::from(ray.dir);
     let mut best = Hit::NONE;

@@ -340,9 +340,12 @@ pub fn trace(
         pad,
         stats: DacrtStats::default(),
     };
-    // The root node: rays whose segment meets the scene box, every triangle.
+    // The root node: rays whose segment is not empty (tmax > tmin, as for every tracer)
+    // and meets the scene box, every triangle.
     let mut ray_list: Vec<u32> = (0..rays.len() as u32).collect();
-    let live = partition(&mut ray_list, |r| dacrt.ray_enters(r, &scene));
+    let live = partition(&mut ray_list, |r| {
+        !rays[r as usize].is_empty() && dacrt.ray_enters(r, &scene)
+    });
     let mut tri_list: Vec<u32> = (0..triangles.len() as u32).collect();
     dacrt.node(scene, &mut ray_list[..live], &mut tri_list, 0);
     debug_assert!(dacrt

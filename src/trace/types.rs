@@ -26,6 +26,12 @@ impl Ray {
             tmax,
         }
     }
+
+    /// Whether the segment (tmin, tmax) holds no point: tmax <= tmin, or either is NaN.
+    /// Such a ray hits nothing (the integrators' "no ray"; see [`super::Tracer`]).
+    pub fn is_empty(&self) -> bool {
+        self.tmax.partial_cmp(&self.tmin) != Some(std::cmp::Ordering::Greater)
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
