@@ -3,9 +3,8 @@
 //! light pass runs again), camera passes cut into pixel ranges. For CIS-LBDPT,
 //! resampling one connection from one candidate is LVC-BDPT's uniform connection, up to
 //! the rounding of two different shaders. Then: the technique images sum to the image,
-//! and a render is free of
-//! hazards under synchronization validation with the three streams on distinct queues
-//! where the device has them.
+//! and a render is free of hazards under synchronization validation with the three
+//! streams on distinct queues where the device has them.
 mod common;
 
 use glam::Vec3;

@@ -11,6 +11,10 @@ struct Ray {
     float tmax;
 };
 
+// Whether the segment (tmin, tmax) holds no point: tmax <= tmin, or either is NaN (the
+// integrators' "no ray"). Such a ray hits nothing. Rust twin: `Ray::is_empty`.
+bool ray_is_empty(Ray r) { return !(r.tmax > r.tmin); }
+
 // 16 bytes. triangle == MISS for no hit (t is then +inf).
 struct Hit {
     float t;

@@ -39,9 +39,9 @@ void main() {
     uint best_tri = MISS;
     float best_u = 0.0, best_v = 0.0;
     bool done = !has_ray;
-    // An empty segment (tmax <= tmin, NaN included: an integrator's "no ray") meets no
-    // triangle: it skips the tests but still takes part in the workgroup's barriers.
-    if (has_ray && !(ray.tmax > ray.tmin)) done = true;
+    // An empty segment meets no triangle: it skips the tests but still takes part in the
+    // workgroup's barriers.
+    if (has_ray && ray_is_empty(ray)) done = true;
 
     for (uint base = 0; base < pc.triangle_count; base += BATCH) {
         uint count = min(BATCH, pc.triangle_count - base);

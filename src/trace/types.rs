@@ -28,7 +28,8 @@ impl Ray {
     }
 
     /// Whether the segment (tmin, tmax) holds no point: tmax <= tmin, or either is NaN.
-    /// Such a ray hits nothing (the integrators' "no ray"; see [`super::Tracer`]).
+    /// Such a ray hits nothing (the integrators' "no ray"; see [`super::Tracer`]). GLSL
+    /// twin: `ray_is_empty` in glsl/common/geometry.glsl.
     pub fn is_empty(&self) -> bool {
         self.tmax.partial_cmp(&self.tmin) != Some(std::cmp::Ordering::Greater)
     }

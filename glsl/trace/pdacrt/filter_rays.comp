@@ -123,10 +123,9 @@ uint ray_code(uint id, Sides sides) {
     vec4 origin_tmin = rays4.data[2u * (pc.ray_offset + id)];
     vec4 dir_tmax = rays4.data[2u * (pc.ray_offset + id) + 1u];
     Ray r = Ray(origin_tmin.xyz, origin_tmin.w, dir_tmax.xyz, dir_tmax.w);
-    // An empty segment (tmax <= tmin: the integrators' "no ray", or NaN) meets no
-    // triangle in (tmin, tmax); left in, it would pass the box tests of every node
-    // around its origin down to a leaf and be brute-forced there.
-    if (!(r.tmax > r.tmin)) return CODE_NONE;
+    // An empty segment meets no triangle; left in, it would pass the box tests of every
+    // node around its origin down to a leaf and be brute-forced there.
+    if (ray_is_empty(r)) return CODE_NONE;
     float t1 = min(r.tmax, hit_t(closest) + pc.eps);
     bvec3 parallel = equal(r.dir, vec3(0.0));
     vec3 inv = 1.0 / mix(r.dir, vec3(1.0), parallel);

@@ -129,13 +129,13 @@ fn prepass_constants(
 /// Whether material sorting pays on `gpu`, as measured (docs/PERFORMANCE.md). The
 /// thesis sorts because divergent material evaluation serialises SIMT groups (§4.2.2,
 /// §4.5.1), so sorting is the default on GPUs — except where measurements say
-/// otherwise: on CPU implementations (lavapipe) sorting is pure overhead, and on
+/// otherwise: on CPU implementations (lavapipe) sorting is pure overhead (as for `pt`,
+/// whose rule this starts from), and on
 /// NVIDIA's driver (an H200) every built-in scene renders 0–13 % slower sorted, both
 /// integrators, one stream or three (tracing rules a pass there; material evaluation is
 /// too small a share for coherence to win the sort back). `--sort` still turns it on.
 pub fn sort_pays(gpu: &Gpu) -> bool {
-    let info = gpu.info();
-    !(info.is_cpu() || info.driver_name == "NVIDIA")
+    super::pt::sort_pays(gpu) && gpu.info().driver_name != "NVIDIA"
 }
 
 /// The [`Shared`] view of an [`LvcIntegrator`]'s fields, borrowed field by field so
