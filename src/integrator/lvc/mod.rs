@@ -130,10 +130,10 @@ fn prepass_constants(
 /// thesis sorts because divergent material evaluation serialises SIMT groups (§4.2.2,
 /// §4.5.1), so sorting is the default on GPUs — except where measurements say
 /// otherwise: on CPU implementations (lavapipe) sorting is pure overhead (as for `pt`,
-/// whose rule this starts from), and on
-/// NVIDIA's driver (an H200) every built-in scene renders 0–13 % slower sorted, both
-/// integrators, one stream or three (tracing rules a pass there; material evaluation is
-/// too small a share for coherence to win the sort back). `--sort` still turns it on.
+/// whose rule this starts from), and on NVIDIA's driver (an H200) every built-in scene
+/// renders 0–13 % slower sorted, both integrators, one stream or three (tracing rules a
+/// pass there; material evaluation is too small a share for coherence to win the sort
+/// back). `--sort` still turns it on.
 pub fn sort_pays(gpu: &Gpu) -> bool {
     super::pt::sort_pays(gpu) && gpu.info().driver_name != "NVIDIA"
 }
