@@ -80,9 +80,9 @@ pub struct RenderOptions {
     /// Stop after the pass during which this many seconds ran out (`spp` is then the
     /// most passes).
     pub time_limit: Option<f64>,
-    /// A reference image (mean RGB per pixel, this film's size): the render reports its
-    /// relative MSE against it as it goes.
-    pub reference: Option<std::sync::Arc<Vec<[f32; 3]>>>,
+    /// A reference image of this film's size: the render reports its relative MSE
+    /// against it as it goes.
+    pub reference: Option<std::sync::Arc<film::Reference>>,
     /// `bpt`, `light`, `lvc-bdpt`, `cis-lbdpt`: keep one image per technique (s, t)
     /// ([`Integrator::extra_images`]).
     pub bdpt_techniques: bool,
@@ -178,6 +178,9 @@ pub struct RenderStats {
     pub stopped_early: bool,
     /// Relative MSE against `--reference`, at the end of the render.
     pub relative_mse: Option<f64>,
+    /// `relative_mse` less the reference's own noise, where its standard errors are
+    /// known ([`film::Reference`]).
+    pub relative_mse_excess: Option<f64>,
     /// The integrator's own counts (paths, connections, non-finite samples …).
     pub counters: std::collections::BTreeMap<String, u64>,
     /// GPU time per kernel (timestamp queries), longest first.
@@ -418,7 +421,8 @@ fn render_prepared(
         rays_per_second: integrator_stats.rays_traced as f64 / seconds.max(1e-9),
         peak_gpu_bytes,
         stopped_early: run.stopped,
-        relative_mse: run.relative_mse,
+        relative_mse: run.reference_error.map(|e| e.relative_mse),
+        relative_mse_excess: run.reference_error.and_then(|e| e.excess),
         counters: integrator_stats.counters,
         kernels: profile.summary(),
         profile: profile.tree(),
@@ -621,7 +625,7 @@ struct PassRun {
     stopped: bool,
     /// Passes this run added.
     passes_rendered: u32,
-    relative_mse: Option<f64>,
+    reference_error: Option<film::ReferenceError>,
 }
 
 /// Seconds between two relative-MSE readings while a render runs (each reads the film).
@@ -663,7 +667,7 @@ fn run_passes(
     let mut passes = job.resumed_passes;
     let mut next = job.first_pass.saturating_add(passes);
     let mut stopped = false;
-    let mut relative_mse = None;
+    let mut reference_error = None;
     let mut mse_read_at = f64::NEG_INFINITY;
     let mut saved_at = 0.0;
     // The first batch is one pass: it measures the time per pass (and pays for the
@@ -696,7 +700,7 @@ fn run_passes(
         let last = next == block.end || out_of_time;
         if let Some(reference) = &options.reference {
             if last || elapsed_s - mse_read_at >= MSE_INTERVAL_S {
-                relative_mse = film::relative_mse(&integrator.sums()?.mean(), reference);
+                reference_error = reference.error(&integrator.sums()?.mean());
                 mse_read_at = elapsed_s;
             }
         }
@@ -706,7 +710,7 @@ fn run_passes(
             target_spp,
             elapsed_s,
             time_limit: options.time_limit,
-            relative_mse,
+            relative_mse: reference_error.map(|e: film::ReferenceError| e.relative_mse),
         };
         (control.progress)(&progress);
         if let Some(watch) = job.watch.as_deref_mut() {
@@ -730,12 +734,12 @@ fn run_passes(
         }
     }
     if let (true, Some(reference)) = (stopped, &options.reference) {
-        relative_mse = film::relative_mse(&integrator.sums()?.mean(), reference);
+        reference_error = reference.error(&integrator.sums()?.mean());
     }
     Ok(PassRun {
         stopped,
         passes_rendered: passes - job.resumed_passes,
-        relative_mse,
+        reference_error,
     })
 }
 

@@ -540,3 +540,115 @@ fn export_scene_writes_the_resolved_scene_or_a_clear_error() {
     files.sort();
     assert_eq!(files, ["glossy.json"]);
 }
+
+/// The committed Mitsuba reference of `fixture` at 64×64: `NAME_mean.exr`, with its
+/// standard errors in `NAME_stderr.exr` beside it.
+fn fixture_reference() -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/reference/fixture_ptracer_64_mean.exr")
+}
+
+/// (1/n) Σ se² / (r² + 0.01) of a reference's mean and standard-error images.
+fn reference_noise(mean: &Path, stderr: &Path) -> f64 {
+    let (r, _) = splitray::film::read_exr(mean).unwrap();
+    let (s, _) = splitray::film::read_exr(stderr).unwrap();
+    let (r, s) = (r.mean_rgb_buffer(), s.mean_rgb_buffer());
+    let sum: f64 = r
+        .iter()
+        .zip(&s)
+        .flat_map(|(r, s)| (0..3).map(move |c| (r[c] as f64, s[c] as f64)))
+        .map(|(r, s)| s * s / (r * r + 0.01))
+        .sum();
+    sum / (3 * r.len()) as f64
+}
+
+#[test]
+fn render_against_a_reference_takes_out_its_noise() {
+    let dir = tempfile::tempdir().unwrap();
+    let reference = fixture_reference();
+    let out = splitray(
+        &[
+            "render",
+            "fixture",
+            "--integrator",
+            "pt",
+            "--width",
+            "64",
+            "--height",
+            "64",
+            "--spp",
+            "2",
+            "--reference",
+            reference.to_str().unwrap(),
+            "-o",
+            "img.exr",
+            "--stats",
+            "stats.json",
+        ],
+        dir.path(),
+    );
+    assert!(out.status.success(), "{}", text(&out));
+    assert!(
+        text(&out).contains("without the reference's own noise"),
+        "{}",
+        text(&out)
+    );
+    let stats: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("stats.json")).unwrap()).unwrap();
+    let raw = stats["relative_mse"].as_f64().unwrap();
+    let excess = stats["relative_mse_excess"].as_f64().unwrap();
+    let noise = reference_noise(
+        &reference,
+        &reference.with_file_name("fixture_ptracer_64_stderr.exr"),
+    );
+    assert!(noise > 0.0);
+    assert!(
+        (raw - excess - noise).abs() <= 1e-9 * raw,
+        "relative MSE {raw} less {excess} is not the reference's noise {noise}"
+    );
+}
+
+#[test]
+fn a_reference_with_unusable_standard_errors_is_refused() {
+    use splitray::film::{write_exr, Film, RenderMetadata};
+    let dir = tempfile::tempdir().unwrap();
+    let mean = dir.path().join("ref_mean.exr");
+    std::fs::copy(fixture_reference(), &mean).unwrap();
+    let stderr = dir.path().join("ref_stderr.exr");
+    let cases = [
+        (
+            Film::from_mean_rgb(32, 32, &[[0.01; 3]; 32 * 32]).unwrap(),
+            "32x32",
+        ),
+        (
+            Film::from_mean_rgb(64, 64, &[[-0.01; 3]; 64 * 64]).unwrap(),
+            "must be finite and not negative",
+        ),
+    ];
+    for (film, problem) in cases {
+        write_exr(&stderr, &film, &RenderMetadata::default()).unwrap();
+        let out = splitray(
+            &[
+                "render",
+                "fixture",
+                "--integrator",
+                "pt",
+                "--width",
+                "64",
+                "--height",
+                "64",
+                "--spp",
+                "1",
+                "--reference",
+                "ref_mean.exr",
+                "-o",
+                "img.exr",
+            ],
+            dir.path(),
+        );
+        let t = text(&out);
+        assert!(!out.status.success(), "accepted: {t}");
+        assert!(t.contains("ref_stderr.exr") && t.contains(problem), "{t}");
+        assert!(!t.contains("panicked"), "{t}");
+        assert!(!dir.path().join("img.exr").exists());
+    }
+}

@@ -8,7 +8,9 @@
 //! at its latest rate. Reported per
 //! integrator: samples/s, Mrays/s and, for `bpt` and `light`, CBPT's throughput measure
 //! (basic contributions f_{i,j} per second, §6.2) — medians over the slices — and,
-//! given a reference, the relative MSE of the final film and its ratio to `pt`'s. Then
+//! given a reference, the relative MSE of the final film and its ratio to `pt`'s — with
+//! the reference's own noise taken out where its standard errors are known
+//! ([`Reference`]: near that floor raw ratios tend to 1 whatever the films). Then
 //! the light-vertex-cache integrators at equal samples per pixel, with one stream and
 //! three, sorted or not ([`super::lvc`]).
 
@@ -19,7 +21,7 @@ use std::time::Instant;
 use serde::Serialize;
 
 use super::{median, EvenMedian};
-use crate::film::{relative_mse, FilmSums};
+use crate::film::{FilmSums, Reference};
 use crate::integrator::{Integrator, IntegratorKind};
 use crate::render::{create_integrator, device_description, RenderError, RenderOptions};
 use crate::scene::Scene;
@@ -36,8 +38,8 @@ pub struct BdptBenchOptions {
     pub rounds: u32,
     pub max_depth: i32,
     pub seed: u64,
-    /// Mean RGB of a reference image of this film size, and where it came from.
-    pub reference: Option<(Arc<Vec<[f32; 3]>>, String)>,
+    /// A reference image of this film size.
+    pub reference: Option<Arc<Reference>>,
     /// The tracer of the GPU integrators (`None`: the scene's, else the default).
     pub tracer: Option<crate::trace::TracerKind>,
     /// The equal-spp comparison of `lvc-bdpt` and `cis-lbdpt` (passes 0: none).
@@ -79,7 +81,23 @@ pub struct BdptRow {
     pub mrays_per_second: f64,
     /// Median over the slices of basic contributions per second (bpt, light).
     pub basic_contributions_per_second: Option<f64>,
+    /// Against the reference, as it is.
     pub relative_mse: Option<f64>,
+    /// `relative_mse` less the reference's own noise (where its standard errors are
+    /// known): the film's error against the reference's expectation.
+    pub relative_mse_excess: Option<f64>,
+}
+
+impl BdptRow {
+    /// The error integrators are compared by: without the reference's noise where that
+    /// is known (`None` if the film's error is inside it), else as measured.
+    pub fn comparable_mse(&self) -> Option<f64> {
+        crate::film::ReferenceError {
+            relative_mse: self.relative_mse?,
+            excess: self.relative_mse_excess,
+        }
+        .comparable()
+    }
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -96,15 +114,24 @@ pub struct BdptBenchReport {
     pub seconds_each: f64,
     pub rounds: u32,
     pub reference: Option<String>,
+    /// The relative MSE the reference's own noise adds to every film's (from its
+    /// standard errors), taken out of the ratios.
+    pub reference_noise: Option<f64>,
     pub rows: Vec<BdptRow>,
     /// `lvc-bdpt` and `cis-lbdpt` at equal spp, with 1 and 3 streams.
     pub equal_spp: Vec<super::lvc::SppRow>,
 }
 
 impl BdptBenchReport {
-    /// relative MSE of `kind` over `pt`'s, when both were measured against a reference.
+    /// relative MSE of `kind` over `pt`'s, when both were measured against a reference
+    /// (without its noise, where known: [`BdptRow::comparable_mse`]).
     pub fn mse_ratio_to_pt(&self, kind: &str) -> Option<f64> {
-        let mse = |k: &str| self.rows.iter().find(|r| r.integrator == k)?.relative_mse;
+        let mse = |k: &str| {
+            self.rows
+                .iter()
+                .find(|r| r.integrator == k)?
+                .comparable_mse()
+        };
         Some(mse(kind)? / mse("pt")?)
     }
 }
@@ -130,29 +157,51 @@ impl fmt::Display for BdptBenchReport {
         if let Some(r) = &self.reference {
             writeln!(f, "reference: {r}")?;
         }
+        if let Some(noise) = self.reference_noise {
+            writeln!(
+                f,
+                "the reference's own noise adds {noise:.4e} to each relative MSE (from its \
+                 standard errors); \"excess\" and the ratios are without it"
+            )?;
+        }
         writeln!(
             f,
-            "{:<8} {:>8} {:>7} {:>12} {:>9} {:>16} {:>12}",
-            "", "seconds", "passes", "samples/s", "Mrays/s", "basic contrib/s", "rel. MSE"
+            "{:<8} {:>8} {:>7} {:>12} {:>9} {:>16} {:>12} {:>12}",
+            "",
+            "seconds",
+            "passes",
+            "samples/s",
+            "Mrays/s",
+            "basic contrib/s",
+            "rel. MSE",
+            "excess"
         )?;
         for r in &self.rows {
             let basic = r
                 .basic_contributions_per_second
                 .map_or("-".to_string(), |b| format!("{b:.4e}"));
-            let mse = r
-                .relative_mse
-                .map_or("-".to_string(), |m| format!("{m:.4e}"));
+            let figure = |m: Option<f64>| m.map_or("-".to_string(), |m| format!("{m:.4e}"));
             writeln!(
                 f,
-                "{:<8} {:>8.2} {:>7} {:>12.0} {:>9.3} {:>16} {:>12}",
+                "{:<8} {:>8.2} {:>7} {:>12.0} {:>9.3} {:>16} {:>12} {:>12}",
                 r.integrator,
                 r.seconds,
                 r.passes,
                 r.samples_per_second,
                 r.mrays_per_second,
                 basic,
-                mse
+                figure(r.relative_mse),
+                figure(r.relative_mse_excess)
             )?;
+        }
+        for r in &self.rows {
+            if r.relative_mse_excess.is_some_and(|e| e <= 0.0) {
+                writeln!(
+                    f,
+                    "{}: error inside the reference's noise, no ratio",
+                    r.integrator
+                )?;
+            }
         }
         for r in &self.rows {
             if r.integrator != "pt" {
@@ -162,7 +211,7 @@ impl fmt::Display for BdptBenchReport {
             }
         }
         let row = |k: &str| self.rows.iter().find(|r| r.integrator == k);
-        let mse = |k: &str| row(k)?.relative_mse;
+        let mse = |k: &str| row(k)?.comparable_mse();
         if let (Some(cis), Some(lvc)) = (mse("cis-lbdpt"), mse("lvc-bdpt")) {
             writeln!(f, "relative MSE cis-lbdpt / lvc-bdpt: {:.3}", cis / lvc)?;
             // A slice's last call can overrun it (its pass count comes from the previous
@@ -284,6 +333,7 @@ pub fn run(
     let mut rows = Vec::new();
     for c in &mut contestants {
         let mean = c.integrator.sums()?.mean();
+        let error = options.reference.as_ref().and_then(|r| r.error(&mean));
         let bidirectional = matches!(
             c.kind,
             IntegratorKind::Bpt | IntegratorKind::Light | IntegratorKind::Cbpt
@@ -296,10 +346,8 @@ pub fn run(
             mrays_per_second: median(c.rays.iter().copied(), EvenMedian::Mean) * 1e-6,
             basic_contributions_per_second: bidirectional
                 .then(|| median(c.basic.iter().copied(), EvenMedian::Mean)),
-            relative_mse: options
-                .reference
-                .as_ref()
-                .and_then(|(r, _)| relative_mse(&mean, r)),
+            relative_mse: error.map(|e| e.relative_mse),
+            relative_mse_excess: error.and_then(|e| e.excess),
         });
     }
     let mut base = RenderOptions::resolve(
@@ -329,7 +377,11 @@ pub fn run(
         max_depth: options.max_depth,
         seconds_each: options.seconds,
         rounds,
-        reference: options.reference.as_ref().map(|(_, name)| name.clone()),
+        reference: options.reference.as_ref().map(|r| r.describe()),
+        reference_noise: options
+            .reference
+            .as_ref()
+            .and_then(|r| r.own_relative_mse()),
         rows,
         equal_spp,
     })

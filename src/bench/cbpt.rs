@@ -31,6 +31,7 @@ use serde::Serialize;
 use super::bdpt::{self as bdpt_bench, BdptBenchOptions, BdptBenchReport};
 use super::{median, EvenMedian};
 use crate::bidir::{Counters, CpuScene};
+use crate::film::Reference;
 use crate::integrator::bpt::{BidirMode, BptIntegrator, BptOptions};
 use crate::integrator::cbpt::cpu_kernels::evaluate;
 use crate::integrator::cbpt::layout::{CombinationData, Kinds, Tables};
@@ -62,8 +63,8 @@ pub struct CbptBenchOptions {
     pub seconds: f64,
     pub max_depth: i32,
     pub seed: u64,
-    /// Mean RGB of a reference of this film size, and where it came from.
-    pub reference: Option<(Arc<Vec<[f32; 3]>>, String)>,
+    /// A reference of this film size.
+    pub reference: Option<Arc<Reference>>,
 }
 
 impl Default for CbptBenchOptions {
@@ -728,7 +729,7 @@ impl fmt::Display for CbptBenchReport {
         if let Some(e) = &self.equal_time {
             writeln!(f, "\nequal time\n{e}")?;
             let row = |k: &str| e.rows.iter().find(|r| r.integrator == k);
-            let efficiency = |k: &str| Some(row(k)?.relative_mse? * row(k)?.seconds);
+            let efficiency = |k: &str| Some(row(k)?.comparable_mse()? * row(k)?.seconds);
             for other in ["pt", "bpt"] {
                 if let (Some(c), Some(o)) = (efficiency("cbpt"), efficiency(other)) {
                     writeln!(f, "relative MSE x seconds, cbpt / {other}: {:.3}", c / o)?;

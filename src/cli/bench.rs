@@ -98,7 +98,9 @@ enum BenchCommand {
         max_depth: i32,
         #[arg(long, default_value_t = 0)]
         seed: u64,
-        /// A converged image of this film size (EXR): relative MSE of each film. Once per
+        /// A converged image of this film size (EXR): relative MSE of each film, and
+        /// without the reference's own noise where its standard errors are known
+        /// (stderr.R/G/B channels, or NAME_stderr.exr beside NAME_mean.exr). Once per
         /// scene, in the scenes' order (all or none).
         #[arg(long, value_name = "REF.exr")]
         reference: Vec<PathBuf>,
@@ -647,23 +649,13 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// A reference image's mean RGB and its path, refused unless it is `width × height`.
+/// A reference image of the benchmark's film size.
 fn read_reference(
     path: &std::path::Path,
     width: u32,
     height: u32,
-) -> anyhow::Result<(std::sync::Arc<Vec<[f32; 3]>>, String)> {
-    let (film, _) = splitray::film::read_exr(path)?;
-    if (film.width(), film.height()) != (width, height) {
-        anyhow::bail!(
-            "{}: the reference is {}x{}, the benchmark renders {width}x{height}",
-            path.display(),
-            film.width(),
-            film.height()
-        );
-    }
-    Ok((
-        std::sync::Arc::new(film.mean_rgb_buffer()),
-        path.display().to_string(),
-    ))
+) -> anyhow::Result<std::sync::Arc<splitray::film::Reference>> {
+    Ok(std::sync::Arc::new(splitray::film::Reference::read(
+        path, width, height,
+    )?))
 }

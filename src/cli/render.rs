@@ -121,7 +121,8 @@ pub struct RenderArgs {
     profile: bool,
     /// A reference image (an EXR of this film size, e.g. a long render or a Mitsuba
     /// reference): the relative MSE against it is shown as the render goes and recorded
-    /// in the stats.
+    /// in the stats, and without the reference's own noise where its standard errors are
+    /// known (stderr.R/G/B channels, or NAME_stderr.exr beside NAME_mean.exr).
     #[arg(long, value_name = "REF.exr")]
     reference: Option<PathBuf>,
     /// Write a timeline of the render (GPU streams, host threads, counters) as
@@ -482,7 +483,13 @@ fn print_summary(result: &RenderOutput, profile: bool) {
         s.peak_gpu_bytes as f64 / (1 << 20) as f64
     );
     if let Some(mse) = s.relative_mse {
-        println!("relative MSE against the reference: {mse:.6e}");
+        match s.relative_mse_excess {
+            Some(excess) => println!(
+                "relative MSE against the reference: {mse:.6e} ({excess:.6e} without the \
+                 reference's own noise)"
+            ),
+            None => println!("relative MSE against the reference: {mse:.6e}"),
+        }
     }
     if profile {
         print!("{}", s.profile.table());

@@ -9,6 +9,8 @@
 //! - [`FilmSums`] ([`sums`]): the per-pass sums every integrator accumulates (mean and
 //!   standard error), which checkpoints save and shards merge.
 //! - [`write_outputs`]: both at once.
+//! - [`Reference`] ([`reference`]): a converged image to measure a film's error against,
+//!   less the reference's own noise where its standard errors are known.
 //! - [`DeviceFilm`] ([`device`]): an integrator's film where it lives on the GPU.
 //!
 //! Every file is written atomically ([`atomic`]): to a temporary file in the target's
@@ -23,6 +25,7 @@ pub mod exr_out;
 mod metadata;
 mod outputs;
 pub mod png_out;
+pub mod reference;
 pub mod sums;
 
 pub use accum::Film;
@@ -33,4 +36,5 @@ pub use exr_out::{read_exr, write_exr};
 pub use metadata::RenderMetadata;
 pub use outputs::{write_outputs, ImageFiles, WrittenOutputs};
 pub use png_out::{write_png_preview, write_png_preview_with, PreviewSettings, ToneMap};
+pub use reference::{Reference, ReferenceError};
 pub use sums::{relative_mse, FilmSums};

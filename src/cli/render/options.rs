@@ -73,7 +73,11 @@ pub(super) fn render_options(
         options.strategy = s;
     }
     if let Some(path) = &args.reference {
-        options.reference = Some(std::sync::Arc::new(read_reference(path, &options)?));
+        options.reference = Some(std::sync::Arc::new(splitray::film::Reference::read(
+            path,
+            options.width,
+            options.height,
+        )?));
     }
     cbpt_settings(args, &mut options.cbpt)?;
     if let Some(dir) = &args.bdpt_techniques {
@@ -131,22 +135,6 @@ fn resumed_options(
         options.time_limit = Some(left);
     }
     Ok(options)
-}
-
-/// The reference image's mean RGB, refused unless it has this render's film size.
-fn read_reference(path: &Path, options: &RenderOptions) -> anyhow::Result<Vec<[f32; 3]>> {
-    let (film, _) = splitray::film::read_exr(path)?;
-    if (film.width(), film.height()) != (options.width, options.height) {
-        bail!(
-            "{}: the reference is {}x{}, the render {}x{}",
-            path.display(),
-            film.width(),
-            film.height(),
-            options.width,
-            options.height
-        );
-    }
-    Ok(film.mean_rgb_buffer())
 }
 
 /// `--cbpt-*` on top of the scene's or the checkpoint's CBPT settings.
