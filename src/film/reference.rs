@@ -18,6 +18,7 @@ use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
+use super::sums::RELATIVE_MSE_GUARD;
 use super::{read_exr, relative_mse, FilmError};
 
 /// A reference image: its mean RGB and, where known, each pixel's standard error.
@@ -122,7 +123,7 @@ impl Reference {
             .iter()
             .zip(stderr)
             .flat_map(|(r, s)| (0..3).map(move |c| (r[c] as f64, s[c] as f64)))
-            .map(|(r, s)| s * s / (r * r + 0.01))
+            .map(|(r, s)| s * s / (r * r + RELATIVE_MSE_GUARD))
             .sum();
         Some(total / (3 * self.mean.len()).max(1) as f64)
     }

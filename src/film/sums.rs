@@ -186,9 +186,13 @@ impl FilmSums {
     }
 }
 
+/// ε of [`relative_mse`]: the usual guard against dividing by black pixels (Rousselle
+/// et al. 2011).
+pub const RELATIVE_MSE_GUARD: f64 = 0.01;
+
 /// Relative mean squared error of `image` against `reference`: the mean over pixels
-/// and channels of (v − r)² / (r² + ε), ε = 0.01, the usual guard against dividing by
-/// black pixels (Rousselle et al. 2011). `None` when the sizes differ.
+/// and channels of (v − r)² / (r² + ε), ε = [`RELATIVE_MSE_GUARD`]. `None` when the
+/// sizes differ.
 pub fn relative_mse(image: &[[f32; 3]], reference: &[[f32; 3]]) -> Option<f64> {
     if image.len() != reference.len() || image.is_empty() {
         return None;
@@ -197,7 +201,7 @@ pub fn relative_mse(image: &[[f32; 3]], reference: &[[f32; 3]]) -> Option<f64> {
         .iter()
         .zip(reference)
         .flat_map(|(v, r)| (0..3).map(move |c| (v[c] as f64, r[c] as f64)))
-        .map(|(v, r)| (v - r) * (v - r) / (r * r + 0.01))
+        .map(|(v, r)| (v - r) * (v - r) / (r * r + RELATIVE_MSE_GUARD))
         .sum();
     Some(total / (3 * image.len()) as f64)
 }
