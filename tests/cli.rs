@@ -561,30 +561,37 @@ fn reference_noise(mean: &Path, stderr: &Path) -> f64 {
     sum / (3 * r.len()) as f64
 }
 
+/// `splitray render fixture` with `pt` at 64×64 against `reference`, writing img.exr and
+/// `extra` arguments.
+fn render_fixture_against(reference: &str, dir: &Path, extra: &[&str]) -> Output {
+    let mut args = vec![
+        "render",
+        "fixture",
+        "--integrator",
+        "pt",
+        "--width",
+        "64",
+        "--height",
+        "64",
+        "--spp",
+        "2",
+        "--reference",
+        reference,
+        "-o",
+        "img.exr",
+    ];
+    args.extend_from_slice(extra);
+    splitray(&args, dir)
+}
+
 #[test]
 fn render_against_a_reference_takes_out_its_noise() {
     let dir = tempfile::tempdir().unwrap();
     let reference = fixture_reference();
-    let out = splitray(
-        &[
-            "render",
-            "fixture",
-            "--integrator",
-            "pt",
-            "--width",
-            "64",
-            "--height",
-            "64",
-            "--spp",
-            "2",
-            "--reference",
-            reference.to_str().unwrap(),
-            "-o",
-            "img.exr",
-            "--stats",
-            "stats.json",
-        ],
+    let out = render_fixture_against(
+        reference.to_str().unwrap(),
         dir.path(),
+        &["--stats", "stats.json"],
     );
     assert!(out.status.success(), "{}", text(&out));
     assert!(
@@ -626,25 +633,7 @@ fn a_reference_with_unusable_standard_errors_is_refused() {
     ];
     for (film, problem) in cases {
         write_exr(&stderr, &film, &RenderMetadata::default()).unwrap();
-        let out = splitray(
-            &[
-                "render",
-                "fixture",
-                "--integrator",
-                "pt",
-                "--width",
-                "64",
-                "--height",
-                "64",
-                "--spp",
-                "1",
-                "--reference",
-                "ref_mean.exr",
-                "-o",
-                "img.exr",
-            ],
-            dir.path(),
-        );
+        let out = render_fixture_against("ref_mean.exr", dir.path(), &[]);
         let t = text(&out);
         assert!(!out.status.success(), "accepted: {t}");
         assert!(t.contains("ref_stderr.exr") && t.contains(problem), "{t}");

@@ -62,17 +62,7 @@ impl Reference {
     /// Reads a reference EXR (see the module docs for where its standard errors come
     /// from), refused unless it is `width × height`.
     pub fn read(path: &Path, width: u32, height: u32) -> Result<Self, FilmError> {
-        let (film, _) = read_exr(path)?;
-        if (film.width(), film.height()) != (width, height) {
-            return Err(FilmError::invalid(
-                path,
-                format!(
-                    "the reference is {}x{}, the film {width}x{height}",
-                    film.width(),
-                    film.height()
-                ),
-            ));
-        }
+        let film = read_sized(path, width, height, "the reference is", "the film")?;
         let mean = film.mean_rgb_buffer();
         let (stderr, stderr_path) = match film.stderr {
             Some(se) => (Some(se), Some(path.to_path_buf())),
@@ -147,18 +137,37 @@ fn sibling_stderr(path: &Path) -> Option<PathBuf> {
 
 /// A standard-error image: RGB of the reference's size.
 fn read_sibling(path: &Path, width: u32, height: u32) -> Result<Vec<[f32; 3]>, FilmError> {
+    let film = read_sized(
+        path,
+        width,
+        height,
+        "the standard errors are",
+        "the reference",
+    )?;
+    Ok(film.mean_rgb_buffer())
+}
+
+/// The EXR at `path`, refused unless it is `width × height` ("`what` AxB, `other`
+/// WxH").
+fn read_sized(
+    path: &Path,
+    width: u32,
+    height: u32,
+    what: &str,
+    other: &str,
+) -> Result<super::Film, FilmError> {
     let (film, _) = read_exr(path)?;
     if (film.width(), film.height()) != (width, height) {
         return Err(FilmError::invalid(
             path,
             format!(
-                "the standard errors are {}x{}, the reference {width}x{height}",
+                "{what} {}x{}, {other} {width}x{height}",
                 film.width(),
                 film.height()
             ),
         ));
     }
-    Ok(film.mean_rgb_buffer())
+    Ok(film)
 }
 
 #[cfg(test)]
