@@ -710,7 +710,7 @@ fn run_passes(
             target_spp,
             elapsed_s,
             time_limit: options.time_limit,
-            relative_mse: reference_error.map(|e: film::ReferenceError| e.relative_mse),
+            relative_mse: reference_error.map(|e| e.relative_mse),
         };
         (control.progress)(&progress);
         if let Some(watch) = job.watch.as_deref_mut() {

@@ -50,36 +50,10 @@ impl Gpu {
         let state = self.stream(stream);
         let device = &self.0.raw;
         let reused = state.state.lock().unwrap().free_slots.pop();
+        // A reused slot was reset when its last submission finished (Gpu::reclaim).
         let slot = match reused {
-            // Reset when its last submission finished (Gpu::reclaim): initial state.
             Some(slot) => slot,
-            None => {
-                let info = vk::CommandPoolCreateInfo::default()
-                    .queue_family_index(state.family)
-                    .flags(vk::CommandPoolCreateFlags::TRANSIENT);
-                // SAFETY: valid device and family.
-                let pool = unsafe { device.create_command_pool(&info, None) }
-                    .call("vkCreateCommandPool")?;
-                let alloc = vk::CommandBufferAllocateInfo::default()
-                    .command_pool(pool)
-                    .level(vk::CommandBufferLevel::PRIMARY)
-                    .command_buffer_count(1);
-                // SAFETY: the pool was just created; this recorder owns it until the
-                // submission completes.
-                let allocated = unsafe { device.allocate_command_buffers(&alloc) }
-                    .call("vkAllocateCommandBuffers");
-                match allocated {
-                    Ok(cmds) => {
-                        self.0.command_buffers.fetch_add(1, Ordering::Relaxed);
-                        CommandSlot { pool, cmd: cmds[0] }
-                    }
-                    Err(e) => {
-                        // SAFETY: nothing was allocated from or submitted with the pool.
-                        unsafe { device.destroy_command_pool(pool, None) };
-                        return Err(e);
-                    }
-                }
-            }
+            None => self.new_command_slot(state.family)?,
         };
         let cmd = slot.cmd;
         let begin = vk::CommandBufferBeginInfo::default()
@@ -95,6 +69,34 @@ impl Gpu {
             submitted: false,
             span,
         })
+    }
+
+    /// A new command pool of queue family `family` with its one command buffer.
+    fn new_command_slot(&self, family: u32) -> Result<CommandSlot> {
+        let device = &self.0.raw;
+        let info = vk::CommandPoolCreateInfo::default()
+            .queue_family_index(family)
+            .flags(vk::CommandPoolCreateFlags::TRANSIENT);
+        // SAFETY: valid device and family.
+        let pool =
+            unsafe { device.create_command_pool(&info, None) }.call("vkCreateCommandPool")?;
+        let alloc = vk::CommandBufferAllocateInfo::default()
+            .command_pool(pool)
+            .level(vk::CommandBufferLevel::PRIMARY)
+            .command_buffer_count(1);
+        // SAFETY: the pool was just created; the recorder owns it until its submission
+        // completes.
+        match unsafe { device.allocate_command_buffers(&alloc) }.call("vkAllocateCommandBuffers") {
+            Ok(cmds) => {
+                self.0.command_buffers.fetch_add(1, Ordering::Relaxed);
+                Ok(CommandSlot { pool, cmd: cmds[0] })
+            }
+            Err(e) => {
+                // SAFETY: nothing was allocated from or submitted with the pool.
+                unsafe { device.destroy_command_pool(pool, None) };
+                Err(e)
+            }
+        }
     }
 }
 
