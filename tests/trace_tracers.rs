@@ -14,7 +14,7 @@ use splitray::trace::cpu_dacrt::{self, DacrtParams};
 use splitray::trace::{
     cpu, CpuDacrtTracer, GpuTriangle, Hit, Query, Ray, RayQueryTracer, Tracer, TracerKind,
 };
-use splitray::vk::{Gpu, MemoryKind, StreamKind};
+use splitray::vk::{MemoryKind, StreamKind};
 
 const BUNNY: &str = "../shared/meshes/bunny/bunny.obj";
 
@@ -411,7 +411,7 @@ fn tracer_kinds_are_registered() {
 
 /// The device, or `None` (with a note) when it lacks ray queries; then creating the
 /// tracer must fail naming the extension.
-fn ray_query_gpu() -> Option<Gpu> {
+fn ray_query_gpu() -> Option<common::TestGpu> {
     let gpu = common::gpu();
     if gpu.ray_query() {
         return Some(gpu);

@@ -399,3 +399,42 @@ fn synchronization_validation_catches_a_missing_barrier() {
         "missing barrier went unreported: {messages:?}"
     );
 }
+
+/// A test process's devices are opened one test at a time (tests/common/turn.rs: the
+/// validation layer cannot take a device opened or closed beside another thread's
+/// calls): a thread's second device joins its turn, another thread's waits until both
+/// are closed.
+#[test]
+fn test_devices_take_turns() {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::time::Duration;
+    let first = common::gpu();
+    // Opened in the turn `first` holds: waiting for it would never end.
+    let second = common::gpu_with(StreamPlacement::SingleQueue, false);
+    let other_opened = AtomicBool::new(false);
+    std::thread::scope(|scope| {
+        let other = scope.spawn(|| {
+            let gpu = common::gpu();
+            other_opened.store(true, Ordering::SeqCst);
+            common::assert_clean(&gpu);
+        });
+        // Opening a device takes lavapipe tens of milliseconds: were the turn not
+        // waited for, the other thread would be done by now.
+        std::thread::sleep(Duration::from_millis(300));
+        assert!(
+            !other_opened.load(Ordering::SeqCst),
+            "opened beside two devices"
+        );
+        common::assert_clean(&second);
+        drop(second);
+        std::thread::sleep(Duration::from_millis(300));
+        assert!(
+            !other_opened.load(Ordering::SeqCst),
+            "opened beside a device"
+        );
+        common::assert_clean(&first);
+        drop(first);
+        other.join().expect("the other thread's device");
+    });
+    assert!(other_opened.load(Ordering::SeqCst));
+}

@@ -142,6 +142,11 @@ pub(crate) const QUERIES_PER_POOL: u32 = 512;
 
 impl Gpu {
     /// Creates the instance, picks a device and opens it with every stream.
+    ///
+    /// With validation on, do not open or drop a `Gpu` while another thread uses
+    /// another one: the validation layer of Debian 12 (1.3.239) keeps all instances' and
+    /// devices' state in one unsynchronised map, and such a process crashes now and then
+    /// (the tests take turns for this: tests/common/turn.rs).
     pub fn new(desc: &GpuDesc) -> Result<Self> {
         let _span = tracing::info_span!("open device").entered();
         let instance = Instance::new(desc.instance)?;

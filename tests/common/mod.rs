@@ -6,22 +6,30 @@ pub mod cli;
 pub mod lvc_dump;
 pub mod reference;
 pub mod scenes;
+mod turn;
+
+pub use turn::TestGpu;
 
 use splitray::vk::{BufferAccess, Gpu, GpuDesc, InstanceDesc, StreamPlacement};
 
 /// Opens the default device with validation (and synchronization validation if `sync`).
-pub fn gpu_with(placement: StreamPlacement, sync: bool) -> Gpu {
+pub fn gpu_with(placement: StreamPlacement, sync: bool) -> TestGpu {
     let _ = env_logger::builder().is_test(true).try_init();
-    Gpu::new(&GpuDesc {
-        instance: InstanceDesc {
-            validation: true,
-            sync_validation: sync,
-        },
-        device: None,
-        placement,
-        ..Default::default()
+    TestGpu::open(|| {
+        open(&GpuDesc {
+            instance: InstanceDesc {
+                validation: true,
+                sync_validation: sync,
+            },
+            device: None,
+            placement,
+            ..Default::default()
+        })
     })
-    .expect("a Vulkan device with the validation layer (run `make deps`)")
+}
+
+fn open(desc: &GpuDesc) -> Gpu {
+    Gpu::new(desc).expect("a Vulkan device with the validation layer (run `make deps`)")
 }
 
 /// Whether the device can hold a buffer of `bytes` that is past one storage binding
@@ -44,24 +52,25 @@ pub fn holds_past_one_binding(gpu: &Gpu, bytes: u64, what: &str) -> bool {
     holds
 }
 
-pub fn gpu() -> Gpu {
+pub fn gpu() -> TestGpu {
     gpu_with(StreamPlacement::Spread, false)
 }
 
 /// The default device with validation, its kernels taking buffers as `access` says
 /// (lavapipe's default reads descriptors where they fit: this proves the other way).
-pub fn gpu_with_access(access: BufferAccess) -> Gpu {
+pub fn gpu_with_access(access: BufferAccess) -> TestGpu {
     let _ = env_logger::builder().is_test(true).try_init();
-    Gpu::new(&GpuDesc {
-        instance: InstanceDesc {
-            validation: true,
-            sync_validation: false,
-        },
-        device: None,
-        placement: StreamPlacement::Spread,
-        buffer_access: Some(access),
+    TestGpu::open(|| {
+        open(&GpuDesc {
+            instance: InstanceDesc {
+                validation: true,
+                sync_validation: false,
+            },
+            device: None,
+            placement: StreamPlacement::Spread,
+            buffer_access: Some(access),
+        })
     })
-    .expect("a Vulkan device with the validation layer (run `make deps`)")
 }
 
 /// Waits for the device, then fails the test on any validation message.
