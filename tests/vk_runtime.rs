@@ -420,18 +420,15 @@ fn test_devices_take_turns() {
         });
         // Opening a device takes lavapipe tens of milliseconds: were the turn not
         // waited for, the other thread would be done by now.
-        std::thread::sleep(Duration::from_millis(300));
-        assert!(
-            !other_opened.load(Ordering::SeqCst),
-            "opened beside two devices"
-        );
+        let assert_still_waiting = |beside: &str| {
+            std::thread::sleep(Duration::from_millis(300));
+            let opened = other_opened.load(Ordering::SeqCst);
+            assert!(!opened, "opened beside {beside}");
+        };
+        assert_still_waiting("two devices");
         common::assert_clean(&second);
         drop(second);
-        std::thread::sleep(Duration::from_millis(300));
-        assert!(
-            !other_opened.load(Ordering::SeqCst),
-            "opened beside a device"
-        );
+        assert_still_waiting("a device");
         common::assert_clean(&first);
         drop(first);
         other.join().expect("the other thread's device");
