@@ -1,6 +1,7 @@
 //! `splitray bench`: measurements, never timed tests. Each verifies its results first.
 
 use std::path::PathBuf;
+use std::sync::Arc;
 
 use anyhow::Context;
 use clap::{Args, Subcommand};
@@ -12,6 +13,7 @@ use splitray::bench::primitives::{self, PrimitivesBenchOptions};
 use splitray::bench::pt::{self as pt_bench, PtBenchOptions};
 use splitray::bench::trace::{self, TraceBenchOptions};
 use splitray::bench::workloads::Workload;
+use splitray::film::Reference;
 use splitray::integrator::IntegratorKind;
 use splitray::trace::{FlushReduce, LevelSplit, PdacrtParams, TracerKind};
 use splitray::vk::{Gpu, GpuDesc, InstanceDesc};
@@ -347,8 +349,10 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             }
             let mut inputs = Vec::new();
             for (k, name) in scenes.iter().enumerate() {
-                let r = reference.get(k);
-                let r = r.map(|p| read_reference(p, *width, *height)).transpose()?;
+                let r = reference
+                    .get(k)
+                    .map(|p| Reference::read(p, *width, *height).map(Arc::new))
+                    .transpose()?;
                 inputs.push((splitray::scene::load(name)?, r));
             }
             inputs
@@ -366,7 +370,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             if time.is_nan() || *time <= 0.0 {
                 anyhow::bail!("--time must be a positive number of seconds");
             }
-            Some(read_reference(path, *width, *height)?)
+            Some(Arc::new(Reference::read(path, *width, *height)?))
         }
         _ => None,
     };
@@ -647,15 +651,4 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         t.finish(&super::timeline::command_line())?;
     }
     Ok(())
-}
-
-/// A reference image of the benchmark's film size.
-fn read_reference(
-    path: &std::path::Path,
-    width: u32,
-    height: u32,
-) -> anyhow::Result<std::sync::Arc<splitray::film::Reference>> {
-    Ok(std::sync::Arc::new(splitray::film::Reference::read(
-        path, width, height,
-    )?))
 }

@@ -18,14 +18,12 @@ use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
-use super::sums::RELATIVE_MSE_GUARD;
+use super::sums::relative_channel_mean;
 use super::{read_exr, relative_mse, FilmError};
 
 /// A reference image: its mean RGB and, where known, each pixel's standard error.
 #[derive(Clone, Debug)]
 pub struct Reference {
-    pub width: u32,
-    pub height: u32,
     pub mean: Vec<[f32; 3]>,
     pub stderr: Option<Vec<[f32; 3]>>,
     /// The file the mean came from.
@@ -81,8 +79,6 @@ impl Reference {
             }
         }
         Ok(Self {
-            width,
-            height,
             mean,
             stderr,
             path: path.to_path_buf(),
@@ -108,14 +104,7 @@ impl Reference {
     /// (1/n) Σ se² / (r² + ε), as [`relative_mse`] weights it.
     pub fn own_relative_mse(&self) -> Option<f64> {
         let stderr = self.stderr.as_ref()?;
-        let total: f64 = self
-            .mean
-            .iter()
-            .zip(stderr)
-            .flat_map(|(r, s)| (0..3).map(move |c| (r[c] as f64, s[c] as f64)))
-            .map(|(r, s)| s * s / (r * r + RELATIVE_MSE_GUARD))
-            .sum();
-        Some(total / (3 * self.mean.len()).max(1) as f64)
+        Some(relative_channel_mean(stderr, &self.mean, |s, _| s * s))
     }
 
     /// `image`'s error against the reference; `None` when its size differs.
@@ -176,8 +165,6 @@ mod tests {
 
     fn reference(mean: Vec<[f32; 3]>, stderr: Option<Vec<[f32; 3]>>) -> Reference {
         Reference {
-            width: mean.len() as u32,
-            height: 1,
             mean,
             stderr,
             path: PathBuf::from("ref.exr"),
@@ -255,8 +242,6 @@ mod tests {
             })
             .collect();
         let r = Reference {
-            width: 64,
-            height: 64,
             mean: mean.clone(),
             stderr: Some(stderr),
             path: PathBuf::from("ref.exr"),

@@ -197,13 +197,25 @@ pub fn relative_mse(image: &[[f32; 3]], reference: &[[f32; 3]]) -> Option<f64> {
     if image.len() != reference.len() || image.is_empty() {
         return None;
     }
-    let total: f64 = image
+    Some(relative_channel_mean(image, reference, |v, r| {
+        (v - r) * (v - r)
+    }))
+}
+
+/// The mean over pixels and channels of `term(x, r)` / (r² + ε), r from `reference`,
+/// x the same pixel's channel in `values`: how the relative MSE weights a squared error.
+pub(super) fn relative_channel_mean(
+    values: &[[f32; 3]],
+    reference: &[[f32; 3]],
+    term: impl Fn(f64, f64) -> f64,
+) -> f64 {
+    let total: f64 = values
         .iter()
         .zip(reference)
         .flat_map(|(v, r)| (0..3).map(move |c| (v[c] as f64, r[c] as f64)))
-        .map(|(v, r)| (v - r) * (v - r) / (r * r + RELATIVE_MSE_GUARD))
+        .map(|(x, r)| term(x, r) / (r * r + RELATIVE_MSE_GUARD))
         .sum();
-    Some(total / (3 * image.len()) as f64)
+    total / (3 * reference.len()).max(1) as f64
 }
 
 #[cfg(test)]
