@@ -13,7 +13,8 @@
 //!   connections (`camera_vertex`, `camera_direct`, `camera_connect`, uniform and
 //!   resampled) against `Connector` on the GPU's own records, with the cache vertices the
 //!   selection must have drawn; `camera_accumulate` and `finish` against sums of the
-//!   dumped contributions; with sorting on, every bounce's `order` (`sort_keys` and the
+//!   dumped contributions, and the visibility tally of every bounce, summed into the
+//!   integrator's counters, against `twin::accumulate`'s; with sorting on, every bounce's `order` (`sort_keys` and the
 //!   radix sort of the keys' ranks) against a stable CPU sort of the 32-bit material
 //!   keys of the same hits.
 //!
@@ -30,7 +31,7 @@ use splitray::bidir::random::{fold_seed, PathSampler};
 use splitray::bidir::{Connector, CpuScene, PinholeCamera, WalkSettings};
 use splitray::integrator::lvc::fixed::FixedFilm;
 use splitray::integrator::lvc::gpu::{dims, Contribution, LvcVertex, VERTEX_CONNECTIBLE};
-use splitray::integrator::lvc::{twin, LvcOptions, Variant};
+use splitray::integrator::lvc::{twin, LvcOptions, Variant, Visibility};
 use splitray::integrator::pt::PtScene;
 use splitray::integrator::Integrator;
 use splitray::scene::{builtin, Material, PointLight, Scene, Triangle};
@@ -259,6 +260,12 @@ fn check_case(case: Case) -> usize {
         }
     }
     assert_eq!(lvc.kernel_counters().unwrap(), [0, 0], "{}", case.name);
+    assert_eq!(
+        lvc.lvc_counters().visibility,
+        visibility_twin(&dumps.chunks, case.options.connections as usize),
+        "{}: visibility tally",
+        case.name
+    );
     drop(lvc);
     common::assert_clean(&gpu);
     sorted_keys
@@ -485,6 +492,26 @@ fn check_camera(
         );
     }
     radiance
+}
+
+/// The visibility tally of every dumped bounce as `twin::accumulate` counts it.
+fn visibility_twin(chunks: &[ChunkDump], connections: usize) -> Visibility {
+    let mut sum = Visibility::default();
+    for b in chunks.iter().flat_map(|d| &d.bounces) {
+        let paths = b.view_paths as usize;
+        let records = twin::BounceRecords {
+            live_ids: &b.active[..paths],
+            emitted: &b.emitted,
+            contributions: &b.contributions,
+            shadow_hits: &b.hits,
+            base: b.base as usize,
+            connections,
+        };
+        let mut scratch = vec![[0.0f32; 4]; b.radiance.len()];
+        sum.merge(&twin::accumulate(&records, &mut scratch).1.into());
+    }
+    assert!(sum.connection_rays > 0 || chunks.iter().all(|d| d.cache.is_empty()));
+    sum
 }
 
 /// `camera_accumulate`'s addition of one contribution.

@@ -30,6 +30,11 @@ pub struct SppRow {
     pub overlap_ms: f64,
     /// GPU time per kernel (all rounds), longest first.
     pub kernels: Vec<KernelTime>,
+    /// Connection shadow rays per camera path and the share of them unoccluded (the
+    /// integrator's counters over all its passes): what resampling does to visibility
+    /// tests.
+    pub connection_rays_per_path: f64,
+    pub connections_unoccluded: f64,
 }
 
 /// Material sorting in a configuration: the integrator's default on the device, or
@@ -229,6 +234,9 @@ pub fn equal_spp(
         .into_iter()
         .map(|c| {
             let (stream_busy_ms, overlap_ms) = stream_use(&c.log);
+            let counters = c.integrator.stats().counters;
+            let count = |name: &str| counters.get(name).copied().unwrap_or(0) as f64;
+            let rays = count("connection_shadow_rays");
             SppRow {
                 integrator: c.kind.name().to_string(),
                 streams: c.streams,
@@ -238,6 +246,8 @@ pub fn equal_spp(
                 stream_busy_ms,
                 overlap_ms,
                 kernels: c.log.summary(),
+                connection_rays_per_path: rays / count("camera_paths").max(1.0),
+                connections_unoccluded: count("connections_unoccluded") / rays.max(1.0),
             }
         })
         .collect())
@@ -340,6 +350,17 @@ pub fn write_equal_spp(f: &mut std::fmt::Formatter<'_>, rows: &[SppRow]) -> std:
                     off / on
                 )?;
             }
+        }
+    }
+    // The images, and so these counts, are the same in every configuration of a method.
+    for k in ["lvc-bdpt", "cis-lbdpt"] {
+        if let Some(r) = first(k) {
+            writeln!(
+                f,
+                "{k}: {:.2} connection shadow rays per camera path, {:.1} % unoccluded",
+                r.connection_rays_per_path,
+                100.0 * r.connections_unoccluded
+            )?;
         }
     }
     for r in rows.iter().filter(|r| r.streams == 3) {

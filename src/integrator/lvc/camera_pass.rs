@@ -12,14 +12,15 @@
 //! 4. the shadow rays of direct lighting and connections traced together, after all
 //!    three (line 9);
 //! 5. `camera_accumulate`: unoccluded contributions join their path's radiance, in a
-//!    fixed order; the live paths are compacted (line 10).
+//!    fixed order, and the bounce's shadow rays are tallied ([`Visibility`]); the live
+//!    paths are compacted (line 10).
 //!
 //! Then `finish` adds each pixel's pass estimates (radiance + light-tracing splats) to
 //! the film. With one stream every kernel is recorded on the main stream in the same
 //! order; the kernels' outputs do not depend on their order, so the image is the same
 //! bit for bit.
 
-use super::gpu::LvcPush;
+use super::gpu::{LvcPush, VisibilityTally};
 use super::light_pass::gather;
 use super::Shared;
 use crate::trace::{Query, Tracer};
@@ -89,8 +90,40 @@ pub type BounceHook<'h> = dyn FnMut(&Shared, &BounceView) -> vk::Result<()> + 'h
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct CameraPassOutcome {
     pub rays: u64,
+    /// Shadow-ray slots handed to the tracer (empty ones included).
     pub shadow_rays: u64,
     pub bounces: u32,
+    pub visibility: Visibility,
+}
+
+/// Shadow rays that carried a contribution and those found unoccluded, summed over
+/// bounces (each bounce's [`VisibilityTally`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Visibility {
+    pub direct_rays: u64,
+    pub direct_unoccluded: u64,
+    pub connection_rays: u64,
+    pub connections_unoccluded: u64,
+}
+
+impl From<VisibilityTally> for Visibility {
+    fn from(t: VisibilityTally) -> Self {
+        Self {
+            direct_rays: t.direct_rays.into(),
+            direct_unoccluded: t.direct_unoccluded.into(),
+            connection_rays: t.connection_rays.into(),
+            connections_unoccluded: t.connections_unoccluded.into(),
+        }
+    }
+}
+
+impl Visibility {
+    pub fn merge(&mut self, other: &Visibility) {
+        self.direct_rays += other.direct_rays;
+        self.direct_unoccluded += other.direct_unoccluded;
+        self.connection_rays += other.connection_rays;
+        self.connections_unoccluded += other.connections_unoccluded;
+    }
 }
 
 /// The first connection slot after `n` direct-lighting slots: the next multiple of
@@ -163,6 +196,8 @@ pub fn trace_camera_paths(
         )?;
         outcome.shadow_rays += shadows as u64;
         let mut rec = gpu.recorder(StreamKind::Main)?;
+        rec.fill(&w.tally, 0);
+        rec.barrier();
         rec.dispatch_items(
             &k.camera_accumulate,
             &[
@@ -173,6 +208,7 @@ pub fn trace_camera_paths(
                 (&w.contributions).into(),
                 (&w.radiance).into(),
                 targets.counters.into(),
+                (&w.tally).into(),
             ],
             &push,
             n as u64,
@@ -180,8 +216,10 @@ pub fn trace_camera_paths(
         rec.barrier();
         w.record_compact(&mut rec, n, &w.alive, &w.kept, &w.count_alive)?;
         w.record_counts_readback(&mut rec);
+        w.record_tally_readback(&mut rec);
         let counted = rec.submit(&[&occluded])?;
         gpu.wait(&counted)?;
+        outcome.visibility.merge(&w.read_tally(&counted)?.into());
         hook(
             shared,
             &BounceView {

@@ -195,6 +195,21 @@ pub const COUNTER_NON_FINITE: usize = 0;
 pub const COUNTER_CLAMPED: usize = 1;
 pub const COUNTERS: usize = 2;
 
+/// A camera bounce's shadow rays that carried a contribution, and those the tracer
+/// found unoccluded, of direct lighting and of the connections (`tally[]` of
+/// camera_accumulate.comp, in this order). Connections the selection made no ray for
+/// (nothing carried, a resampled draw repeated) are not counted.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+#[repr(C)]
+pub struct VisibilityTally {
+    pub direct_rays: u32,
+    pub direct_unoccluded: u32,
+    pub connection_rays: u32,
+    pub connections_unoccluded: u32,
+}
+
+const _: () = assert!(size_of::<VisibilityTally>() == 16);
+
 /// Random-number dimensions of the cache-vertex selection (`select_dim` in lvc.glsl),
 /// above every dimension of the bidirectional walks ([`crate::bidir::random::dims`]).
 pub mod dims {

@@ -23,6 +23,8 @@ pub struct Kernels {
     /// is built (a driver that compiles at pipeline creation pays for one).
     pub camera_connect: ComputePipeline,
     pub camera_bounce: ComputePipeline,
+    /// Its tally summed per subgroup where the device has subgroup arithmetic, else by
+    /// one atomic per invocation ([`AccumulateTally`]).
     pub camera_accumulate: ComputePipeline,
     pub finish: ComputePipeline,
     /// `pt`'s: the material key of each live path's hit and the identity order.
@@ -32,6 +34,12 @@ pub struct Kernels {
 
 impl Kernels {
     pub fn new(gpu: &Gpu, variant: Variant) -> vk::Result<Self> {
+        Self::with_tally(gpu, variant, AccumulateTally::for_device(gpu))
+    }
+
+    /// [`Kernels::new`] with the accumulation's tally made as `tally` says (tests build
+    /// both).
+    pub fn with_tally(gpu: &Gpu, variant: Variant, tally: AccumulateTally) -> vk::Result<Self> {
         let lvc = |kernel: Kernel, bindings| {
             vk::compute_pipeline(
                 gpu,
@@ -65,10 +73,36 @@ impl Kernels {
                 Variant::CisLbdpt => lvc(shaders::INTEGRATOR_LVC_CAMERA_CONNECT__RESAMPLED, 11)?,
             },
             camera_bounce: lvc(shaders::INTEGRATOR_LVC_CAMERA_BOUNCE, 9)?,
-            camera_accumulate: lvc(shaders::INTEGRATOR_LVC_CAMERA_ACCUMULATE, 7)?,
+            camera_accumulate: lvc(tally.kernel(), 8)?,
             finish: lvc(shaders::INTEGRATOR_LVC_FINISH, 5)?,
             gather: pt(shaders::INTEGRATOR_PT_GATHER, 5)?,
         })
+    }
+}
+
+/// How `camera_accumulate` sums its visibility tally.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AccumulateTally {
+    /// subgroupAdd, then one atomic per subgroup.
+    Subgroup,
+    /// One atomic per invocation with something to count.
+    Atomic,
+}
+
+impl AccumulateTally {
+    pub fn for_device(gpu: &Gpu) -> Self {
+        if gpu.info().capabilities.subgroup_arithmetic {
+            Self::Subgroup
+        } else {
+            Self::Atomic
+        }
+    }
+
+    pub fn kernel(self) -> Kernel {
+        match self {
+            Self::Subgroup => shaders::INTEGRATOR_LVC_CAMERA_ACCUMULATE__SUBGROUP,
+            Self::Atomic => shaders::INTEGRATOR_LVC_CAMERA_ACCUMULATE,
+        }
     }
 }
 

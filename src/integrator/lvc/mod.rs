@@ -63,6 +63,7 @@ use crate::trace::Tracer;
 use crate::vk::{self, Buffer, Gpu, Recorder};
 
 use self::cache::LightCache;
+pub use self::camera_pass::Visibility;
 use self::camera_pass::{trace_camera_paths, CameraRange, CameraTargets, Streams};
 use self::gpu::{LvcConstants, FLAG_SORTED};
 use self::kernels::Kernels;
@@ -188,6 +189,8 @@ pub struct LvcCounters {
     pub rays: u64,
     pub shadow_rays: u64,
     pub cache_regrowths: u64,
+    /// The camera passes' shadow rays that carried a contribution, and the unoccluded.
+    pub visibility: Visibility,
 }
 
 /// LVC-BDPT or CIS-LBDPT as an [`Integrator`].
@@ -430,6 +433,7 @@ impl<'t> LvcIntegrator<'t> {
             self.counters.camera_paths += (passes * count) as u64;
             self.counters.rays += camera.rays + camera.shadow_rays;
             self.counters.shadow_rays += camera.shadow_rays;
+            self.counters.visibility.merge(&camera.visibility);
             offset += count;
         }
         observer.end_chunk(&chunk);
@@ -493,6 +497,13 @@ impl Integrator for LvcIntegrator<'_> {
             ("cache_vertices", c.cache_vertices),
             ("shadow_rays", c.shadow_rays),
             ("cache_regrowths", c.cache_regrowths),
+            ("direct_shadow_rays", c.visibility.direct_rays),
+            ("direct_unoccluded", c.visibility.direct_unoccluded),
+            ("connection_shadow_rays", c.visibility.connection_rays),
+            (
+                "connections_unoccluded",
+                c.visibility.connections_unoccluded,
+            ),
             ("non_finite_dropped", kernel[gpu::COUNTER_NON_FINITE] as u64),
             ("splats_clamped", kernel[gpu::COUNTER_CLAMPED] as u64),
         ];

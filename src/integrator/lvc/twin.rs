@@ -8,13 +8,15 @@
 
 use glam::Vec3;
 
-use super::gpu::{LvcVertex, VERTEX_CONNECTIBLE, VERTEX_EXTENDS, VERTEX_VALID};
+use super::gpu::{
+    Contribution, LvcVertex, VisibilityTally, VERTEX_CONNECTIBLE, VERTEX_EXTENDS, VERTEX_VALID,
+};
 use crate::bidir::random::{pcg_hash, PathSampler};
 use crate::bidir::scene::SurfaceHit;
 use crate::bidir::walk::{camera_subpath, light_subpath};
 use crate::bidir::{Connector, Counters, CpuScene, PinholeCamera, Sample, Vertex, WalkSettings};
 use crate::integrator::pt::PtScene;
-use crate::trace::{CpuBvh, Ray};
+use crate::trace::{CpuBvh, Hit, Ray, MISS};
 
 /// `random_u32` of lvc_random.glsl: the full hash whose top 24 bits `random01` takes.
 pub fn random_u32(index: u32, sample: u32, dimension: u32, seed: u32) -> u32 {
@@ -205,4 +207,62 @@ pub fn connect(connector: &Connector, y: &LvcVertex, z: &LvcVertex) -> Option<Sa
     let light = subpath_to(to_vertex(connector.scene, y), i);
     let camera = subpath_to(to_vertex(connector.scene, z), j);
     connector.connect(&light, i, &camera, j, &mut Counters::default())
+}
+
+/// What `camera_accumulate` reads of one camera bounce.
+pub struct BounceRecords<'a> {
+    /// The live paths' ids, in wavefront order.
+    pub live_ids: &'a [u32],
+    /// Per live path: its emitter hit.
+    pub emitted: &'a [Contribution],
+    /// The bounce's shadow-ray slots: direct lighting at i, connection k of path i at
+    /// base + i N + k; and the occlusion query's answer for each slot.
+    pub contributions: &'a [Contribution],
+    pub shadow_hits: &'a [Hit],
+    pub base: usize,
+    pub connections: usize,
+}
+
+/// `camera_accumulate` (camera_accumulate.comp): each live path's radiance gains its
+/// emitter hit and its unoccluded direct lighting and connections, in that order;
+/// non-finite contributions are dropped and counted. Returns that count and the
+/// bounce's visibility tally.
+pub fn accumulate(records: &BounceRecords, radiance: &mut [[f32; 4]]) -> (u32, VisibilityTally) {
+    let mut non_finite = 0;
+    let mut tally = VisibilityTally::default();
+    let mut add = |sum: &mut Vec3, c: &Contribution| {
+        if !c.is_some() {
+            return;
+        }
+        let v = c.value();
+        if v.is_finite() {
+            *sum += v;
+        } else {
+            non_finite += 1;
+        }
+    };
+    for (i, &id) in records.live_ids.iter().enumerate() {
+        let r = &mut radiance[id as usize];
+        let mut sum = Vec3::new(r[0], r[1], r[2]);
+        add(&mut sum, &records.emitted[i]);
+        let direct = &records.contributions[i];
+        let open = records.shadow_hits[i].triangle == MISS;
+        tally.direct_rays += u32::from(direct.is_some());
+        tally.direct_unoccluded += u32::from(direct.is_some() && open);
+        if open {
+            add(&mut sum, direct);
+        }
+        for k in 0..records.connections {
+            let slot = records.base + i * records.connections + k;
+            let c = &records.contributions[slot];
+            let reached = records.shadow_hits[slot].triangle == MISS;
+            tally.connection_rays += u32::from(c.is_some());
+            tally.connections_unoccluded += u32::from(c.is_some() && reached);
+            if reached {
+                add(&mut sum, c);
+            }
+        }
+        r[..3].copy_from_slice(&sum.to_array());
+    }
+    (non_finite, tally)
 }

@@ -3,7 +3,7 @@
 //! pass fills with one direct-lighting and N connection rays per path, and light tracing
 //! with one ray per cache vertex of a batch.
 
-use super::gpu::{Contribution, LvcVertex, WalkState};
+use super::gpu::{Contribution, LvcVertex, VisibilityTally, WalkState};
 use crate::integrator::pt::MaterialSort;
 use crate::primitives::compact::Kept;
 use crate::primitives::{Compact, Tuning};
@@ -13,6 +13,10 @@ use crate::vk::{self, Buffer, Gpu, MemoryKind, Recorder, TimelinePoint};
 /// Slots the connections' region may start after the direct-lighting slots (it starts
 /// at a storage-buffer offset the device can bind: up to 2 KiB of 32-byte slots).
 const ALIGNMENT_SLACK: usize = 64;
+
+/// Where the tally lies in the readback buffer, after the two counts.
+const TALLY_READBACK_OFFSET: u64 = 8;
+const TALLY_BYTES: u64 = size_of::<VisibilityTally>() as u64;
 
 pub struct Wavefront {
     /// Paths it holds.
@@ -46,6 +50,9 @@ pub struct Wavefront {
     /// survivors of a camera bounce, on the device and for the host.
     pub count_marked: Buffer,
     pub count_alive: Buffer,
+    /// A camera bounce's [`VisibilityTally`].
+    pub tally: Buffer,
+    /// The two counts (bytes 0–7) and the tally (from [`TALLY_READBACK_OFFSET`]).
     pub counts_readback: Buffer,
     pub compact: Compact,
     compact_scratch: Buffer,
@@ -94,7 +101,12 @@ impl Wavefront {
             contributions: gpu.zeroed::<Contribution>("lvc-contributions", shadow)?,
             count_marked: gpu.zeroed::<u32>("lvc-count-marked", 1)?,
             count_alive: gpu.zeroed::<u32>("lvc-count-alive", 1)?,
-            counts_readback: gpu.create_buffer("lvc-counts", 8, MemoryKind::Readback)?,
+            tally: gpu.zeroed::<VisibilityTally>("lvc-tally", 1)?,
+            counts_readback: gpu.create_buffer(
+                "lvc-counts",
+                TALLY_READBACK_OFFSET + TALLY_BYTES,
+                MemoryKind::Readback,
+            )?,
             compact,
             compact_scratch,
             sorter,
@@ -126,6 +138,26 @@ impl Wavefront {
     pub fn record_counts_readback(&self, rec: &mut Recorder) {
         rec.copy(&self.count_marked, 0, &self.counts_readback, 0, 4);
         rec.copy(&self.count_alive, 0, &self.counts_readback, 4, 4);
+    }
+
+    /// Records the copy of the camera bounce's tally to the host-visible buffer.
+    pub fn record_tally_readback(&self, rec: &mut Recorder) {
+        rec.copy(
+            &self.tally,
+            0,
+            &self.counts_readback,
+            TALLY_READBACK_OFFSET,
+            TALLY_BYTES,
+        );
+    }
+
+    /// The tally as the readback recorded in the submission that ends at `done` left it.
+    pub fn read_tally(&self, done: &TimelinePoint) -> vk::Result<VisibilityTally> {
+        let words = self.counts_readback.read_after::<u32>(done)?;
+        let at = (TALLY_READBACK_OFFSET / 4) as usize;
+        Ok(*bytemuck::from_bytes(bytemuck::cast_slice(
+            &words[at..at + 4],
+        )))
     }
 
     /// (vertices marked, paths alive), each at most `n`, as the readback recorded in the
