@@ -187,6 +187,9 @@ pub struct LvcCounters {
     pub camera_paths: u64,
     pub cache_vertices: u64,
     pub rays: u64,
+    /// Shadow-ray slots of the camera passes handed to the tracer, empty ones included
+    /// (`shadow_ray_slots` in the stats; [`Visibility`] counts the rays that carried a
+    /// contribution).
     pub shadow_rays: u64,
     pub cache_regrowths: u64,
     /// The camera passes' shadow rays that carried a contribution, and the unoccluded.
@@ -495,7 +498,7 @@ impl Integrator for LvcIntegrator<'_> {
             ("light_paths", c.light_paths),
             ("camera_paths", c.camera_paths),
             ("cache_vertices", c.cache_vertices),
-            ("shadow_rays", c.shadow_rays),
+            ("shadow_ray_slots", c.shadow_rays),
             ("cache_regrowths", c.cache_regrowths),
             ("direct_shadow_rays", c.visibility.direct_rays),
             ("direct_unoccluded", c.visibility.direct_unoccluded),
