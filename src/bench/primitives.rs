@@ -351,15 +351,83 @@ pub fn run(gpu: &Gpu, opts: &PrimitivesBenchOptions) -> BenchResult<PrimitivesRe
     let tuning = opts
         .tuning
         .unwrap_or_else(|| Tuning::for_device(gpu.info()));
-    let n = opts.n;
-    let n32 = u32::try_from(n)?;
     let mut rows = Vec::new();
     let mut targets = Vec::new();
 
     let host_cores_before = host::effective_cores();
+    let (sorted, sort_target) = bench_sort(gpu, &tuning, opts.n, runs)?;
+    rows.extend(sorted);
+    targets.push(sort_target);
+    let (scanned, scan_target) = bench_scan(gpu, &tuning, opts.scan_n, runs)?;
+    rows.extend(scanned);
+    targets.extend(scan_target);
+    let host_cores_after = host::effective_cores();
 
-    // --- Radix sort of key-value pairs (all 32 bits), against sort_unstable_by_key.
-    let sort = RadixSort::new(gpu, &tuning)?;
+    let values = Values::new(gpu, opts.n)?;
+    rows.extend(bench_reduce_by_key(gpu, &tuning, &values, runs)?);
+    rows.push(bench_compact(gpu, &tuning, &values, runs)?);
+    rows.extend(bench_gather(gpu, &tuning, &values, runs)?);
+    gpu.wait_idle()?;
+
+    let info = gpu.info();
+    Ok(PrimitivesReport {
+        device: info.name.clone(),
+        driver: format!("{} {}", info.driver_name, info.driver_info),
+        subgroup_size: info.limits.subgroup_size,
+        variant: tuning.describe(),
+        tuning,
+        runs,
+        host_cpu: host::cpu_model(),
+        host_threads: rayon::current_num_threads(),
+        host_cores_before,
+        host_cores_after,
+        rows,
+        targets,
+    })
+}
+
+/// Issue 3's sort target: on lavapipe a ratio to the single-thread CPU sort, on a GPU a
+/// throughput (stated for 16M keys).
+fn sort_target(gpu: &Gpu, n: usize, row: &BenchRow, single_ms: f64) -> TargetCheck {
+    if gpu.info().is_cpu() {
+        TargetCheck {
+            target: format!("sort {n} pairs vs single-thread sort_unstable_by_key"),
+            measured: single_ms / row.gpu_ms,
+            required: 1.5,
+            met: single_ms / row.gpu_ms >= 1.5,
+        }
+    } else {
+        let gkeys = row.mkeys_per_s / 1e3;
+        TargetCheck {
+            target: format!("sort {n} pairs, Gkeys/s (GPU target at 16M keys)"),
+            measured: gkeys,
+            required: 5.0,
+            met: gkeys >= 5.0,
+        }
+    }
+}
+
+/// Milliseconds of one single-thread `sort_unstable_by_key` of a copy of `pairs`.
+fn cpu_sort_ms(pairs: &[(u32, u32)]) -> f64 {
+    let mut p = pairs.to_vec();
+    let t = Instant::now();
+    p.sort_unstable_by_key(|x| x.0);
+    let ms = t.elapsed().as_secs_f64() * 1e3;
+    std::hint::black_box(&p);
+    ms
+}
+
+/// Radix sort of key-value pairs, all 32 bits against `sort_unstable_by_key` (the
+/// target) and rayon's parallel sort, then keys of 16 significant bits (half the
+/// passes); each result checked against the CPU twin first.
+fn bench_sort(
+    gpu: &Gpu,
+    tuning: &Tuning,
+    n: usize,
+    runs: usize,
+) -> BenchResult<(Vec<BenchRow>, TargetCheck)> {
+    let n32 = u32::try_from(n)?;
+    let sort = RadixSort::new(gpu, tuning)?;
     let keys = random_u32s(n, 1);
     let values: Vec<u32> = (0..n as u32).collect();
     let kbuf = gpu.upload("bench-keys", &keys)?;
@@ -385,12 +453,17 @@ pub fn run(gpu: &Gpu, opts: &PrimitivesBenchOptions) -> BenchResult<PrimitivesRe
             &scratch,
         )
     };
-    let mut rec = gpu.recorder(StreamKind::Main)?;
-    record_sort(&mut rec, 0..32)?;
-    gpu.wait(&rec.submit(&[])?)?;
-    let (ck, cv) = cpu::sort_pairs(&keys, &values, 0..32);
-    check("radix sort keys", &kbuf.read::<u32>()?, &ck)?;
-    check("radix sort values", &vbuf.read::<u32>()?, &cv)?;
+    let verify = |keys: &[u32], bits: std::ops::Range<u32>, what: &str| -> BenchResult<()> {
+        let mut rec = gpu.recorder(StreamKind::Main)?;
+        record_sort(&mut rec, bits.clone())?;
+        gpu.wait(&rec.submit(&[])?)?;
+        let (ck, cv) = cpu::sort_pairs(keys, &values, bits);
+        check(&format!("{what} keys"), &kbuf.read::<u32>()?, &ck)?;
+        check(&format!("{what} values"), &vbuf.read::<u32>()?, &cv)
+    };
+    let mut rows = Vec::new();
+
+    verify(&keys, 0..32, "radix sort")?;
     let pairs: Vec<(u32, u32)> = keys.iter().copied().zip(values.iter().copied()).collect();
     // The target's two sides alternate run by run (see time_against).
     let (gpu_ms, wall_ms, single) = time_against(
@@ -398,16 +471,8 @@ pub fn run(gpu: &Gpu, opts: &PrimitivesBenchOptions) -> BenchResult<PrimitivesRe
         runs,
         restore,
         |rec| record_sort(rec, 0..32),
-        || {
-            let mut p = pairs.clone();
-            let t = Instant::now();
-            p.sort_unstable_by_key(|x| x.0);
-            let ms = t.elapsed().as_secs_f64() * 1e3;
-            std::hint::black_box(&p);
-            Ok(ms)
-        },
+        || Ok(cpu_sort_ms(&pairs)),
     )?;
-    let t = (gpu_ms, wall_ms);
     let par = time_cpu(runs, || {
         let mut p = pairs.clone();
         let t = Instant::now();
@@ -419,52 +484,24 @@ pub fn run(gpu: &Gpu, opts: &PrimitivesBenchOptions) -> BenchResult<PrimitivesRe
     let r = row(
         "sort_pairs (32 bits)",
         n,
-        t,
+        (gpu_ms, wall_ms),
         &[
             ("cpu sort_unstable_by_key", single),
             ("cpu rayon par_sort", par),
         ],
     );
-    // Issue 3's targets: on lavapipe a ratio to the single-thread CPU sort, on a GPU a
-    // throughput (stated for 16M keys).
-    targets.push(if gpu.info().is_cpu() {
-        TargetCheck {
-            target: format!("sort {n} pairs vs single-thread sort_unstable_by_key"),
-            measured: single / r.gpu_ms,
-            required: 1.5,
-            met: single / r.gpu_ms >= 1.5,
-        }
-    } else {
-        let gkeys = r.mkeys_per_s / 1e3;
-        TargetCheck {
-            target: format!("sort {n} pairs, Gkeys/s (GPU target at 16M keys)"),
-            measured: gkeys,
-            required: 5.0,
-            met: gkeys >= 5.0,
-        }
-    });
+    let target = sort_target(gpu, n, &r, single);
     rows.push(r);
+
     // Keys with 16 significant bits: the bit range halves the passes.
     let keys16: Vec<u32> = keys.iter().map(|k| k >> 16).collect();
     kinit.write(&keys16)?;
     let mut rec = gpu.recorder(StreamKind::Main)?;
     restore(&mut rec)?;
     gpu.wait(&rec.submit(&[])?)?;
-    let mut rec = gpu.recorder(StreamKind::Main)?;
-    record_sort(&mut rec, 0..16)?;
-    gpu.wait(&rec.submit(&[])?)?;
-    let (ck, cv) = cpu::sort_pairs(&keys16, &values, 0..16);
-    check("radix sort 16-bit keys", &kbuf.read::<u32>()?, &ck)?;
-    check("radix sort 16-bit values", &vbuf.read::<u32>()?, &cv)?;
+    verify(&keys16, 0..16, "radix sort 16-bit")?;
     let pairs16: Vec<(u32, u32)> = keys16.iter().copied().zip(values.iter().copied()).collect();
-    let single16 = time_cpu(runs, || {
-        let mut p = pairs16.clone();
-        let t = Instant::now();
-        p.sort_unstable_by_key(|x| x.0);
-        let ms = t.elapsed().as_secs_f64() * 1e3;
-        std::hint::black_box(&p);
-        ms
-    });
+    let single16 = time_cpu(runs, || cpu_sort_ms(&pairs16));
     let t = time_gpu(gpu, runs, restore, |rec| record_sort(rec, 0..16))?;
     rows.push(row(
         "sort_pairs (bits 0..16)",
@@ -472,12 +509,19 @@ pub fn run(gpu: &Gpu, opts: &PrimitivesBenchOptions) -> BenchResult<PrimitivesRe
         t,
         &[("cpu sort_unstable_by_key", single16)],
     ));
-    drop((scratch, kinit, vinit));
+    Ok((rows, target))
+}
 
-    // --- Scan against a copy of the same bytes.
-    let scan_n = opts.scan_n;
+/// Exclusive scan of `scan_n` values below 256 against a vkCmdCopyBuffer of the same
+/// bytes (lavapipe's target) and the CPU scan; the copy's own row follows.
+fn bench_scan(
+    gpu: &Gpu,
+    tuning: &Tuning,
+    scan_n: usize,
+    runs: usize,
+) -> BenchResult<(Vec<BenchRow>, Option<TargetCheck>)> {
     let scan_n32 = u32::try_from(scan_n)?;
-    let scan = Scan::new(gpu, &tuning)?;
+    let scan = Scan::new(gpu, tuning)?;
     let data: Vec<u32> = random_u32s(scan_n, 2).iter().map(|x| x & 0xFF).collect();
     let input = gpu.upload("bench-scan-in", &data)?;
     let output = device_buffer(gpu, "bench-scan-out", scan_n as u64 * 4)?;
@@ -518,62 +562,96 @@ pub fn run(gpu: &Gpu, opts: &PrimitivesBenchOptions) -> BenchResult<PrimitivesRe
         Ok(g)
     })?;
     let copy_t = (copy_ms, median(copy_walls.into_inner(), EvenMedian::Upper));
-    let t = (scan_gpu, scan_wall);
     let r = row(
         "scan (exclusive)",
         scan_n,
-        t,
+        (scan_gpu, scan_wall),
         &[
             ("vkCmdCopyBuffer same bytes", copy_t.0),
             ("cpu scan", scan_cpu),
         ],
     );
     // The scan's target is lavapipe's; on a GPU the ratio stays in the row.
-    targets.extend(gpu.info().is_cpu().then(|| TargetCheck {
+    let target = gpu.info().is_cpu().then(|| TargetCheck {
         target: format!("scan {scan_n} u32 vs vkCmdCopyBuffer bandwidth"),
         measured: copy_t.0 / r.gpu_ms,
         required: 0.5,
         met: copy_t.0 / r.gpu_ms >= 0.5,
-    }));
-    rows.push(r);
-    rows.push(row("vkCmdCopyBuffer (reference)", scan_n, copy_t, &[]));
-    drop((input, output, scan_scratch));
-    let host_cores_after = host::effective_cores();
+    });
+    Ok((
+        vec![r, row("vkCmdCopyBuffer (reference)", scan_n, copy_t, &[])],
+        target,
+    ))
+}
 
-    // --- Reduce-by-key (sum, arg-min) and run-length encoding over sorted keys with
-    // runs of 1..=16 items (like PDACRT's per-ray hit candidates).
-    let rbk = ReduceByKey::new(gpu, &tuning)?;
-    let mut rkeys = Vec::with_capacity(n);
+/// The values the reductions, compaction and gathers read, and the outputs they write.
+struct Values {
+    n: usize,
+    host: Vec<u32>,
+    buffer: Buffer,
+    out: Buffer,
+    out_count: Buffer,
+}
+
+impl Values {
+    fn new(gpu: &Gpu, n: usize) -> BenchResult<Self> {
+        let host = random_u32s(n, 4);
+        Ok(Self {
+            n,
+            buffer: gpu.upload("bench-rbk-values", &host)?,
+            host,
+            out: device_buffer(gpu, "bench-rbk-out-a", n as u64 * 4)?,
+            out_count: device_buffer(gpu, "bench-rbk-count", 4)?,
+        })
+    }
+}
+
+/// Sorted keys with runs of 1..=16 items (like PDACRT's per-ray hit candidates).
+fn run_keys(n: usize) -> Vec<u32> {
+    let mut keys = Vec::with_capacity(n);
     let lens = random_u32s(n, 3);
     let mut k = 0u32;
-    while rkeys.len() < n {
-        let len = (lens[rkeys.len()] % 16 + 1) as usize;
-        rkeys.extend(std::iter::repeat_n(k, len.min(n - rkeys.len())));
+    while keys.len() < n {
+        let len = (lens[keys.len()] % 16 + 1) as usize;
+        keys.extend(std::iter::repeat_n(k, len.min(n - keys.len())));
         k += 1;
     }
-    let rvals = random_u32s(n, 4);
+    keys
+}
+
+/// Reduce-by-key (sum, arg-min) and run-length encoding over [`run_keys`], each against
+/// its CPU twin.
+fn bench_reduce_by_key(
+    gpu: &Gpu,
+    tuning: &Tuning,
+    values: &Values,
+    runs: usize,
+) -> BenchResult<Vec<BenchRow>> {
+    let n = values.n;
+    let n32 = u32::try_from(n)?;
+    let rbk = ReduceByKey::new(gpu, tuning)?;
+    let rkeys = run_keys(n);
+    let rvals = &values.host;
     let tvals: Vec<f32> = rvals.iter().map(|&v| (v >> 8) as f32 / 65536.0).collect();
     let ids: Vec<u32> = (0..n as u32).collect();
     let bk = gpu.upload("bench-rbk-keys", &rkeys)?;
-    let bv = gpu.upload("bench-rbk-values", &rvals)?;
     let bt = gpu.upload("bench-rbk-t", &tvals)?;
     let bi = gpu.upload("bench-rbk-ids", &ids)?;
     let ok = device_buffer(gpu, "bench-rbk-out-keys", n as u64 * 4)?;
-    let oa = device_buffer(gpu, "bench-rbk-out-a", n as u64 * 4)?;
     let ob = device_buffer(gpu, "bench-rbk-out-b", n as u64 * 4)?;
-    let oc = device_buffer(gpu, "bench-rbk-count", 4)?;
     let rs = device_buffer(gpu, "bench-rbk-scratch", rbk.scratch_bytes(n32))?;
+    let (oa, oc) = (&values.out, &values.out_count);
     let outs = RunOutputs {
         keys: (&ok).into(),
-        a: (&oa).into(),
+        a: oa.into(),
         b: Some((&ob).into()),
-        count: (&oc).into(),
+        count: oc.into(),
     };
     let reductions: [(&str, Reduction); 3] = [
         (
             "reduce_by_key sum",
             Reduction::Sum {
-                values: (&bv).into(),
+                values: (&values.buffer).into(),
             },
         ),
         (
@@ -585,6 +663,7 @@ pub fn run(gpu: &Gpu, opts: &PrimitivesBenchOptions) -> BenchResult<PrimitivesRe
         ),
         ("run_length_encode", Reduction::Count),
     ];
+    let mut rows = Vec::new();
     for (name, reduction) in reductions {
         let record = |rec: &mut Recorder| rbk.record(rec, n32, (&bk).into(), reduction, outs, &rs);
         let mut rec = gpu.recorder(StreamKind::Main)?;
@@ -593,10 +672,9 @@ pub fn run(gpu: &Gpu, opts: &PrimitivesBenchOptions) -> BenchResult<PrimitivesRe
         let runs_n = oc.read::<u32>()?[0] as usize;
         let gk = &ok.read::<u32>()?[..runs_n.min(n)];
         let ga = &oa.read::<u32>()?[..runs_n.min(n)];
-        let t0 = Instant::now();
         match reduction {
             Reduction::Sum { .. } => {
-                let (ck, cv) = cpu::reduce_by_key_sum(&rkeys, &rvals);
+                let (ck, cv) = cpu::reduce_by_key_sum(&rkeys, rvals);
                 check(name, gk, &ck)?;
                 check(name, ga, &cv)?;
             }
@@ -614,12 +692,11 @@ pub fn run(gpu: &Gpu, opts: &PrimitivesBenchOptions) -> BenchResult<PrimitivesRe
                 check(name, gb, &ci)?;
             }
         }
-        let _ = t0;
         let cpu_ms = time_cpu(runs, || {
             let t = Instant::now();
             match reduction {
                 Reduction::Sum { .. } => {
-                    std::hint::black_box(cpu::reduce_by_key_sum(&rkeys, &rvals));
+                    std::hint::black_box(cpu::reduce_by_key_sum(&rkeys, rvals));
                 }
                 Reduction::Count => {
                     std::hint::black_box(cpu::run_length_encode(&rkeys));
@@ -633,10 +710,19 @@ pub fn run(gpu: &Gpu, opts: &PrimitivesBenchOptions) -> BenchResult<PrimitivesRe
         let t = time_gpu(gpu, runs, no_prepare, record)?;
         rows.push(row(name, n, t, &[("cpu twin", cpu_ms)]));
     }
-    drop((bk, bt, bi, ok, ob, rs));
+    Ok(rows)
+}
 
-    // --- Compaction (half kept) and gather/scatter by a random permutation.
-    let compact = Compact::new(gpu, &tuning)?;
+/// Compaction of the values, half of them kept, against its CPU twin.
+fn bench_compact(
+    gpu: &Gpu,
+    tuning: &Tuning,
+    values: &Values,
+    runs: usize,
+) -> BenchResult<BenchRow> {
+    let n = values.n;
+    let n32 = u32::try_from(n)?;
+    let compact = Compact::new(gpu, tuning)?;
     let flags: Vec<u32> = random_u32s(n, 5).iter().map(|x| x & 1).collect();
     let bf = gpu.upload("bench-flags", &flags)?;
     let cs = device_buffer(gpu, "bench-compact-scratch", compact.scratch_bytes(n32))?;
@@ -645,28 +731,41 @@ pub fn run(gpu: &Gpu, opts: &PrimitivesBenchOptions) -> BenchResult<PrimitivesRe
             rec,
             n32,
             (&bf).into(),
-            Kept::Values((&bv).into()),
-            (&oa).into(),
-            (&oc).into(),
+            Kept::Values((&values.buffer).into()),
+            (&values.out).into(),
+            (&values.out_count).into(),
             &cs,
         )
     };
     let mut rec = gpu.recorder(StreamKind::Main)?;
     record(&mut rec)?;
     gpu.wait(&rec.submit(&[])?)?;
-    let kept = oc.read::<u32>()?[0] as usize;
-    let expect = cpu::compact(&flags, &rvals);
-    check("compaction", &oa.read::<u32>()?[..kept.min(n)], &expect)?;
+    let kept = values.out_count.read::<u32>()?[0] as usize;
+    let expect = cpu::compact(&flags, &values.host);
+    check(
+        "compaction",
+        &values.out.read::<u32>()?[..kept.min(n)],
+        &expect,
+    )?;
     let cpu_ms = time_cpu(runs, || {
         let t = Instant::now();
-        std::hint::black_box(cpu::compact(&flags, &rvals));
+        std::hint::black_box(cpu::compact(&flags, &values.host));
         t.elapsed().as_secs_f64() * 1e3
     });
     let t = time_gpu(gpu, runs, no_prepare, record)?;
-    rows.push(row("compact (by flag)", n, t, &[("cpu twin", cpu_ms)]));
-    drop((bf, cs));
+    Ok(row("compact (by flag)", n, t, &[("cpu twin", cpu_ms)]))
+}
 
-    let gather = Gather::new(gpu, &tuning)?;
+/// Gather and scatter of the values by a random permutation, against their CPU twins.
+fn bench_gather(
+    gpu: &Gpu,
+    tuning: &Tuning,
+    values: &Values,
+    runs: usize,
+) -> BenchResult<Vec<BenchRow>> {
+    let n = values.n;
+    let n32 = u32::try_from(n)?;
+    let gather = Gather::new(gpu, tuning)?;
     let mut perm: Vec<u32> = (0..n as u32).collect();
     let shuffle = random_u32s(n, 6);
     for i in (1..n).rev() {
@@ -674,59 +773,44 @@ pub fn run(gpu: &Gpu, opts: &PrimitivesBenchOptions) -> BenchResult<PrimitivesRe
     }
     let bp = gpu.upload("bench-perm", &perm)?;
     let gs = device_buffer(gpu, "bench-gather-scratch", gather.scratch_bytes(n32))?;
+    let rvals = &values.host;
+    let apply = |dir: Direction| match dir {
+        Direction::Gather => cpu::gather(rvals, &perm),
+        Direction::Scatter => {
+            let mut o = vec![0; n];
+            cpu::scatter(rvals, &perm, &mut o);
+            o
+        }
+    };
+    let mut rows = Vec::new();
     for (name, dir) in [
         ("gather", Direction::Gather),
         ("scatter", Direction::Scatter),
     ] {
         let record = |rec: &mut Recorder| {
-            gather.record(rec, n32, dir, (&bv).into(), (&bp).into(), (&oa).into(), &gs)
+            gather.record(
+                rec,
+                n32,
+                dir,
+                (&values.buffer).into(),
+                (&bp).into(),
+                (&values.out).into(),
+                &gs,
+            )
         };
         let mut rec = gpu.recorder(StreamKind::Main)?;
         record(&mut rec)?;
         gpu.wait(&rec.submit(&[])?)?;
-        let expect = match dir {
-            Direction::Gather => cpu::gather(&rvals, &perm),
-            Direction::Scatter => {
-                let mut o = vec![0; n];
-                cpu::scatter(&rvals, &perm, &mut o);
-                o
-            }
-        };
-        check(name, &oa.read::<u32>()?, &expect)?;
+        check(name, &values.out.read::<u32>()?, &apply(dir))?;
         let cpu_ms = time_cpu(runs, || {
             let t = Instant::now();
-            match dir {
-                Direction::Gather => {
-                    std::hint::black_box(cpu::gather(&rvals, &perm));
-                }
-                Direction::Scatter => {
-                    let mut o = vec![0; n];
-                    cpu::scatter(&rvals, &perm, &mut o);
-                    std::hint::black_box(o);
-                }
-            }
+            std::hint::black_box(apply(dir));
             t.elapsed().as_secs_f64() * 1e3
         });
         let t = time_gpu(gpu, runs, no_prepare, record)?;
         rows.push(row(name, n, t, &[("cpu twin", cpu_ms)]));
     }
-    gpu.wait_idle()?;
-
-    let info = gpu.info();
-    Ok(PrimitivesReport {
-        device: info.name.clone(),
-        driver: format!("{} {}", info.driver_name, info.driver_info),
-        subgroup_size: info.limits.subgroup_size,
-        variant: tuning.describe(),
-        tuning,
-        runs,
-        host_cpu: host::cpu_model(),
-        host_threads: rayon::current_num_threads(),
-        host_cores_before,
-        host_cores_after,
-        rows,
-        targets,
-    })
+    Ok(rows)
 }
 
 /// Minimum over `runs` of the GPU ms (less sensitive than the median to other load on a
