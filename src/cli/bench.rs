@@ -15,6 +15,8 @@ use splitray::bench::trace::{self, TraceBenchOptions};
 use splitray::bench::workloads::Workload;
 use splitray::film::Reference;
 use splitray::integrator::IntegratorKind;
+use splitray::scene::{AnimatedScene, Scene};
+use splitray::trace::pdacrt::LevelStats;
 use splitray::trace::{FlushReduce, LevelSplit, PdacrtParams, TracerKind};
 use splitray::vk::{Gpu, GpuDesc, InstanceDesc};
 
@@ -309,71 +311,27 @@ fn write_json<T: serde::Serialize>(path: &Option<PathBuf>, value: &T) -> anyhow:
     Ok(())
 }
 
+/// What a bench reads before the device opens.
+enum Inputs {
+    /// Nothing (primitives).
+    None,
+    /// The scene of pt and trace.
+    Scene(Scene),
+    /// The animated scene of dynamic.
+    Animated(AnimatedScene),
+    /// Each scene of bdpt with its reference, if any.
+    Bdpt(Vec<(Scene, Option<Arc<Reference>>)>),
+    /// The scene of cbpt and its reference, if any.
+    Cbpt {
+        scene: Scene,
+        reference: Option<Arc<Reference>>,
+    },
+}
+
 pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     let mut timeline = super::timeline::TimelineOutput::start(args.timeline.as_deref())?;
     // Load inputs before opening the device, so bad input fails fast.
-    let scene = match &args.what {
-        BenchCommand::Trace { scene, .. }
-        | BenchCommand::Pt { scene, .. }
-        | BenchCommand::Cbpt { scene, .. } => Some(splitray::scene::load(scene)?),
-        BenchCommand::Bdpt { .. }
-        | BenchCommand::Primitives { .. }
-        | BenchCommand::Dynamic { .. } => None,
-    };
-    let animated = match &args.what {
-        BenchCommand::Dynamic { scene, .. } => Some(splitray::scene::load_animated(scene)?),
-        _ => None,
-    };
-    let bdpt_inputs = match &args.what {
-        BenchCommand::Bdpt {
-            scenes,
-            reference,
-            width,
-            height,
-            time,
-            streams,
-            ..
-        } => {
-            if time.is_nan() || *time <= 0.0 {
-                anyhow::bail!("--time must be a positive number of seconds");
-            }
-            if let Some(s) = streams.iter().find(|s| !matches!(s, 1 | 3)) {
-                anyhow::bail!("--streams: {s} streams; the kernels run on 1 or 3");
-            }
-            if !reference.is_empty() && reference.len() != scenes.len() {
-                anyhow::bail!(
-                    "--reference: {} given for {} scenes (one per scene, in order, or none)",
-                    reference.len(),
-                    scenes.len()
-                );
-            }
-            let mut inputs = Vec::new();
-            for (k, name) in scenes.iter().enumerate() {
-                let r = reference
-                    .get(k)
-                    .map(|p| Reference::read(p, *width, *height).map(Arc::new))
-                    .transpose()?;
-                inputs.push((splitray::scene::load(name)?, r));
-            }
-            inputs
-        }
-        _ => Vec::new(),
-    };
-    let cbpt_reference = match &args.what {
-        BenchCommand::Cbpt {
-            reference: Some(path),
-            width,
-            height,
-            time,
-            ..
-        } => {
-            if time.is_nan() || *time <= 0.0 {
-                anyhow::bail!("--time must be a positive number of seconds");
-            }
-            Some(Arc::new(Reference::read(path, *width, *height)?))
-        }
-        _ => None,
-    };
+    let inputs = load_inputs(&args.what)?;
     let gpu = Gpu::new(&GpuDesc {
         instance: InstanceDesc {
             validation: args.validation,
@@ -385,261 +343,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     if let Some(t) = timeline.as_mut() {
         t.attach(&gpu)?;
     }
-    match &args.what {
-        BenchCommand::Primitives {
-            n,
-            scan_n,
-            runs,
-            json,
-        } => {
-            let report = primitives::run(
-                &gpu,
-                &PrimitivesBenchOptions {
-                    n: *n,
-                    scan_n: *scan_n,
-                    runs: *runs,
-                    tuning: None,
-                },
-            )
-            .map_err(|e| anyhow::anyhow!("{e}"))?;
-            print!("{report}");
-            write_json(json, &report)?;
-        }
-        BenchCommand::Pt {
-            width,
-            height,
-            spp,
-            max_depth,
-            tracer,
-            json,
-            ..
-        } => {
-            let scene = scene.expect("loaded above");
-            let report = pt_bench::run(
-                &gpu,
-                &scene,
-                &PtBenchOptions {
-                    width: *width,
-                    height: *height,
-                    spp: *spp,
-                    max_depth: *max_depth,
-                    tracer: *tracer,
-                    ..Default::default()
-                },
-            )
-            .map_err(|e| anyhow::anyhow!("{e}"))?;
-            print!("{report}");
-            write_json(json, &report)?;
-        }
-        BenchCommand::Bdpt {
-            width,
-            height,
-            integrators,
-            time,
-            rounds,
-            max_depth,
-            seed,
-            spp,
-            spp_rounds,
-            streams,
-            sort,
-            json,
-            ..
-        } => {
-            let mut reports = Vec::new();
-            for (scene, reference) in bdpt_inputs {
-                let report = bdpt_bench::run(
-                    &gpu,
-                    &scene,
-                    &BdptBenchOptions {
-                        width: *width,
-                        height: *height,
-                        integrators: integrators.clone(),
-                        seconds: *time,
-                        rounds: *rounds,
-                        max_depth: *max_depth,
-                        seed: *seed,
-                        reference,
-                        tracer: None,
-                        equal_spp: SppPlan {
-                            passes: *spp,
-                            rounds: *spp_rounds,
-                            streams: streams.clone(),
-                            sort: sort.clone(),
-                        },
-                    },
-                )?;
-                print!("{report}");
-                reports.push(report);
-            }
-            write_json(json, &reports)?;
-        }
-        BenchCommand::Cbpt {
-            width,
-            height,
-            tracers,
-            steps,
-            rounds,
-            batches,
-            time,
-            max_depth,
-            seed,
-            json,
-            ..
-        } => {
-            let scene = scene.expect("loaded above");
-            if let Some(b) = batches.iter().find(|b| **b == 0 || **b % 32 != 0) {
-                anyhow::bail!("--batches: {b} is not a positive multiple of 32");
-            }
-            let report = cbpt_bench::run(
-                &gpu,
-                &scene,
-                &CbptBenchOptions {
-                    width: *width,
-                    height: *height,
-                    tracers: tracers.clone(),
-                    steps: *steps,
-                    rounds: *rounds,
-                    batches: batches.clone(),
-                    seconds: *time,
-                    max_depth: *max_depth,
-                    seed: *seed,
-                    reference: cbpt_reference,
-                },
-            )?;
-            print!("{report}");
-            write_json(json, &report)?;
-        }
-        BenchCommand::Dynamic {
-            frames,
-            fps,
-            first,
-            width,
-            height,
-            workloads,
-            tracers,
-            json,
-            ..
-        } => {
-            let report = dynamic::run(
-                &gpu,
-                animated.as_ref().expect("loaded above"),
-                &DynamicBenchOptions {
-                    width: *width,
-                    height: *height,
-                    first: *first,
-                    frames: *frames,
-                    fps: *fps,
-                    workloads: workloads.clone(),
-                    contenders: tracers.clone(),
-                    ..Default::default()
-                },
-            )
-            .map_err(|e| anyhow::anyhow!("{e}"))?;
-            print!("{report}");
-            write_json(json, &report)?;
-        }
-        BenchCommand::Trace {
-            width,
-            height,
-            workload,
-            tracers,
-            frames,
-            dump_hits,
-            levels,
-            profile,
-            json,
-            alpha,
-            beta,
-            eta,
-            lambda,
-            batch,
-            intersect_workgroup,
-            tile_workgroup,
-            chunk,
-            stage_triangles,
-            tight_boxes,
-            terminal_cost,
-            terminal_cost_min_rays,
-            one_dispatch_plan,
-            split,
-            flush,
-            ..
-        } => {
-            let scene = scene.expect("loaded above");
-            let mut params = PdacrtParams::for_device(&gpu);
-            params.alpha = alpha.unwrap_or(params.alpha);
-            params.beta = beta.unwrap_or(params.beta);
-            params.eta = eta.unwrap_or(params.eta);
-            params.lambda = lambda.unwrap_or(params.lambda.min(params.eta));
-            params.batch = batch.unwrap_or(params.batch);
-            params.intersect_workgroup = intersect_workgroup.unwrap_or(params.intersect_workgroup);
-            params.tile_workgroup = tile_workgroup.unwrap_or(params.tile_workgroup);
-            params.max_rays_per_chunk = chunk.unwrap_or(params.max_rays_per_chunk);
-            params.stage_triangles = stage_triangles.unwrap_or(params.stage_triangles);
-            params.tight_boxes = tight_boxes.unwrap_or(params.tight_boxes);
-            params.terminal_cost = terminal_cost.unwrap_or(params.terminal_cost);
-            params.terminal_cost_min_rays =
-                terminal_cost_min_rays.unwrap_or(params.terminal_cost_min_rays);
-            params.one_dispatch_plan = one_dispatch_plan.unwrap_or(params.one_dispatch_plan);
-            if let Some(split) = split {
-                params.split = match split {
-                    SplitArg::Sort => LevelSplit::SortByKey,
-                    SplitArg::Scan => LevelSplit::PrefixSums,
-                };
-            }
-            if let Some(flush) = flush {
-                params.flush_reduce = match flush {
-                    FlushArg::Sort => FlushReduce::SortByRay,
-                    FlushArg::Atomic => FlushReduce::AtomicMin,
-                };
-            }
-            let report = trace::run(
-                &gpu,
-                &scene,
-                &TraceBenchOptions {
-                    width: *width,
-                    height: *height,
-                    workload: *workload,
-                    tracers: tracers.clone(),
-                    frames: *frames,
-                    pdacrt: Some(params),
-                    ..Default::default()
-                },
-                dump_hits.as_deref(),
-            )
-            .map_err(|e| anyhow::anyhow!("{e}"))?;
-            print!("{report}");
-            if *profile {
-                for row in &report.rows {
-                    println!("\n{} GPU scopes (last frame):", row.tracer);
-                    print!("{}", row.profile.table());
-                }
-            }
-            if *levels {
-                println!("PDACRT levels (last frame):");
-                println!(
-                    "{:>5} {:>6} {:>8} {:>10} {:>10} {:>6} {:>9} {:>8}",
-                    "chunk", "level", "nodes", "triangles", "rays", "dup", "terminal", "ms"
-                );
-                for l in &report.pdacrt_levels {
-                    println!(
-                        "{:>5} {:>6} {:>8} {:>10} {:>10} {:>6.2} {:>9} {:>8.2}{}",
-                        l.chunk,
-                        l.level,
-                        l.nodes,
-                        l.triangles,
-                        l.rays,
-                        l.ray_duplication,
-                        l.terminal_nodes,
-                        l.ms,
-                        if l.flushed { "  flush" } else { "" }
-                    );
-                }
-            }
-            write_json(json, &report)?;
-        }
-    }
+    dispatch(&gpu, &args.what, inputs)?;
     let messages = gpu.validation_messages();
     if !messages.is_empty() {
         anyhow::bail!(
@@ -651,4 +355,418 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         t.finish(&super::timeline::command_line())?;
     }
     Ok(())
+}
+
+/// Loads and checks the scenes and references the bench `what` needs.
+fn load_inputs(what: &BenchCommand) -> anyhow::Result<Inputs> {
+    Ok(match what {
+        BenchCommand::Trace { scene, .. } | BenchCommand::Pt { scene, .. } => {
+            Inputs::Scene(splitray::scene::load(scene)?)
+        }
+        BenchCommand::Cbpt {
+            scene,
+            reference,
+            width,
+            height,
+            time,
+            ..
+        } => {
+            let scene = splitray::scene::load(scene)?;
+            let reference = match reference {
+                Some(path) => {
+                    check_time(*time)?;
+                    Some(Arc::new(Reference::read(path, *width, *height)?))
+                }
+                None => None,
+            };
+            Inputs::Cbpt { scene, reference }
+        }
+        BenchCommand::Bdpt {
+            scenes,
+            reference,
+            width,
+            height,
+            time,
+            streams,
+            ..
+        } => Inputs::Bdpt(load_bdpt_inputs(
+            scenes, reference, *width, *height, *time, streams,
+        )?),
+        BenchCommand::Dynamic { scene, .. } => {
+            Inputs::Animated(splitray::scene::load_animated(scene)?)
+        }
+        BenchCommand::Primitives { .. } => Inputs::None,
+    })
+}
+
+/// Checks `bench bdpt`'s options, then loads each scene with its reference.
+fn load_bdpt_inputs(
+    scenes: &[String],
+    reference: &[PathBuf],
+    width: u32,
+    height: u32,
+    time: f64,
+    streams: &[u32],
+) -> anyhow::Result<Vec<(Scene, Option<Arc<Reference>>)>> {
+    check_time(time)?;
+    if let Some(s) = streams.iter().find(|s| !matches!(s, 1 | 3)) {
+        anyhow::bail!("--streams: {s} streams; the kernels run on 1 or 3");
+    }
+    if !reference.is_empty() && reference.len() != scenes.len() {
+        anyhow::bail!(
+            "--reference: {} given for {} scenes (one per scene, in order, or none)",
+            reference.len(),
+            scenes.len()
+        );
+    }
+    let mut inputs = Vec::new();
+    for (k, name) in scenes.iter().enumerate() {
+        let r = reference
+            .get(k)
+            .map(|p| Reference::read(p, width, height).map(Arc::new))
+            .transpose()?;
+        inputs.push((splitray::scene::load(name)?, r));
+    }
+    Ok(inputs)
+}
+
+/// Fails unless `--time` is a positive number of seconds.
+fn check_time(time: f64) -> anyhow::Result<()> {
+    if time.is_nan() || time <= 0.0 {
+        anyhow::bail!("--time must be a positive number of seconds");
+    }
+    Ok(())
+}
+
+/// Runs the bench `what` names on the inputs [`load_inputs`] loaded for it.
+fn dispatch(gpu: &Gpu, what: &BenchCommand, inputs: Inputs) -> anyhow::Result<()> {
+    match (what, inputs) {
+        (
+            BenchCommand::Primitives {
+                n,
+                scan_n,
+                runs,
+                json,
+            },
+            Inputs::None,
+        ) => run_primitives(gpu, *n, *scan_n, *runs, json),
+        (BenchCommand::Pt { .. }, Inputs::Scene(scene)) => run_pt(gpu, what, &scene),
+        (BenchCommand::Bdpt { .. }, Inputs::Bdpt(inputs)) => run_bdpt(gpu, what, inputs),
+        (BenchCommand::Cbpt { .. }, Inputs::Cbpt { scene, reference }) => {
+            run_cbpt(gpu, what, &scene, reference)
+        }
+        (BenchCommand::Dynamic { .. }, Inputs::Animated(animated)) => {
+            run_dynamic(gpu, what, &animated)
+        }
+        (BenchCommand::Trace { .. }, Inputs::Scene(scene)) => run_trace(gpu, what, &scene),
+        _ => unreachable!("load_inputs loads each bench's own inputs"),
+    }
+}
+
+/// `bench primitives`: runs, prints and writes the primitives' report.
+fn run_primitives(
+    gpu: &Gpu,
+    n: usize,
+    scan_n: usize,
+    runs: usize,
+    json: &Option<PathBuf>,
+) -> anyhow::Result<()> {
+    let report = primitives::run(
+        gpu,
+        &PrimitivesBenchOptions {
+            n,
+            scan_n,
+            runs,
+            tuning: None,
+        },
+    )
+    .map_err(|e| anyhow::anyhow!("{e}"))?;
+    print!("{report}");
+    write_json(json, &report)
+}
+
+/// `bench pt`: runs, prints and writes the path tracer's report on `scene`.
+fn run_pt(gpu: &Gpu, what: &BenchCommand, scene: &Scene) -> anyhow::Result<()> {
+    let BenchCommand::Pt {
+        width,
+        height,
+        spp,
+        max_depth,
+        tracer,
+        json,
+        ..
+    } = what
+    else {
+        unreachable!("run_pt runs bench pt")
+    };
+    let report = pt_bench::run(
+        gpu,
+        scene,
+        &PtBenchOptions {
+            width: *width,
+            height: *height,
+            spp: *spp,
+            max_depth: *max_depth,
+            tracer: *tracer,
+            ..Default::default()
+        },
+    )
+    .map_err(|e| anyhow::anyhow!("{e}"))?;
+    print!("{report}");
+    write_json(json, &report)
+}
+
+/// `bench bdpt`: runs and prints a report per scene, then writes them all.
+fn run_bdpt(
+    gpu: &Gpu,
+    what: &BenchCommand,
+    inputs: Vec<(Scene, Option<Arc<Reference>>)>,
+) -> anyhow::Result<()> {
+    let BenchCommand::Bdpt {
+        width,
+        height,
+        integrators,
+        time,
+        rounds,
+        max_depth,
+        seed,
+        spp,
+        spp_rounds,
+        streams,
+        sort,
+        json,
+        ..
+    } = what
+    else {
+        unreachable!("run_bdpt runs bench bdpt")
+    };
+    let mut reports = Vec::new();
+    for (scene, reference) in inputs {
+        let report = bdpt_bench::run(
+            gpu,
+            &scene,
+            &BdptBenchOptions {
+                width: *width,
+                height: *height,
+                integrators: integrators.clone(),
+                seconds: *time,
+                rounds: *rounds,
+                max_depth: *max_depth,
+                seed: *seed,
+                reference,
+                tracer: None,
+                equal_spp: SppPlan {
+                    passes: *spp,
+                    rounds: *spp_rounds,
+                    streams: streams.clone(),
+                    sort: sort.clone(),
+                },
+            },
+        )?;
+        print!("{report}");
+        reports.push(report);
+    }
+    write_json(json, &reports)
+}
+
+/// `bench cbpt`: checks the batch sizes, then runs, prints and writes CBPT's report.
+fn run_cbpt(
+    gpu: &Gpu,
+    what: &BenchCommand,
+    scene: &Scene,
+    reference: Option<Arc<Reference>>,
+) -> anyhow::Result<()> {
+    let BenchCommand::Cbpt {
+        width,
+        height,
+        tracers,
+        steps,
+        rounds,
+        batches,
+        time,
+        max_depth,
+        seed,
+        json,
+        ..
+    } = what
+    else {
+        unreachable!("run_cbpt runs bench cbpt")
+    };
+    if let Some(b) = batches.iter().find(|b| **b == 0 || **b % 32 != 0) {
+        anyhow::bail!("--batches: {b} is not a positive multiple of 32");
+    }
+    let report = cbpt_bench::run(
+        gpu,
+        scene,
+        &CbptBenchOptions {
+            width: *width,
+            height: *height,
+            tracers: tracers.clone(),
+            steps: *steps,
+            rounds: *rounds,
+            batches: batches.clone(),
+            seconds: *time,
+            max_depth: *max_depth,
+            seed: *seed,
+            reference,
+        },
+    )?;
+    print!("{report}");
+    write_json(json, &report)
+}
+
+/// `bench dynamic`: runs, prints and writes the per-frame report on `animated`.
+fn run_dynamic(gpu: &Gpu, what: &BenchCommand, animated: &AnimatedScene) -> anyhow::Result<()> {
+    let BenchCommand::Dynamic {
+        frames,
+        fps,
+        first,
+        width,
+        height,
+        workloads,
+        tracers,
+        json,
+        ..
+    } = what
+    else {
+        unreachable!("run_dynamic runs bench dynamic")
+    };
+    let report = dynamic::run(
+        gpu,
+        animated,
+        &DynamicBenchOptions {
+            width: *width,
+            height: *height,
+            first: *first,
+            frames: *frames,
+            fps: *fps,
+            workloads: workloads.clone(),
+            contenders: tracers.clone(),
+            ..Default::default()
+        },
+    )
+    .map_err(|e| anyhow::anyhow!("{e}"))?;
+    print!("{report}");
+    write_json(json, &report)
+}
+
+/// `bench trace`: runs and prints the tracers' report (with --profile and --levels
+/// tables), then writes it.
+fn run_trace(gpu: &Gpu, what: &BenchCommand, scene: &Scene) -> anyhow::Result<()> {
+    let BenchCommand::Trace {
+        width,
+        height,
+        workload,
+        tracers,
+        frames,
+        dump_hits,
+        levels,
+        profile,
+        json,
+        ..
+    } = what
+    else {
+        unreachable!("run_trace runs bench trace")
+    };
+    let report = trace::run(
+        gpu,
+        scene,
+        &TraceBenchOptions {
+            width: *width,
+            height: *height,
+            workload: *workload,
+            tracers: tracers.clone(),
+            frames: *frames,
+            pdacrt: Some(pdacrt_params(gpu, what)),
+            ..Default::default()
+        },
+        dump_hits.as_deref(),
+    )
+    .map_err(|e| anyhow::anyhow!("{e}"))?;
+    print!("{report}");
+    if *profile {
+        for row in &report.rows {
+            println!("\n{} GPU scopes (last frame):", row.tracer);
+            print!("{}", row.profile.table());
+        }
+    }
+    if *levels {
+        print_levels(&report.pdacrt_levels);
+    }
+    write_json(json, &report)
+}
+
+/// PDACRT's parameters for the device, with `bench trace`'s overrides applied.
+fn pdacrt_params(gpu: &Gpu, what: &BenchCommand) -> PdacrtParams {
+    let BenchCommand::Trace {
+        alpha,
+        beta,
+        eta,
+        lambda,
+        batch,
+        intersect_workgroup,
+        tile_workgroup,
+        chunk,
+        stage_triangles,
+        tight_boxes,
+        terminal_cost,
+        terminal_cost_min_rays,
+        one_dispatch_plan,
+        split,
+        flush,
+        ..
+    } = what
+    else {
+        unreachable!("pdacrt_params reads bench trace's options")
+    };
+    let mut params = PdacrtParams::for_device(gpu);
+    params.alpha = alpha.unwrap_or(params.alpha);
+    params.beta = beta.unwrap_or(params.beta);
+    params.eta = eta.unwrap_or(params.eta);
+    params.lambda = lambda.unwrap_or(params.lambda.min(params.eta));
+    params.batch = batch.unwrap_or(params.batch);
+    params.intersect_workgroup = intersect_workgroup.unwrap_or(params.intersect_workgroup);
+    params.tile_workgroup = tile_workgroup.unwrap_or(params.tile_workgroup);
+    params.max_rays_per_chunk = chunk.unwrap_or(params.max_rays_per_chunk);
+    params.stage_triangles = stage_triangles.unwrap_or(params.stage_triangles);
+    params.tight_boxes = tight_boxes.unwrap_or(params.tight_boxes);
+    params.terminal_cost = terminal_cost.unwrap_or(params.terminal_cost);
+    params.terminal_cost_min_rays = terminal_cost_min_rays.unwrap_or(params.terminal_cost_min_rays);
+    params.one_dispatch_plan = one_dispatch_plan.unwrap_or(params.one_dispatch_plan);
+    if let Some(split) = split {
+        params.split = match split {
+            SplitArg::Sort => LevelSplit::SortByKey,
+            SplitArg::Scan => LevelSplit::PrefixSums,
+        };
+    }
+    if let Some(flush) = flush {
+        params.flush_reduce = match flush {
+            FlushArg::Sort => FlushReduce::SortByRay,
+            FlushArg::Atomic => FlushReduce::AtomicMin,
+        };
+    }
+    params
+}
+
+/// Prints `--levels`' table of PDACRT's per-level statistics.
+fn print_levels(levels: &[LevelStats]) {
+    println!("PDACRT levels (last frame):");
+    println!(
+        "{:>5} {:>6} {:>8} {:>10} {:>10} {:>6} {:>9} {:>8}",
+        "chunk", "level", "nodes", "triangles", "rays", "dup", "terminal", "ms"
+    );
+    for l in levels {
+        println!(
+            "{:>5} {:>6} {:>8} {:>10} {:>10} {:>6.2} {:>9} {:>8.2}{}",
+            l.chunk,
+            l.level,
+            l.nodes,
+            l.triangles,
+            l.rays,
+            l.ray_duplication,
+            l.terminal_nodes,
+            l.ms,
+            if l.flushed { "  flush" } else { "" }
+        );
+    }
 }
