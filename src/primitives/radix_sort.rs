@@ -397,11 +397,39 @@ impl RadixSort {
             rec.barrier();
             return Ok(());
         }
+        self.check_sort_scratch(scratch, cap, passes, values.is_some())?;
         let misc = &scratch.misc;
-        check_scratch("radix sort", misc, 0, self.scratch_bytes(cap))?;
-        // Key-value segment sorts ping-pong through interleaved pairs in scratch.keys.
-        let pairs = self.pairs && values.is_some();
+        let (hist_off, lanes_off, scan_off) = self.layout(cap);
+        let plan = PassPlan {
+            misc,
+            header: misc.slice(0, HEADER_BYTES),
+            hist: misc.slice(hist_off, region(self.hist_len(cap) as u64 * 4)),
+            lanes: misc.slice(lanes_off, region(self.lane_counts_len(cap) * 4)),
+            scan_off,
+            cap,
+            passes,
+            bits,
+        };
+        self.record_setup(rec, count, &plan)?;
+        match values {
+            // Key-value segment sorts ping-pong through interleaved pairs in scratch.keys.
+            Some(vals) if self.pairs => self.record_pair_passes(rec, &plan, keys, vals, scratch),
+            _ => self.record_array_passes(rec, &plan, count, keys, values, scratch),
+        }
+    }
+
+    /// Checks that `scratch` holds what a sort of up to `cap` keys in `passes` passes
+    /// needs (with values or not).
+    fn check_sort_scratch(
+        &self,
+        scratch: &SortScratch,
+        cap: u32,
+        passes: u32,
+        with_values: bool,
+    ) -> Result<()> {
+        check_scratch("radix sort", &scratch.misc, 0, self.scratch_bytes(cap))?;
         if self.pairs {
+            let pairs = with_values;
             let words = if pairs { 2 } else { 1 };
             check_scratch("radix sort", &scratch.keys, 0, cap as u64 * 4 * words)?;
             if pairs && (passes > 2 || (self.splits_last() && passes > 1)) {
@@ -412,186 +440,241 @@ impl RadixSort {
                 check_scratch("radix sort", b, 0, cap as u64 * 4)?;
             }
         }
-        let (hist_off, lanes_off, scan_off) = self.layout(cap);
-        let header = misc.slice(0, HEADER_BYTES);
-        let hist = misc.slice(hist_off, region(self.hist_len(cap) as u64 * 4));
-        let lanes = misc.slice(lanes_off, region(self.lane_counts_len(cap) * 4));
-        let stored = if self.stores_lane_counts() { 2 } else { 0 };
+        Ok(())
+    }
+
+    /// The sort's header (dispatch sizes from the count) and the histogram scan's setup.
+    fn record_setup(&self, rec: &mut Recorder, count: Count<'_>, plan: &PassPlan) -> Result<()> {
         self.setup.record(
             rec,
             count,
             1,
-            header,
+            plan.header,
             [self.tuning.tile(), self.tuning.sort_tile(), 0, 0],
             None,
         )?;
         // The histogram scan's n = tiles × radix, read from this header on the GPU.
         let tiles_count = Count::Gpu {
-            buffer: misc,
+            buffer: plan.misc,
             offset: 4 * 2, // HDR_GROUPS + 1: the tile count of dispatch kind 1
-            max: self.tiles(cap) as u32,
+            max: self.tiles(plan.cap) as u32,
         };
         self.scan.record_setup(
             rec,
             tiles_count,
             self.radix() * self.hist_rows(),
-            misc,
-            scan_off,
+            plan.misc,
+            plan.scan_off,
             None,
-        )?;
+        )
+    }
 
-        let with_values = values.is_some() as u32;
-        if let (true, Some(vals)) = (pairs, values) {
-            let pair_buffers = [
-                BufferSlice::from(&scratch.keys),
-                BufferSlice::from(&scratch.values),
-            ];
-            for pass in 0..passes {
-                let shift = bits.start + pass * self.tuning.radix_bits;
-                // The first pass reads the caller's buffers, the last (if not also the
-                // first, and unless the sort splits its pairs at the end) writes them;
-                // everything in between is pairs to pairs.
-                let pairs_in = pass > 0;
-                let to_pairs = pass == 0 || pass + 1 < passes || self.splits_last();
-                let push = PassPush {
-                    shift,
-                    bits: (bits.end - shift).min(self.tuning.radix_bits),
-                    flags: 1 | if pairs_in { 4 } else { 0 } | if to_pairs { 8 } else { 0 },
-                };
-                let (ki, vi) = if pairs_in {
-                    let p = pair_buffers[(pass as usize - 1) % 2];
-                    (p, p)
-                } else {
-                    (keys, vals)
-                };
-                let (ko, vo) = if to_pairs {
-                    let p = pair_buffers[pass as usize % 2];
-                    (p, p)
-                } else {
-                    (keys, vals)
-                };
-                rec.dispatch_indirect(
-                    &self.histogram,
-                    &[header, ki, hist],
-                    &push,
-                    misc,
-                    args_offset(1),
-                )?;
-                rec.barrier();
-                self.scan.record_passes(
-                    rec,
-                    hist,
-                    hist,
-                    ScanKind::Exclusive,
-                    false,
-                    self.hist_len(cap),
-                    misc,
-                    scan_off,
-                )?;
-                let scatter = match &self.pair_scatters {
-                    Some(kinds) if !pairs_in => &kinds.first,
-                    Some(kinds) if to_pairs => &kinds.middle,
-                    Some(PairScatters {
-                        last: Some(last), ..
-                    }) => last,
-                    _ => &self.scatter,
-                };
-                rec.dispatch_indirect(
-                    scatter,
-                    &[header, ki, vi, hist, ko, vo],
-                    &push,
-                    misc,
-                    args_offset(1),
-                )?;
-                rec.barrier();
-            }
-            // The result is still in pairs after a single pass, or after every pass
-            // when the sort splits its pairs at the end: split them into the caller's arrays.
-            if let (true, Some(unpack)) = (passes == 1 || self.splits_last(), &self.unpack) {
-                let p = pair_buffers[(passes as usize - 1) % 2];
-                rec.dispatch_indirect(unpack, &[header, p, keys, vals], &(), misc, args_offset(1))?;
-                rec.barrier();
-            }
-            return Ok(());
+    /// One pass's histogram and its exclusive scan (in place).
+    fn record_histogram(
+        &self,
+        rec: &mut Recorder,
+        plan: &PassPlan,
+        bindings: &[BufferSlice<'_>],
+        push: &PassPush,
+    ) -> Result<()> {
+        rec.dispatch_indirect(&self.histogram, bindings, push, plan.misc, args_offset(1))?;
+        rec.barrier();
+        self.scan.record_passes(
+            rec,
+            plan.hist,
+            plan.hist,
+            ScanKind::Exclusive,
+            false,
+            self.hist_len(plan.cap),
+            plan.misc,
+            plan.scan_off,
+        )
+    }
+
+    /// The push constants of pass `pass`.
+    fn pass_push(&self, plan: &PassPlan, pass: u32, flags: u32) -> PassPush {
+        let shift = plan.bits.start + pass * self.tuning.radix_bits;
+        PassPush {
+            shift,
+            bits: (plan.bits.end - shift).min(self.tuning.radix_bits),
+            flags,
         }
+    }
+
+    /// Key-value passes through interleaved pairs: the first pass reads the caller's
+    /// arrays, the middle ones go pairs to pairs, the last writes the caller's arrays
+    /// (or pairs that an unpack splits, after one pass or where the sort splits last).
+    fn record_pair_passes(
+        &self,
+        rec: &mut Recorder,
+        plan: &PassPlan,
+        keys: BufferSlice<'_>,
+        vals: BufferSlice<'_>,
+        scratch: &SortScratch,
+    ) -> Result<()> {
+        let pair_buffers = [
+            BufferSlice::from(&scratch.keys),
+            BufferSlice::from(&scratch.values),
+        ];
+        let passes = plan.passes;
+        for pass in 0..passes {
+            // The first pass reads the caller's buffers, the last (if not also the
+            // first, and unless the sort splits its pairs at the end) writes them;
+            // everything in between is pairs to pairs.
+            let pairs_in = pass > 0;
+            let to_pairs = pass == 0 || pass + 1 < passes || self.splits_last();
+            let flags = 1 | if pairs_in { 4 } else { 0 } | if to_pairs { 8 } else { 0 };
+            let push = self.pass_push(plan, pass, flags);
+            let (ki, vi) = if pairs_in {
+                let p = pair_buffers[(pass as usize - 1) % 2];
+                (p, p)
+            } else {
+                (keys, vals)
+            };
+            let (ko, vo) = if to_pairs {
+                let p = pair_buffers[pass as usize % 2];
+                (p, p)
+            } else {
+                (keys, vals)
+            };
+            self.record_histogram(rec, plan, &[plan.header, ki, plan.hist], &push)?;
+            let scatter = match &self.pair_scatters {
+                Some(kinds) if !pairs_in => &kinds.first,
+                Some(kinds) if to_pairs => &kinds.middle,
+                Some(PairScatters {
+                    last: Some(last), ..
+                }) => last,
+                _ => &self.scatter,
+            };
+            rec.dispatch_indirect(
+                scatter,
+                &[plan.header, ki, vi, plan.hist, ko, vo],
+                &push,
+                plan.misc,
+                args_offset(1),
+            )?;
+            rec.barrier();
+        }
+        // The result is still in pairs after a single pass, or after every pass
+        // when the sort splits its pairs at the end: split them into the caller's arrays.
+        if let (true, Some(unpack)) = (passes == 1 || self.splits_last(), &self.unpack) {
+            let p = pair_buffers[(passes as usize - 1) % 2];
+            rec.dispatch_indirect(
+                unpack,
+                &[plan.header, p, keys, vals],
+                &(),
+                plan.misc,
+                args_offset(1),
+            )?;
+            rec.barrier();
+        }
+        Ok(())
+    }
+
+    /// Passes between the caller's arrays and the scratch pair, keys (and values) as
+    /// separate arrays; an odd number of passes copies the result back.
+    fn record_array_passes(
+        &self,
+        rec: &mut Recorder,
+        plan: &PassPlan,
+        count: Count<'_>,
+        keys: BufferSlice<'_>,
+        values: Option<BufferSlice<'_>>,
+        scratch: &SortScratch,
+    ) -> Result<()> {
+        let with_values = values.is_some() as u32;
+        let stored = if self.stores_lane_counts() { 2 } else { 0 };
         let tmp_keys = BufferSlice::from(&scratch.keys);
         let tmp_vals = BufferSlice::from(&scratch.values);
         let vals = values.unwrap_or(keys);
         let tmp_v = if values.is_some() { tmp_vals } else { tmp_keys };
         let mut src = (keys, vals);
         let mut dst = (tmp_keys, tmp_v);
-        for pass in 0..passes {
-            let shift = bits.start + pass * self.tuning.radix_bits;
-            let push = PassPush {
-                shift,
-                bits: (bits.end - shift).min(self.tuning.radix_bits),
-                flags: with_values | stored,
-            };
-            let count_bindings = [header, src.0, hist, lanes];
-            rec.dispatch_indirect(
-                &self.histogram,
-                &count_bindings[..if self.tableless() { 3 } else { 4 }],
-                &push,
-                misc,
-                args_offset(1),
-            )?;
-            rec.barrier();
-            self.scan.record_passes(
-                rec,
-                hist,
-                hist,
-                ScanKind::Exclusive,
-                false,
-                self.hist_len(cap),
-                misc,
-                scan_off,
-            )?;
-            let scatter_bindings = [header, src.0, src.1, hist, dst.0, dst.1, lanes];
+        let used = if self.tableless() { 0 } else { 1 };
+        for pass in 0..plan.passes {
+            let push = self.pass_push(plan, pass, with_values | stored);
+            let count_bindings = [plan.header, src.0, plan.hist, plan.lanes];
+            self.record_histogram(rec, plan, &count_bindings[..3 + used], &push)?;
+            let scatter_bindings = [
+                plan.header,
+                src.0,
+                src.1,
+                plan.hist,
+                dst.0,
+                dst.1,
+                plan.lanes,
+            ];
             rec.dispatch_indirect(
                 &self.scatter,
-                &scatter_bindings[..if self.tableless() { 6 } else { 7 }],
+                &scatter_bindings[..6 + used],
                 &push,
-                misc,
+                plan.misc,
                 args_offset(1),
             )?;
             rec.barrier();
             std::mem::swap(&mut src, &mut dst);
         }
-        if passes % 2 == 1 {
+        if plan.passes % 2 == 1 {
             // An odd number of passes left the result in the scratch pair.
-            match count {
-                // n known here: a transfer copy (memcpy speed on CPU devices).
-                Count::Host(n) => {
-                    let bytes = n as u64 * 4;
-                    if bytes > 0 {
-                        rec.copy(
-                            src.0.buffer,
-                            src.0.offset,
-                            dst.0.buffer,
-                            dst.0.offset,
-                            bytes,
-                        );
-                        if values.is_some() {
-                            rec.copy(
-                                src.1.buffer,
-                                src.1.offset,
-                                dst.1.buffer,
-                                dst.1.offset,
-                                bytes,
-                            );
-                        }
-                    }
-                }
-                Count::Gpu { .. } => rec.dispatch_indirect(
-                    &self.copy,
-                    &[header, src.0, src.1, dst.0, dst.1],
-                    &with_values,
-                    misc,
-                    args_offset(0),
-                )?,
-            }
-            rec.barrier();
+            self.record_copy_back(rec, plan, count, src, dst, values.is_some())?;
         }
         Ok(())
     }
+
+    /// Copies the sorted keys (and values) from `src` to `dst`.
+    fn record_copy_back(
+        &self,
+        rec: &mut Recorder,
+        plan: &PassPlan,
+        count: Count<'_>,
+        src: (BufferSlice<'_>, BufferSlice<'_>),
+        dst: (BufferSlice<'_>, BufferSlice<'_>),
+        with_values: bool,
+    ) -> Result<()> {
+        match count {
+            // n known here: a transfer copy (memcpy speed on CPU devices).
+            Count::Host(n) => {
+                let bytes = n as u64 * 4;
+                if bytes > 0 {
+                    rec.copy(
+                        src.0.buffer,
+                        src.0.offset,
+                        dst.0.buffer,
+                        dst.0.offset,
+                        bytes,
+                    );
+                    if with_values {
+                        rec.copy(
+                            src.1.buffer,
+                            src.1.offset,
+                            dst.1.buffer,
+                            dst.1.offset,
+                            bytes,
+                        );
+                    }
+                }
+            }
+            Count::Gpu { .. } => rec.dispatch_indirect(
+                &self.copy,
+                &[plan.header, src.0, src.1, dst.0, dst.1],
+                &(with_values as u32),
+                plan.misc,
+                args_offset(0),
+            )?,
+        }
+        rec.barrier();
+        Ok(())
+    }
+}
+
+/// Where one sort's passes find their scratch regions, and how many they make.
+struct PassPlan<'a> {
+    misc: &'a Buffer,
+    header: BufferSlice<'a>,
+    hist: BufferSlice<'a>,
+    lanes: BufferSlice<'a>,
+    scan_off: u64,
+    cap: u32,
+    passes: u32,
+    bits: std::ops::Range<u32>,
 }
