@@ -297,6 +297,37 @@ fn trace_once(
     hit_buf.read()
 }
 
+impl GpuBatch {
+    /// `rays` on the device, with a hits buffer of `hit_slots` hits.
+    fn upload(gpu: &Gpu, rays: &[Ray], hit_slots: usize, query: Query) -> vk::Result<Self> {
+        Ok(Self {
+            rays: gpu.upload("bench-rays", rays)?,
+            hits: gpu.create_buffer(
+                "bench-hits",
+                (hit_slots * size_of::<Hit>()) as u64,
+                vk::MemoryKind::Device,
+            )?,
+            count: rays.len() as u32,
+            query,
+        })
+    }
+}
+
+/// Per batch, brute force's hits on a strided sample of its rays: (rays, hits, query).
+type OracleSamples = Vec<(Vec<Ray>, Vec<Hit>, Query)>;
+
+/// What every step of the benchmark shares: the device, the options, the scene's
+/// triangles and the workload, on the host and on the device.
+struct Bench<'a> {
+    gpu: &'a Gpu,
+    opts: &'a TraceBenchOptions,
+    triangles: Vec<GpuTriangle>,
+    batches: Vec<RayBatch>,
+    gpu_batches: Vec<GpuBatch>,
+    /// Rays of the whole workload, all batches together.
+    total_rays: usize,
+}
+
 /// Runs the benchmark. `dump_hits`: write the primary hits (pixel order) there.
 pub fn run(
     gpu: &Gpu,
@@ -309,151 +340,160 @@ pub fn run(
         .iter()
         .map(|t| GpuTriangle::new(t.p))
         .collect();
-    let primary = workloads::primary_rays(scene, opts.width, opts.height);
-
-    // The workload's rays, from PDACRT's primary hits (checked below like every tracer).
-    let mut reference = PdacrtTracer::new(gpu, &triangles)?;
-    let primary_hits = trace_once(gpu, &mut reference, &primary, Query::ClosestHit)?;
-    if let Some(path) = dump_hits {
-        write_hits(path, &primary_hits)?;
-    }
-    let mut batches: Vec<RayBatch> = Vec::new();
-    if opts.workload == Workload::Primary {
-        batches.push(RayBatch {
-            label: "primary".into(),
-            rays: primary.clone(),
-            query: Query::ClosestHit,
-        });
-    } else {
-        let mut trace = |rays: &[Ray]| {
-            trace_once(gpu, &mut reference, rays, Query::ClosestHit).expect("trace bounce")
-        };
-        batches = workloads::secondary_batches(
-            opts.workload,
-            scene,
-            &triangles,
-            &primary,
-            &primary_hits,
-            &mut trace,
-        );
-    }
-    drop(reference);
-    let total_rays: usize = batches.iter().map(|b| b.rays.len()).sum();
-
-    let gpu_batches: Vec<GpuBatch> = batches
-        .iter()
-        .map(|b| -> vk::Result<GpuBatch> {
-            Ok(GpuBatch {
-                rays: gpu.upload("bench-rays", &b.rays)?,
-                hits: gpu.create_buffer(
-                    "bench-hits",
-                    (b.rays.len().max(1) * size_of::<Hit>()) as u64,
-                    vk::MemoryKind::Device,
-                )?,
-                count: b.rays.len() as u32,
-                query: b.query,
-            })
-        })
-        .collect::<vk::Result<_>>()?;
-
-    // Brute-force samples for verification (the oracle of every tracer).
-    let mut oracle = BruteForceTracer::new(gpu, &triangles)?;
-    let affordable = (opts.verify_budget / triangles.len().max(1) as f64) as usize;
-    let verify_rays = affordable.clamp(64.min(opts.verify_rays), opts.verify_rays);
-    let samples: Vec<(Vec<Ray>, Vec<Hit>, Query)> = batches
-        .iter()
-        .map(|b| -> vk::Result<_> {
-            let rays = strided(&b.rays, verify_rays);
-            let hits = trace_once(gpu, &mut oracle, &rays, b.query)?;
-            Ok((rays, hits, b.query))
-        })
-        .collect::<vk::Result<_>>()?;
-    drop(oracle);
+    let batches = workload_batches(gpu, scene, opts, &triangles, dump_hits)?;
+    let bench = Bench::upload(gpu, opts, triangles, batches)?;
+    let samples = bench.oracle_samples()?;
 
     // Phase 1, per tracer alone on the device: verify it, then measure its peak memory
     // over a warm-up frame and one more (its pools persist between frames, so another
     // tracer alive at the same time would blur both figures).
-    let make = |kind: TracerKind| -> vk::Result<Box<dyn Tracer>> {
-        match (kind, opts.pdacrt) {
-            (TracerKind::Pdacrt, Some(params)) => Ok(Box::new(PdacrtTracer::with_params(
-                gpu, &triangles, params,
-            )?)),
-            _ => kind.create(gpu, &triangles),
-        }
-    };
     let mut contenders = Vec::new();
     for &kind in &opts.tracers {
-        let mut tracer = make(kind)?;
-        // Verify before timing.
-        let (mut verified, mut mismatches) = (0, 0);
-        for (rays, want, query) in &samples {
-            let got = trace_once(gpu, tracer.as_mut(), rays, *query)?;
-            verified += rays.len();
-            mismatches += got
-                .iter()
-                .zip(want)
-                .filter(|(g, w)| match query {
-                    Query::ClosestHit => !cpu::same_hit(g, w, 1e-5, true),
-                    Query::Occlusion => g.is_hit() != w.is_hit(),
-                })
-                .count();
+        contenders.push(bench.measure_alone(kind, &samples)?);
+    }
+
+    // Phase 2: all tracers together, one warm-up frame each (LLVM compiles each kernel
+    // at its first dispatch on lavapipe), then timed frames in interleaved rounds, so
+    // that a change of load on a shared machine hits every tracer alike.
+    bench.warm_up(&mut contenders)?;
+    bench.time_rounds(&mut contenders)?;
+    Ok(bench.report(scene, contenders))
+}
+
+/// The workload's rays, from PDACRT's primary hits (checked later like every tracer);
+/// writes the primary hits to `dump_hits` first.
+fn workload_batches(
+    gpu: &Gpu,
+    scene: &Scene,
+    opts: &TraceBenchOptions,
+    triangles: &[GpuTriangle],
+    dump_hits: Option<&Path>,
+) -> BenchResult<Vec<RayBatch>> {
+    let primary = workloads::primary_rays(scene, opts.width, opts.height);
+    let mut reference = PdacrtTracer::new(gpu, triangles)?;
+    let primary_hits = trace_once(gpu, &mut reference, &primary, Query::ClosestHit)?;
+    if let Some(path) = dump_hits {
+        write_hits(path, &primary_hits)?;
+    }
+    if opts.workload == Workload::Primary {
+        return Ok(vec![RayBatch {
+            label: "primary".into(),
+            rays: primary,
+            query: Query::ClosestHit,
+        }]);
+    }
+    let mut trace = |rays: &[Ray]| {
+        trace_once(gpu, &mut reference, rays, Query::ClosestHit).expect("trace bounce")
+    };
+    let batches = workloads::secondary_batches(
+        opts.workload,
+        scene,
+        triangles,
+        &primary,
+        &primary_hits,
+        &mut trace,
+    );
+    Ok(batches)
+}
+
+/// Traces every sample's rays with `tracer`: (rays checked, hits that differ from brute
+/// force's).
+fn count_mismatches(
+    gpu: &Gpu,
+    tracer: &mut dyn Tracer,
+    samples: &OracleSamples,
+) -> vk::Result<(usize, usize)> {
+    let (mut verified, mut mismatches) = (0, 0);
+    for (rays, want, query) in samples {
+        let got = trace_once(gpu, tracer, rays, *query)?;
+        verified += rays.len();
+        mismatches += got
+            .iter()
+            .zip(want)
+            .filter(|(g, w)| match query {
+                Query::ClosestHit => !cpu::same_hit(g, w, 1e-5, true),
+                Query::Occlusion => g.is_hit() != w.is_hit(),
+            })
+            .count();
+    }
+    Ok((verified, mismatches))
+}
+
+impl<'a> Bench<'a> {
+    /// Puts every batch's rays on the device, with room for its hits.
+    fn upload(
+        gpu: &'a Gpu,
+        opts: &'a TraceBenchOptions,
+        triangles: Vec<GpuTriangle>,
+        batches: Vec<RayBatch>,
+    ) -> vk::Result<Self> {
+        let total_rays: usize = batches.iter().map(|b| b.rays.len()).sum();
+        let gpu_batches: Vec<GpuBatch> = batches
+            .iter()
+            .map(|b| GpuBatch::upload(gpu, &b.rays, b.rays.len().max(1), b.query))
+            .collect::<vk::Result<_>>()?;
+        Ok(Self {
+            gpu,
+            opts,
+            triangles,
+            batches,
+            gpu_batches,
+            total_rays,
+        })
+    }
+
+    /// Brute-force samples for verification (the oracle of every tracer): at most
+    /// `verify_rays` strided rays per batch, fewer where `verify_budget` says so.
+    fn oracle_samples(&self) -> vk::Result<OracleSamples> {
+        let mut oracle = BruteForceTracer::new(self.gpu, &self.triangles)?;
+        let affordable = (self.opts.verify_budget / self.triangles.len().max(1) as f64) as usize;
+        let verify_rays = affordable.clamp(64.min(self.opts.verify_rays), self.opts.verify_rays);
+        let samples = self
+            .batches
+            .iter()
+            .map(|b| -> vk::Result<_> {
+                let rays = strided(&b.rays, verify_rays);
+                let hits = trace_once(self.gpu, &mut oracle, &rays, b.query)?;
+                Ok((rays, hits, b.query))
+            })
+            .collect::<vk::Result<_>>()?;
+        drop(oracle);
+        Ok(samples)
+    }
+
+    /// A new tracer of `kind`, with the options' PDACRT parameters where they give them.
+    fn make_tracer(&self, kind: TracerKind) -> vk::Result<Box<dyn Tracer>> {
+        match (kind, self.opts.pdacrt) {
+            (TracerKind::Pdacrt, Some(params)) => Ok(Box::new(PdacrtTracer::with_params(
+                self.gpu,
+                &self.triangles,
+                params,
+            )?)),
+            _ => kind.create(self.gpu, &self.triangles),
         }
+    }
+
+    /// Phase 1 for one tracer, alone on the device: verifies it against `samples`, then
+    /// measures its peak memory. Fails if any sampled hit differs.
+    fn measure_alone(&self, kind: TracerKind, samples: &OracleSamples) -> BenchResult<Contender> {
+        let mut tracer = self.make_tracer(kind)?;
+        // Verify before timing.
+        let (verified, mismatches) = count_mismatches(self.gpu, tracer.as_mut(), samples)?;
         if mismatches > 0 {
             return Err(format!("{}: {mismatches} of {verified} sampled hits differ from brute force; not timing it", kind.name()).into());
         }
-        // Brute force on a subset when the whole frame would take too long.
-        let tests = triangles.len() as f64 * total_rays as f64;
-        let subset = if kind == TracerKind::BruteForce && tests > opts.brute_force_budget {
-            opts.brute_force_budget / tests
-        } else {
-            1.0
-        };
-        let subset_batches = if subset < 1.0 {
-            Some(
-                batches
-                    .iter()
-                    .map(|b| -> vk::Result<GpuBatch> {
-                        let rays = strided(
-                            &b.rays,
-                            ((b.rays.len() as f64 * subset).ceil() as usize).max(1),
-                        );
-                        Ok(GpuBatch {
-                            rays: gpu.upload("bench-rays", &rays)?,
-                            hits: gpu.create_buffer(
-                                "bench-hits",
-                                (rays.len() * size_of::<Hit>()) as u64,
-                                vk::MemoryKind::Device,
-                            )?,
-                            count: rays.len() as u32,
-                            query: b.query,
-                        })
-                    })
-                    .collect::<vk::Result<Vec<_>>>()?,
-            )
-        } else {
-            None
-        };
-        let timed = subset_batches.as_deref().unwrap_or(&gpu_batches);
+        let subset_batches = self.brute_force_subset(kind)?;
+        let timed = subset_batches.as_deref().unwrap_or(&self.gpu_batches);
         let traced: usize = timed.iter().map(|b| b.count as usize).sum();
-        let scale = total_rays as f64 / traced.max(1) as f64;
+        let scale = self.total_rays as f64 / traced.max(1) as f64;
 
         // Everything on the device before the tracer's first frame: rays, hits and the
         // bench's own buffers (the tracer's pipelines hold no device memory).
         drop(tracer);
-        gpu.wait_idle()?;
-        let baseline = gpu.memory_bytes().0;
-        let mut tracer = make(kind)?;
-        let mut peak = 0;
-        for _ in 0..2 {
-            gpu.wait_idle()?;
-            gpu.reset_peak_memory();
-            run_frame(gpu, tracer.as_mut(), &triangles, timed)?;
-            peak = peak.max(gpu.memory_bytes().1);
-        }
-        drop(tracer);
-        gpu.wait_idle()?;
-        let _ = gpu.take_profile();
-        contenders.push(Contender {
+        self.gpu.wait_idle()?;
+        let baseline = self.gpu.memory_bytes().0;
+        let peak = self.peak_memory(kind, timed)?;
+        Ok(Contender {
             kind,
             subset_batches,
             scale,
@@ -466,87 +506,164 @@ pub fn run(
             kernels: Vec::new(),
             profile: Default::default(),
             tracer: None,
-        });
+        })
     }
 
-    // Phase 2: all tracers together, one warm-up frame each (LLVM compiles each kernel
-    // at its first dispatch on lavapipe), then timed frames in interleaved rounds, so
-    // that a change of load on a shared machine hits every tracer alike.
-    for c in &mut contenders {
-        let mut tracer = make(c.kind)?;
-        let timed = c.subset_batches.as_deref().unwrap_or(&gpu_batches);
-        run_frame(gpu, tracer.as_mut(), &triangles, timed)?;
-        c.tracer = Some(tracer);
-    }
-    let _ = gpu.take_profile();
-    for _ in 0..opts.frames.max(5) {
-        for c in &mut contenders {
-            let timed = c.subset_batches.as_deref().unwrap_or(&gpu_batches);
-            let tracer = c.tracer.as_deref_mut().expect("created above");
-            let ms = run_frame(gpu, tracer, &triangles, timed)?;
-            c.times.push(ms * c.scale);
-            c.host.extend(tracer.host_timing());
-            let log = gpu.take_profile();
-            c.kernels = log.summary();
-            c.profile = log.tree();
+    /// Brute force on a subset when the whole frame would take too long (more than
+    /// `brute_force_budget` ray–triangle tests): a strided part of each batch. `None` for
+    /// every other tracer and for brute force within the budget.
+    fn brute_force_subset(&self, kind: TracerKind) -> vk::Result<Option<Vec<GpuBatch>>> {
+        let budget = self.opts.brute_force_budget;
+        let tests = self.triangles.len() as f64 * self.total_rays as f64;
+        let subset = if kind == TracerKind::BruteForce && tests > budget {
+            budget / tests
+        } else {
+            1.0
+        };
+        if subset < 1.0 {
+            let batches = self
+                .batches
+                .iter()
+                .map(|b| -> vk::Result<GpuBatch> {
+                    let rays = strided(
+                        &b.rays,
+                        ((b.rays.len() as f64 * subset).ceil() as usize).max(1),
+                    );
+                    GpuBatch::upload(self.gpu, &rays, rays.len(), b.query)
+                })
+                .collect::<vk::Result<Vec<_>>>()?;
+            Ok(Some(batches))
+        } else {
+            Ok(None)
         }
-        eprint!(".");
-        let _ = std::io::stderr().flush();
     }
-    eprintln!();
 
-    let mut rows = Vec::new();
-    let mut pdacrt_levels = Vec::new();
-    for mut c in contenders {
-        c.times.sort_by(f64::total_cmp);
-        let median = c.times[c.times.len() / 2];
-        let tracer = c.tracer.as_deref().expect("created above");
+    /// Peak device memory of a fresh tracer of `kind` over a warm-up frame of `timed` and
+    /// one more; the tracer is gone and the profile discarded on return.
+    fn peak_memory(&self, kind: TracerKind, timed: &[GpuBatch]) -> vk::Result<u64> {
+        let gpu = self.gpu;
+        let mut tracer = self.make_tracer(kind)?;
+        let mut peak = 0;
+        for _ in 0..2 {
+            gpu.wait_idle()?;
+            gpu.reset_peak_memory();
+            run_frame(gpu, tracer.as_mut(), &self.triangles, timed)?;
+            peak = peak.max(gpu.memory_bytes().1);
+        }
+        drop(tracer);
+        gpu.wait_idle()?;
+        let _ = gpu.take_profile();
+        Ok(peak)
+    }
+
+    /// Phase 2's start: creates every contender's tracer, all alive together, and runs
+    /// one warm-up frame of each; the warm-up frames' profile is discarded.
+    fn warm_up(&self, contenders: &mut [Contender]) -> vk::Result<()> {
+        for c in contenders.iter_mut() {
+            let mut tracer = self.make_tracer(c.kind)?;
+            let timed = c.subset_batches.as_deref().unwrap_or(&self.gpu_batches);
+            run_frame(self.gpu, tracer.as_mut(), &self.triangles, timed)?;
+            c.tracer = Some(tracer);
+        }
+        let _ = self.gpu.take_profile();
+        Ok(())
+    }
+
+    /// The timed frames: rounds of one frame per contender, in order (at least 5
+    /// rounds), each frame's time scaled to the whole workload; the kernels and profile
+    /// kept are each contender's last frame's.
+    fn time_rounds(&self, contenders: &mut [Contender]) -> vk::Result<()> {
+        let gpu = self.gpu;
+        for _ in 0..self.opts.frames.max(5) {
+            for c in contenders.iter_mut() {
+                let timed = c.subset_batches.as_deref().unwrap_or(&self.gpu_batches);
+                let tracer = c.tracer.as_deref_mut().expect("created above");
+                let ms = run_frame(gpu, tracer, &self.triangles, timed)?;
+                c.times.push(ms * c.scale);
+                c.host.extend(tracer.host_timing());
+                let log = gpu.take_profile();
+                c.kernels = log.summary();
+                c.profile = log.tree();
+            }
+            eprint!(".");
+            let _ = std::io::stderr().flush();
+        }
+        eprintln!();
+        Ok(())
+    }
+
+    /// The report: a row per contender, in the options' order, and PDACRT's per-level
+    /// statistics (of the last contender that has them).
+    fn report(&self, scene: &Scene, contenders: Vec<Contender>) -> TraceReport {
+        let (gpu, opts) = (self.gpu, self.opts);
+        let mut rows = Vec::new();
+        let mut pdacrt_levels = Vec::new();
+        for c in contenders {
+            let (row, levels) = c.into_row(self.total_rays);
+            if let Some(levels) = levels {
+                pdacrt_levels = levels;
+            }
+            rows.push(row);
+        }
+        TraceReport {
+            scene: scene.name.clone(),
+            triangles: self.triangles.len(),
+            device: crate::render::device_description(gpu),
+            width: opts.width,
+            height: opts.height,
+            workload: opts.workload,
+            batches: self
+                .batches
+                .iter()
+                .map(|b| (b.label.clone(), b.rays.len()))
+                .collect(),
+            rays: self.total_rays,
+            rows,
+            pdacrt_levels,
+            pdacrt_params: opts
+                .tracers
+                .contains(&TracerKind::Pdacrt)
+                .then(|| opts.pdacrt.unwrap_or_else(|| PdacrtParams::for_device(gpu))),
+            date: super::today(),
+        }
+    }
+}
+
+impl Contender {
+    /// Its row of the report (median, min and max of the timed frames), with its
+    /// tracer's per-level statistics of the last frame where it keeps them (PDACRT).
+    fn into_row(
+        mut self,
+        total_rays: usize,
+    ) -> (TracerRow, Option<Vec<crate::trace::pdacrt::LevelStats>>) {
+        self.times.sort_by(f64::total_cmp);
+        let median = self.times[self.times.len() / 2];
+        let tracer = self.tracer.as_deref().expect("created above");
         let stats = tracer.level_stats();
         let (trips, levels) = (
             stats.map(|s| s.host_round_trips),
             stats.map(|s| s.levels.len()),
         );
-        if let Some(stats) = stats {
-            pdacrt_levels = stats.levels.clone();
-        }
-        rows.push(TracerRow {
-            tracer: c.kind.name().into(),
+        let level_stats = stats.map(|s| s.levels.clone());
+        let row = TracerRow {
+            tracer: self.kind.name().into(),
             frame_ms: median,
-            min_ms: c.times[0],
-            max_ms: *c.times.last().unwrap(),
+            min_ms: self.times[0],
+            max_ms: *self.times.last().unwrap(),
             mrays_per_s: total_rays as f64 / (median * 1e3),
-            peak_gpu_bytes: c.peak,
-            tracer_peak_bytes: c.peak.saturating_sub(c.baseline),
-            kernels: c.kernels,
-            profile: c.profile,
-            subset: 1.0 / c.scale,
-            verified_rays: c.verified,
-            mismatches: c.mismatches,
+            peak_gpu_bytes: self.peak,
+            tracer_peak_bytes: self.peak.saturating_sub(self.baseline),
+            kernels: self.kernels,
+            profile: self.profile,
+            subset: 1.0 / self.scale,
+            verified_rays: self.verified,
+            mismatches: self.mismatches,
             host_round_trips: trips,
             levels,
-            host: host_row(&c.host),
-        });
+            host: host_row(&self.host),
+        };
+        (row, level_stats)
     }
-    Ok(TraceReport {
-        scene: scene.name.clone(),
-        triangles: triangles.len(),
-        device: crate::render::device_description(gpu),
-        width: opts.width,
-        height: opts.height,
-        workload: opts.workload,
-        batches: batches
-            .iter()
-            .map(|b| (b.label.clone(), b.rays.len()))
-            .collect(),
-        rays: total_rays,
-        rows,
-        pdacrt_levels,
-        pdacrt_params: opts
-            .tracers
-            .contains(&TracerKind::Pdacrt)
-            .then(|| opts.pdacrt.unwrap_or_else(|| PdacrtParams::for_device(gpu))),
-        date: super::today(),
-    })
 }
 
 /// Medians of a CPU tracer's per-frame host timings (`None` for GPU tracers).
