@@ -429,10 +429,9 @@ impl RadixSort {
     ) -> Result<()> {
         check_scratch("radix sort", &scratch.misc, 0, self.scratch_bytes(cap))?;
         if self.pairs {
-            let pairs = with_values;
-            let words = if pairs { 2 } else { 1 };
+            let words = if with_values { 2 } else { 1 };
             check_scratch("radix sort", &scratch.keys, 0, cap as u64 * 4 * words)?;
-            if pairs && (passes > 2 || (self.splits_last() && passes > 1)) {
+            if with_values && (passes > 2 || (self.splits_last() && passes > 1)) {
                 check_scratch("radix sort", &scratch.values, 0, cap as u64 * 8)?;
             }
         } else {

@@ -219,7 +219,8 @@ pub fn trace_camera_paths(
         w.record_tally_readback(&mut rec);
         let counted = rec.submit(&[&occluded])?;
         gpu.wait(&counted)?;
-        outcome.visibility.merge(&w.read_tally(&counted)?.into());
+        let (survivors, tally) = w.read_camera_counts(n, &counted)?;
+        outcome.visibility.merge(&tally.into());
         hook(
             shared,
             &BounceView {
@@ -230,7 +231,6 @@ pub fn trace_camera_paths(
                 connection_base: push.base,
             },
         )?;
-        let (_, survivors) = w.read_counts(n, &counted)?;
         if survivors == 0 {
             break;
         }

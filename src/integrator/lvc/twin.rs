@@ -230,6 +230,12 @@ pub struct BounceRecords<'a> {
 pub fn accumulate(records: &BounceRecords, radiance: &mut [[f32; 4]]) -> (u32, VisibilityTally) {
     let mut non_finite = 0;
     let mut tally = VisibilityTally::default();
+    // A slot's shadow ray counts where it carried a contribution, and as unoccluded where
+    // the tracer found nothing in its way.
+    let count = |rays: &mut u32, unoccluded: &mut u32, c: &Contribution, open: bool| {
+        *rays += u32::from(c.is_some());
+        *unoccluded += u32::from(c.is_some() && open);
+    };
     let mut add = |sum: &mut Vec3, c: &Contribution| {
         if !c.is_some() {
             return;
@@ -247,8 +253,12 @@ pub fn accumulate(records: &BounceRecords, radiance: &mut [[f32; 4]]) -> (u32, V
         add(&mut sum, &records.emitted[i]);
         let direct = &records.contributions[i];
         let open = records.shadow_hits[i].triangle == MISS;
-        tally.direct_rays += u32::from(direct.is_some());
-        tally.direct_unoccluded += u32::from(direct.is_some() && open);
+        count(
+            &mut tally.direct_rays,
+            &mut tally.direct_unoccluded,
+            direct,
+            open,
+        );
         if open {
             add(&mut sum, direct);
         }
@@ -256,8 +266,12 @@ pub fn accumulate(records: &BounceRecords, radiance: &mut [[f32; 4]]) -> (u32, V
             let slot = records.base + i * records.connections + k;
             let c = &records.contributions[slot];
             let reached = records.shadow_hits[slot].triangle == MISS;
-            tally.connection_rays += u32::from(c.is_some());
-            tally.connections_unoccluded += u32::from(c.is_some() && reached);
+            count(
+                &mut tally.connection_rays,
+                &mut tally.connections_unoccluded,
+                c,
+                reached,
+            );
             if reached {
                 add(&mut sum, c);
             }

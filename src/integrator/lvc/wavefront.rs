@@ -151,13 +151,17 @@ impl Wavefront {
         );
     }
 
-    /// The tally as the readback recorded in the submission that ends at `done` left it.
-    pub fn read_tally(&self, done: &TimelinePoint) -> vk::Result<VisibilityTally> {
+    /// A camera bounce's survivors (at most `n`) and tally, in one read of what the
+    /// readbacks recorded in the submission that ends at `done` left.
+    pub fn read_camera_counts(
+        &self,
+        n: u32,
+        done: &TimelinePoint,
+    ) -> vk::Result<(u32, VisibilityTally)> {
         let words = self.counts_readback.read_after::<u32>(done)?;
         let at = (TALLY_READBACK_OFFSET / 4) as usize;
-        Ok(*bytemuck::from_bytes(bytemuck::cast_slice(
-            &words[at..at + 4],
-        )))
+        let tally = bytemuck::cast_slice::<u32, VisibilityTally>(&words[at..at + 4])[0];
+        Ok((words[1].min(n), tally))
     }
 
     /// (vertices marked, paths alive), each at most `n`, as the readback recorded in the
