@@ -2,7 +2,7 @@
 //! profiler log. [`Gpu`] is a cheap, cloneable handle to it.
 
 use std::collections::VecDeque;
-use std::ffi::CStr;
+use std::ffi::{c_char, CStr};
 use std::mem::ManuallyDrop;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
@@ -17,7 +17,9 @@ use super::instance::{Instance, InstanceDesc};
 use super::physical::{self, PhysicalDeviceInfo};
 use super::pipeline::BufferAccess;
 use super::profiler::{GpuBatch, ProfileLog, QueryBatch};
-use super::stream::{StreamKind, StreamMapping, StreamPlacement, TimelineHandle, TimelinePoint};
+use super::stream::{
+    QueueSlot, StreamKind, StreamMapping, StreamPlacement, TimelineHandle, TimelinePoint,
+};
 
 /// How to open a device.
 #[derive(Clone, Debug, Default)]
@@ -57,6 +59,26 @@ pub(crate) struct AccelSupport {
     pub(crate) loader: khr::acceleration_structure::Device,
     /// minAccelerationStructureScratchOffsetAlignment.
     pub(crate) scratch_alignment: u64,
+}
+
+impl AccelSupport {
+    /// The loader and the scratch alignment of a device opened with ray queries.
+    fn new(instance: &Instance, info: &PhysicalDeviceInfo, raw: &ash::Device) -> Self {
+        let mut as_props = vk::PhysicalDeviceAccelerationStructurePropertiesKHR::default();
+        let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut as_props);
+        // SAFETY: valid physical device that offers VK_KHR_acceleration_structure.
+        unsafe {
+            instance
+                .raw
+                .get_physical_device_properties2(info.raw, &mut props2)
+        };
+        Self {
+            loader: khr::acceleration_structure::Device::new(&instance.raw, raw),
+            scratch_alignment: (as_props.min_acceleration_structure_scratch_offset_alignment
+                as u64)
+                .max(1),
+        }
+    }
 }
 
 /// A command pool with the one command buffer ever allocated from it. Resetting the
@@ -189,131 +211,21 @@ impl Gpu {
         present: bool,
     ) -> Result<Self> {
         let mapping = StreamMapping::plan(&info, placement);
-        let per_family = mapping.queues_per_family();
-        let priorities = [1.0f32; 16];
-        let queue_infos: Vec<_> = per_family
-            .iter()
-            .map(|&(family, count)| {
-                vk::DeviceQueueCreateInfo::default()
-                    .queue_family_index(family)
-                    .queue_priorities(&priorities[..count as usize])
-            })
-            .collect();
-        // Ray queries (and what they need) are enabled only where the device offers
-        // them all; elsewhere the device is opened exactly as without them.
-        let ray_query = info.capabilities.ray_query;
-        let mut extensions = vec![khr::push_descriptor::NAME.as_ptr()];
-        if present {
-            extensions.push(khr::swapchain::NAME.as_ptr());
-        }
-        if let Some(calibration) = info.calibration {
-            extensions.push(calibration.name().as_ptr());
-        }
-        if ray_query {
-            extensions.extend([
-                khr::acceleration_structure::NAME.as_ptr(),
-                khr::ray_query::NAME.as_ptr(),
-                khr::deferred_host_operations::NAME.as_ptr(),
-            ]);
-        }
-        let int64_atomics = info.capabilities.buffer_int64_atomics;
-        let mut f12 = vk::PhysicalDeviceVulkan12Features::default()
-            .timeline_semaphore(true)
-            .buffer_device_address(true)
-            .shader_buffer_int64_atomics(int64_atomics);
-        let f10 =
-            vk::PhysicalDeviceFeatures::default().shader_int64(info.capabilities.shader_int64);
-        let full_subgroups = info.capabilities.compute_full_subgroups;
-        let mut f13 = vk::PhysicalDeviceVulkan13Features::default()
-            .synchronization2(true)
-            .maintenance4(true)
-            .subgroup_size_control(full_subgroups)
-            .compute_full_subgroups(full_subgroups);
-        let mut accel_features = vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default()
-            .acceleration_structure(true);
-        let mut rq_features = vk::PhysicalDeviceRayQueryFeaturesKHR::default().ray_query(true);
-        let mut create_info = vk::DeviceCreateInfo::default()
-            .queue_create_infos(&queue_infos)
-            .enabled_extension_names(&extensions)
-            .enabled_features(&f10)
-            .push_next(&mut f12)
-            .push_next(&mut f13);
-        if ray_query {
-            create_info = create_info
-                .push_next(&mut accel_features)
-                .push_next(&mut rq_features);
-        }
-        // SAFETY: the physical device came from this instance; the create info lives here.
-        let raw = unsafe { instance.raw.create_device(info.raw, &create_info, None) }
-            .call("vkCreateDevice")?;
-
-        let allocator = Allocator::new(&AllocatorCreateDesc {
-            instance: instance.raw.clone(),
-            device: raw.clone(),
-            physical_device: info.raw,
-            debug_settings: Default::default(),
-            buffer_device_address: true,
-            allocation_sizes: Default::default(),
-        })
-        .map_err(|source| VkError::Alloc {
-            name: "allocator".into(),
-            source,
-        })?;
-
-        // Distinct queues, in slot order.
-        let mut queue_slots = Vec::new();
-        for s in mapping.slots {
-            if !queue_slots.contains(&s) {
-                queue_slots.push(s);
-            }
-        }
+        let raw = create_logical_device(&instance, &info, &mapping, present)?;
+        let allocator = create_allocator(&instance, &raw, &info)?;
+        let queue_slots = distinct_queue_slots(&mapping);
         let queues = queue_slots
             .iter()
-            // SAFETY: each (family, index) was requested in queue_infos.
+            // SAFETY: each (family, index) is one of the mapping's, all requested by
+            // create_logical_device.
             .map(|s| Mutex::new(unsafe { raw.get_device_queue(s.family, s.index) }))
             .collect();
-
-        let mut streams = Vec::new();
-        for kind in StreamKind::ALL {
-            let slot = mapping.slot(kind);
-            let mut type_info = vk::SemaphoreTypeCreateInfo::default()
-                .semaphore_type(vk::SemaphoreType::TIMELINE)
-                .initial_value(0);
-            let sem_info = vk::SemaphoreCreateInfo::default().push_next(&mut type_info);
-            // SAFETY: valid device.
-            let sem = unsafe { raw.create_semaphore(&sem_info, None) }.call("vkCreateSemaphore")?;
-            let bits = info.queue_families[slot.family as usize].timestamp_valid_bits;
-            streams.push(StreamState {
-                kind,
-                family: slot.family,
-                queue: queue_slots.iter().position(|s| *s == slot).unwrap(),
-                timeline: Arc::new(TimelineHandle { raw: sem }),
-                timestamp_mask: match bits {
-                    0 => 0,
-                    64.. => u64::MAX,
-                    b => (1u64 << b) - 1,
-                },
-                state: Mutex::new(StreamInner::default()),
-            });
-        }
-
+        let streams = create_streams(&raw, &info, &mapping, &queue_slots)?;
         let push_descriptor = khr::push_descriptor::Device::new(&instance.raw, &raw);
-        let accel = ray_query.then(|| {
-            let mut as_props = vk::PhysicalDeviceAccelerationStructurePropertiesKHR::default();
-            let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut as_props);
-            // SAFETY: valid physical device that offers VK_KHR_acceleration_structure.
-            unsafe {
-                instance
-                    .raw
-                    .get_physical_device_properties2(info.raw, &mut props2)
-            };
-            AccelSupport {
-                loader: khr::acceleration_structure::Device::new(&instance.raw, &raw),
-                scratch_alignment: (as_props.min_acceleration_structure_scratch_offset_alignment
-                    as u64)
-                    .max(1),
-            }
-        });
+        let accel = info
+            .capabilities
+            .ray_query
+            .then(|| AccelSupport::new(&instance, &info, &raw));
         let calibrator = info
             .calibration
             .map(|extension| Calibrator::new(&instance, &raw, extension));
@@ -564,6 +476,152 @@ impl Drop for GpuInner {
             ManuallyDrop::drop(&mut self.allocator);
             self.raw.destroy_device(None);
         }
+    }
+}
+
+/// Queue priorities, all equal; a family's queue create info takes the first `count`.
+static QUEUE_PRIORITIES: [f32; 16] = [1.0; 16];
+
+/// Opens the logical device with the queues of `mapping`, the extensions and features
+/// splitray uses where the device offers them, and VK_KHR_swapchain when it `present`s.
+fn create_logical_device(
+    instance: &Instance,
+    info: &PhysicalDeviceInfo,
+    mapping: &StreamMapping,
+    present: bool,
+) -> Result<ash::Device> {
+    let queue_infos: Vec<_> = mapping
+        .queues_per_family()
+        .iter()
+        .map(|&(family, count)| {
+            vk::DeviceQueueCreateInfo::default()
+                .queue_family_index(family)
+                .queue_priorities(&QUEUE_PRIORITIES[..count as usize])
+        })
+        .collect();
+    let extensions = device_extensions(info, present);
+    let ray_query = info.capabilities.ray_query;
+    let int64_atomics = info.capabilities.buffer_int64_atomics;
+    let mut f12 = vk::PhysicalDeviceVulkan12Features::default()
+        .timeline_semaphore(true)
+        .buffer_device_address(true)
+        .shader_buffer_int64_atomics(int64_atomics);
+    let f10 = vk::PhysicalDeviceFeatures::default().shader_int64(info.capabilities.shader_int64);
+    let full_subgroups = info.capabilities.compute_full_subgroups;
+    let mut f13 = vk::PhysicalDeviceVulkan13Features::default()
+        .synchronization2(true)
+        .maintenance4(true)
+        .subgroup_size_control(full_subgroups)
+        .compute_full_subgroups(full_subgroups);
+    let mut accel_features =
+        vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default().acceleration_structure(true);
+    let mut rq_features = vk::PhysicalDeviceRayQueryFeaturesKHR::default().ray_query(true);
+    let mut create_info = vk::DeviceCreateInfo::default()
+        .queue_create_infos(&queue_infos)
+        .enabled_extension_names(&extensions)
+        .enabled_features(&f10)
+        .push_next(&mut f12)
+        .push_next(&mut f13);
+    if ray_query {
+        create_info = create_info
+            .push_next(&mut accel_features)
+            .push_next(&mut rq_features);
+    }
+    // SAFETY: the physical device came from this instance; the create info lives here.
+    unsafe { instance.raw.create_device(info.raw, &create_info, None) }.call("vkCreateDevice")
+}
+
+/// The device extensions to enable: push descriptors always, the swapchain to present,
+/// calibrated timestamps and ray queries where the device offers them.
+fn device_extensions(info: &PhysicalDeviceInfo, present: bool) -> Vec<*const c_char> {
+    let mut extensions = vec![khr::push_descriptor::NAME.as_ptr()];
+    if present {
+        extensions.push(khr::swapchain::NAME.as_ptr());
+    }
+    if let Some(calibration) = info.calibration {
+        extensions.push(calibration.name().as_ptr());
+    }
+    // Ray queries (and what they need) are enabled only where the device offers
+    // them all; elsewhere the device is opened exactly as without them.
+    if info.capabilities.ray_query {
+        extensions.extend([
+            khr::acceleration_structure::NAME.as_ptr(),
+            khr::ray_query::NAME.as_ptr(),
+            khr::deferred_host_operations::NAME.as_ptr(),
+        ]);
+    }
+    extensions
+}
+
+fn create_allocator(
+    instance: &Instance,
+    raw: &ash::Device,
+    info: &PhysicalDeviceInfo,
+) -> Result<Allocator> {
+    Allocator::new(&AllocatorCreateDesc {
+        instance: instance.raw.clone(),
+        device: raw.clone(),
+        physical_device: info.raw,
+        debug_settings: Default::default(),
+        buffer_device_address: true,
+        allocation_sizes: Default::default(),
+    })
+    .map_err(|source| VkError::Alloc {
+        name: "allocator".into(),
+        source,
+    })
+}
+
+/// The distinct queues of `mapping`, in slot order.
+fn distinct_queue_slots(mapping: &StreamMapping) -> Vec<QueueSlot> {
+    let mut queue_slots = Vec::new();
+    for s in mapping.slots {
+        if !queue_slots.contains(&s) {
+            queue_slots.push(s);
+        }
+    }
+    queue_slots
+}
+
+/// Every stream with its timeline semaphore, on its queue (an index into `queue_slots`).
+fn create_streams(
+    raw: &ash::Device,
+    info: &PhysicalDeviceInfo,
+    mapping: &StreamMapping,
+    queue_slots: &[QueueSlot],
+) -> Result<Vec<StreamState>> {
+    let mut streams = Vec::new();
+    for kind in StreamKind::ALL {
+        let slot = mapping.slot(kind);
+        let sem = create_timeline_semaphore(raw)?;
+        let bits = info.queue_families[slot.family as usize].timestamp_valid_bits;
+        streams.push(StreamState {
+            kind,
+            family: slot.family,
+            queue: queue_slots.iter().position(|s| *s == slot).unwrap(),
+            timeline: Arc::new(TimelineHandle { raw: sem }),
+            timestamp_mask: timestamp_mask(bits),
+            state: Mutex::new(StreamInner::default()),
+        });
+    }
+    Ok(streams)
+}
+
+fn create_timeline_semaphore(raw: &ash::Device) -> Result<vk::Semaphore> {
+    let mut type_info = vk::SemaphoreTypeCreateInfo::default()
+        .semaphore_type(vk::SemaphoreType::TIMELINE)
+        .initial_value(0);
+    let sem_info = vk::SemaphoreCreateInfo::default().push_next(&mut type_info);
+    // SAFETY: valid device.
+    unsafe { raw.create_semaphore(&sem_info, None) }.call("vkCreateSemaphore")
+}
+
+/// The bits of a timestamp that a queue family writes (`timestamp_valid_bits`) as a mask.
+fn timestamp_mask(bits: u32) -> u64 {
+    match bits {
+        0 => 0,
+        64.. => u64::MAX,
+        b => (1u64 << b) - 1,
     }
 }
 
