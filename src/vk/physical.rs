@@ -227,149 +227,199 @@ fn has_extension(exts: &[vk::ExtensionProperties], name: &CStr) -> bool {
 
 /// Lists every physical device with its properties.
 pub fn enumerate(instance: &Instance) -> Result<Vec<PhysicalDeviceInfo>> {
-    let raw_instance = &instance.raw;
     // SAFETY: valid instance.
     let devices =
-        unsafe { raw_instance.enumerate_physical_devices() }.call("vkEnumeratePhysicalDevices")?;
-    let mut out = Vec::new();
-    for (index, &pd) in devices.iter().enumerate() {
-        let mut props11 = vk::PhysicalDeviceVulkan11Properties::default();
-        let mut props12 = vk::PhysicalDeviceVulkan12Properties::default();
-        let mut props13 = vk::PhysicalDeviceVulkan13Properties::default();
-        let mut props2 = vk::PhysicalDeviceProperties2::default()
-            .push_next(&mut props11)
-            .push_next(&mut props12)
-            .push_next(&mut props13);
-        let mut f12 = vk::PhysicalDeviceVulkan12Features::default();
-        let mut f13 = vk::PhysicalDeviceVulkan13Features::default();
+        unsafe { instance.raw.enumerate_physical_devices() }.call("vkEnumeratePhysicalDevices")?;
+    devices
+        .iter()
+        .enumerate()
+        .map(|(index, &pd)| describe(instance, index, pd))
+        .collect()
+}
+
+/// Everything about physical device `pd`, the `index`th of its instance.
+fn describe(
+    instance: &Instance,
+    index: usize,
+    pd: vk::PhysicalDevice,
+) -> Result<PhysicalDeviceInfo> {
+    let raw_instance = &instance.raw;
+    let mut props11 = vk::PhysicalDeviceVulkan11Properties::default();
+    let mut props12 = vk::PhysicalDeviceVulkan12Properties::default();
+    let mut props13 = vk::PhysicalDeviceVulkan13Properties::default();
+    let mut props2 = vk::PhysicalDeviceProperties2::default()
+        .push_next(&mut props11)
+        .push_next(&mut props12)
+        .push_next(&mut props13);
+    let mut f12 = vk::PhysicalDeviceVulkan12Features::default();
+    let mut f13 = vk::PhysicalDeviceVulkan13Features::default();
+    let mut features2 = vk::PhysicalDeviceFeatures2::default()
+        .push_next(&mut f12)
+        .push_next(&mut f13);
+    // SAFETY: valid physical device; the chains live on this stack frame.
+    let (families, exts, memory) = unsafe {
+        raw_instance.get_physical_device_properties2(pd, &mut props2);
+        raw_instance.get_physical_device_features2(pd, &mut features2);
+        (
+            raw_instance.get_physical_device_queue_family_properties(pd),
+            raw_instance
+                .enumerate_device_extension_properties(pd)
+                .call("vkEnumerateDeviceExtensionProperties")?,
+            raw_instance.get_physical_device_memory_properties(pd),
+        )
+    };
+    let p = props2.properties;
+    let f10 = features2.features;
+    let ray_query = ray_query_supported(instance, pd, &exts, &f12);
+    let (device_type, type_rank) = device_type_and_rank(p.device_type);
+    let v = p.api_version;
+    let (calibration, domains) = calibrateable_domains(instance, pd, &exts);
+    Ok(PhysicalDeviceInfo {
+        index,
+        name: name_of(&p.device_name),
+        device_type: device_type.into(),
+        api_version: format!(
+            "{}.{}.{}",
+            vk::api_version_major(v),
+            vk::api_version_minor(v),
+            vk::api_version_patch(v)
+        ),
+        driver_name: name_of(&props12.driver_name),
+        driver_info: name_of(&props12.driver_info),
+        queue_families: queue_family_infos(&families),
+        limits: limits_info(&p.limits, &props11, &props13, &memory),
+        capabilities: capability_info(&exts, &f10, &f12, &f13, &props11, ray_query),
+        calibrated_time_domains: domains.into_iter().map(time_domain_name).collect(),
+        calibration,
+        raw: pd,
+        api_version_raw: v,
+        type_rank,
+    })
+}
+
+/// Ray queries need three extensions and three features; the feature structures of the
+/// two KHR extensions are only chained where the extensions exist.
+fn ray_query_supported(
+    instance: &Instance,
+    pd: vk::PhysicalDevice,
+    exts: &[vk::ExtensionProperties],
+    f12: &vk::PhysicalDeviceVulkan12Features<'_>,
+) -> bool {
+    let ray_query_exts = has_extension(exts, khr::ray_query::NAME)
+        && has_extension(exts, khr::acceleration_structure::NAME)
+        && has_extension(exts, khr::deferred_host_operations::NAME);
+    ray_query_exts && f12.buffer_device_address == vk::TRUE && {
+        let mut accel = vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default();
+        let mut rq = vk::PhysicalDeviceRayQueryFeaturesKHR::default();
         let mut features2 = vk::PhysicalDeviceFeatures2::default()
-            .push_next(&mut f12)
-            .push_next(&mut f13);
-        // SAFETY: valid physical device; the chains live on this stack frame.
-        let (families, exts, memory) = unsafe {
-            raw_instance.get_physical_device_properties2(pd, &mut props2);
-            raw_instance.get_physical_device_features2(pd, &mut features2);
-            (
-                raw_instance.get_physical_device_queue_family_properties(pd),
-                raw_instance
-                    .enumerate_device_extension_properties(pd)
-                    .call("vkEnumerateDeviceExtensionProperties")?,
-                raw_instance.get_physical_device_memory_properties(pd),
-            )
+            .push_next(&mut accel)
+            .push_next(&mut rq);
+        // SAFETY: valid physical device; the extensions of both structures exist.
+        unsafe {
+            instance
+                .raw
+                .get_physical_device_features2(pd, &mut features2)
         };
-        let p = props2.properties;
-        let f10 = features2.features;
-        // Ray queries need three extensions and three features; the feature structures of
-        // the two KHR extensions are only chained where the extensions exist.
-        let ray_query_exts = has_extension(&exts, khr::ray_query::NAME)
-            && has_extension(&exts, khr::acceleration_structure::NAME)
-            && has_extension(&exts, khr::deferred_host_operations::NAME);
-        let ray_query = ray_query_exts && f12.buffer_device_address == vk::TRUE && {
-            let mut accel = vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default();
-            let mut rq = vk::PhysicalDeviceRayQueryFeaturesKHR::default();
-            let mut features2 = vk::PhysicalDeviceFeatures2::default()
-                .push_next(&mut accel)
-                .push_next(&mut rq);
-            // SAFETY: valid physical device; the extensions of both structures exist.
-            unsafe { raw_instance.get_physical_device_features2(pd, &mut features2) };
-            accel.acceleration_structure == vk::TRUE && rq.ray_query == vk::TRUE
-        };
-        let (device_type, type_rank) = match p.device_type {
-            vk::PhysicalDeviceType::DISCRETE_GPU => ("discrete", 0),
-            vk::PhysicalDeviceType::INTEGRATED_GPU => ("integrated", 1),
-            vk::PhysicalDeviceType::VIRTUAL_GPU => ("virtual", 2),
-            vk::PhysicalDeviceType::CPU => ("cpu", 3),
-            _ => ("other", 4),
-        };
-        let v = p.api_version;
-        let (calibration, domains) = calibrateable_domains(instance, pd, &exts);
-        out.push(PhysicalDeviceInfo {
-            index,
-            name: name_of(&p.device_name),
-            device_type: device_type.into(),
-            api_version: format!(
-                "{}.{}.{}",
-                vk::api_version_major(v),
-                vk::api_version_minor(v),
-                vk::api_version_patch(v)
-            ),
-            driver_name: name_of(&props12.driver_name),
-            driver_info: name_of(&props12.driver_info),
-            queue_families: families
-                .iter()
-                .enumerate()
-                .map(|(i, q)| QueueFamilyInfo {
-                    index: i as u32,
-                    count: q.queue_count,
-                    graphics: q.queue_flags.contains(vk::QueueFlags::GRAPHICS),
-                    compute: q.queue_flags.contains(vk::QueueFlags::COMPUTE),
-                    transfer: q.queue_flags.intersects(
-                        vk::QueueFlags::TRANSFER
-                            | vk::QueueFlags::COMPUTE
-                            | vk::QueueFlags::GRAPHICS,
-                    ),
-                    timestamp_valid_bits: q.timestamp_valid_bits,
-                })
-                .collect(),
-            limits: LimitsInfo {
-                max_storage_buffer_range: p.limits.max_storage_buffer_range as u64,
-                max_compute_shared_memory_size: p.limits.max_compute_shared_memory_size,
-                max_compute_work_group_invocations: p.limits.max_compute_work_group_invocations,
-                max_compute_work_group_count: p.limits.max_compute_work_group_count,
-                max_push_constants_size: p.limits.max_push_constants_size,
-                min_storage_buffer_offset_alignment: p.limits.min_storage_buffer_offset_alignment,
-                timestamp_period_ns: p.limits.timestamp_period,
-                subgroup_size: props11.subgroup_size,
-                // A device without subgroup size control reports zeros: then the one
-                // size it has is the range.
-                min_subgroup_size: if props13.min_subgroup_size > 0 {
-                    props13.min_subgroup_size
-                } else {
-                    props11.subgroup_size
-                },
-                max_subgroup_size: props13.max_subgroup_size.max(props11.subgroup_size),
-                max_memory_allocation_size: props11.max_memory_allocation_size,
-                max_buffer_size: props13.max_buffer_size,
-                device_local_bytes: memory
-                    .memory_heaps_as_slice()
-                    .iter()
-                    .filter(|h| h.flags.contains(vk::MemoryHeapFlags::DEVICE_LOCAL))
-                    .map(|h| h.size)
-                    .max()
-                    .unwrap_or(0),
-            },
-            capabilities: CapabilityInfo {
-                timeline_semaphore: f12.timeline_semaphore == vk::TRUE,
-                synchronization2: f13.synchronization2 == vk::TRUE,
-                maintenance4: f13.maintenance4 == vk::TRUE,
-                buffer_device_address: f12.buffer_device_address == vk::TRUE,
-                push_descriptor: has_extension(&exts, khr::push_descriptor::NAME),
-                ray_query,
-                subgroup_arithmetic: props11
-                    .subgroup_supported_operations
-                    .contains(vk::SubgroupFeatureFlags::ARITHMETIC),
-                subgroup_ballot_shuffle: props11
-                    .subgroup_supported_stages
-                    .contains(vk::ShaderStageFlags::COMPUTE)
-                    && props11.subgroup_supported_operations.contains(
-                        vk::SubgroupFeatureFlags::BASIC
-                            | vk::SubgroupFeatureFlags::BALLOT
-                            | vk::SubgroupFeatureFlags::SHUFFLE,
-                    ),
-                compute_full_subgroups: f13.compute_full_subgroups == vk::TRUE
-                    && f13.subgroup_size_control == vk::TRUE,
-                shader_int64: f10.shader_int64 == vk::TRUE,
-                buffer_int64_atomics: f10.shader_int64 == vk::TRUE
-                    && f12.shader_buffer_int64_atomics == vk::TRUE,
-            },
-            calibrated_time_domains: domains.into_iter().map(time_domain_name).collect(),
-            calibration,
-            raw: pd,
-            api_version_raw: v,
-            type_rank,
-        });
+        accel.acceleration_structure == vk::TRUE && rq.ray_query == vk::TRUE
     }
-    Ok(out)
+}
+
+/// The name `splitray info` gives a device type, and its rank in the default choice
+/// ([`select`]: lower first).
+fn device_type_and_rank(device_type: vk::PhysicalDeviceType) -> (&'static str, u32) {
+    match device_type {
+        vk::PhysicalDeviceType::DISCRETE_GPU => ("discrete", 0),
+        vk::PhysicalDeviceType::INTEGRATED_GPU => ("integrated", 1),
+        vk::PhysicalDeviceType::VIRTUAL_GPU => ("virtual", 2),
+        vk::PhysicalDeviceType::CPU => ("cpu", 3),
+        _ => ("other", 4),
+    }
+}
+
+fn queue_family_infos(families: &[vk::QueueFamilyProperties]) -> Vec<QueueFamilyInfo> {
+    families
+        .iter()
+        .enumerate()
+        .map(|(i, q)| QueueFamilyInfo {
+            index: i as u32,
+            count: q.queue_count,
+            graphics: q.queue_flags.contains(vk::QueueFlags::GRAPHICS),
+            compute: q.queue_flags.contains(vk::QueueFlags::COMPUTE),
+            transfer: q.queue_flags.intersects(
+                vk::QueueFlags::TRANSFER | vk::QueueFlags::COMPUTE | vk::QueueFlags::GRAPHICS,
+            ),
+            timestamp_valid_bits: q.timestamp_valid_bits,
+        })
+        .collect()
+}
+
+fn limits_info(
+    limits: &vk::PhysicalDeviceLimits,
+    props11: &vk::PhysicalDeviceVulkan11Properties<'_>,
+    props13: &vk::PhysicalDeviceVulkan13Properties<'_>,
+    memory: &vk::PhysicalDeviceMemoryProperties,
+) -> LimitsInfo {
+    LimitsInfo {
+        max_storage_buffer_range: limits.max_storage_buffer_range as u64,
+        max_compute_shared_memory_size: limits.max_compute_shared_memory_size,
+        max_compute_work_group_invocations: limits.max_compute_work_group_invocations,
+        max_compute_work_group_count: limits.max_compute_work_group_count,
+        max_push_constants_size: limits.max_push_constants_size,
+        min_storage_buffer_offset_alignment: limits.min_storage_buffer_offset_alignment,
+        timestamp_period_ns: limits.timestamp_period,
+        subgroup_size: props11.subgroup_size,
+        // A device without subgroup size control reports zeros: then the one
+        // size it has is the range.
+        min_subgroup_size: if props13.min_subgroup_size > 0 {
+            props13.min_subgroup_size
+        } else {
+            props11.subgroup_size
+        },
+        max_subgroup_size: props13.max_subgroup_size.max(props11.subgroup_size),
+        max_memory_allocation_size: props11.max_memory_allocation_size,
+        max_buffer_size: props13.max_buffer_size,
+        device_local_bytes: memory
+            .memory_heaps_as_slice()
+            .iter()
+            .filter(|h| h.flags.contains(vk::MemoryHeapFlags::DEVICE_LOCAL))
+            .map(|h| h.size)
+            .max()
+            .unwrap_or(0),
+    }
+}
+
+fn capability_info(
+    exts: &[vk::ExtensionProperties],
+    f10: &vk::PhysicalDeviceFeatures,
+    f12: &vk::PhysicalDeviceVulkan12Features<'_>,
+    f13: &vk::PhysicalDeviceVulkan13Features<'_>,
+    props11: &vk::PhysicalDeviceVulkan11Properties<'_>,
+    ray_query: bool,
+) -> CapabilityInfo {
+    CapabilityInfo {
+        timeline_semaphore: f12.timeline_semaphore == vk::TRUE,
+        synchronization2: f13.synchronization2 == vk::TRUE,
+        maintenance4: f13.maintenance4 == vk::TRUE,
+        buffer_device_address: f12.buffer_device_address == vk::TRUE,
+        push_descriptor: has_extension(exts, khr::push_descriptor::NAME),
+        ray_query,
+        subgroup_arithmetic: props11
+            .subgroup_supported_operations
+            .contains(vk::SubgroupFeatureFlags::ARITHMETIC),
+        subgroup_ballot_shuffle: props11
+            .subgroup_supported_stages
+            .contains(vk::ShaderStageFlags::COMPUTE)
+            && props11.subgroup_supported_operations.contains(
+                vk::SubgroupFeatureFlags::BASIC
+                    | vk::SubgroupFeatureFlags::BALLOT
+                    | vk::SubgroupFeatureFlags::SHUFFLE,
+            ),
+        compute_full_subgroups: f13.compute_full_subgroups == vk::TRUE
+            && f13.subgroup_size_control == vk::TRUE,
+        shader_int64: f10.shader_int64 == vk::TRUE,
+        buffer_int64_atomics: f10.shader_int64 == vk::TRUE
+            && f12.shader_buffer_int64_atomics == vk::TRUE,
+    }
 }
 
 /// Picks a device: `selector` (index or case-insensitive name substring), else the
