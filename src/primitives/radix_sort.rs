@@ -33,10 +33,10 @@ use super::tuning::multisplit_supported;
 use super::{
     args_offset, check_scratch, region, Count, Scan, ScanKind, Setup, Tuning, HEADER_BYTES,
 };
-use crate::shaders;
+use crate::shaders::{self, Kernel};
 use crate::vk::{
     compute_pipeline, compute_pipeline_full_subgroups, Buffer, BufferSlice, ComputePipeline, Gpu,
-    MemoryKind, Recorder, Result, VkError,
+    MemoryKind, PhysicalDeviceInfo, Recorder, Result, VkError,
 };
 
 #[repr(C)]
@@ -74,6 +74,26 @@ struct PairScatters {
     last: Option<ComputePipeline>,
 }
 
+impl PairScatters {
+    /// The three scatters, or with 64-bit accesses (`wide`) the first two.
+    fn new(gpu: &Gpu, wide: bool, spec: &[u32; 3]) -> Result<Self> {
+        let kind = |k| compute_pipeline(gpu, k, 6, 12, spec);
+        Ok(if wide {
+            Self {
+                first: kind(shaders::PRIMITIVES_SORT_SEG_SCATTER__FIRST64)?,
+                middle: kind(shaders::PRIMITIVES_SORT_SEG_SCATTER__MIDDLE64)?,
+                last: None,
+            }
+        } else {
+            Self {
+                first: kind(shaders::PRIMITIVES_SORT_SEG_SCATTER__FIRST)?,
+                middle: kind(shaders::PRIMITIVES_SORT_SEG_SCATTER__MIDDLE)?,
+                last: Some(kind(shaders::PRIMITIVES_SORT_SEG_SCATTER__LAST)?),
+            }
+        })
+    }
+}
+
 pub struct RadixSort {
     setup: Setup,
     histogram: ComputePipeline,
@@ -107,26 +127,8 @@ impl RadixSort {
             tuning.radix_bits,
         ];
         let info = gpu.info();
-        let shared = info.limits.max_compute_shared_memory_size as u64;
-        if tuning.sort_shared_bytes(info) > shared {
-            return Err(VkError::Usage(format!(
-                "radix sort tuning needs {} bytes of shared memory; the device has {shared}",
-                tuning.sort_shared_bytes(info)
-            )));
-        }
+        check_tuning_fits(info, tuning)?;
         let multisplit = tuning.sort_multisplit;
-        if multisplit
-            && (!multisplit_supported(info, tuning.sort_workgroup_size) || tuning.radix_bits > 8)
-        {
-            return Err(VkError::Usage(format!(
-                "radix sort: the multisplit variant ({}) cannot run on '{}' (it needs subgroup \
-                 ballot, shuffle and arithmetic, full subgroups, a workgroup that is a multiple \
-                 of the largest subgroup size {}, and digits of at most 8 bits)",
-                tuning.describe(),
-                info.name,
-                info.limits.max_subgroup_size
-            )));
-        }
         // The row variant needs the workgroup to be exactly one subgroup.
         let rows = !multisplit
             && tuning.sort_rows
@@ -136,38 +138,7 @@ impl RadixSort {
             && tuning.sort_segments
             && tuning.sort_keys_per_invocation % 4 == 0;
         let wide = segments && tuning.wide_segments(info, tuning.sort_keys_per_invocation);
-        let (histogram, scatter) = if multisplit {
-            (
-                shaders::PRIMITIVES_SORT_MS_COUNT,
-                shaders::PRIMITIVES_SORT_MS_SCATTER,
-            )
-        } else if segments && wide {
-            (
-                shaders::PRIMITIVES_SORT_SEG_COUNT__WIDE64,
-                shaders::PRIMITIVES_SORT_SEG_SCATTER,
-            )
-        } else if segments {
-            (
-                shaders::PRIMITIVES_SORT_SEG_COUNT,
-                shaders::PRIMITIVES_SORT_SEG_SCATTER,
-            )
-        } else if rows {
-            (
-                shaders::PRIMITIVES_SORT_HISTOGRAM__ROWS,
-                shaders::PRIMITIVES_SORT_SCATTER_ROWS,
-            )
-        } else if tuning.sort_keys_per_invocation % 4 == 0 {
-            // Runs read as uvec4s (a quarter of the per-lane accesses).
-            (
-                shaders::PRIMITIVES_SORT_HISTOGRAM__VEC4,
-                shaders::PRIMITIVES_SORT_SCATTER__VEC4,
-            )
-        } else {
-            (
-                shaders::PRIMITIVES_SORT_HISTOGRAM,
-                shaders::PRIMITIVES_SORT_SCATTER,
-            )
-        };
+        let (histogram, scatter) = pass_kernels(tuning, multisplit, rows, segments, wide);
         log::info!(
             "radix sort on {}: {} — kernels {} + {}",
             gpu.info().name,
@@ -189,47 +160,21 @@ impl RadixSort {
         } else {
             compute_pipeline(gpu, scatter, if segments { 6 } else { 7 }, 12, &spec)?
         };
+        let pairs = segments && tuning.sort_pairs;
         Ok(Self {
             setup: Setup::new(gpu)?,
             histogram: compute_pipeline(gpu, histogram, if tableless { 3 } else { 4 }, 12, &spec)?,
             scatter,
-            pair_scatters: if segments && tuning.sort_pairs {
-                let kind = |k| compute_pipeline(gpu, k, 6, 12, &spec);
-                Some(if wide {
-                    PairScatters {
-                        first: kind(shaders::PRIMITIVES_SORT_SEG_SCATTER__FIRST64)?,
-                        middle: kind(shaders::PRIMITIVES_SORT_SEG_SCATTER__MIDDLE64)?,
-                        last: None,
-                    }
-                } else {
-                    PairScatters {
-                        first: kind(shaders::PRIMITIVES_SORT_SEG_SCATTER__FIRST)?,
-                        middle: kind(shaders::PRIMITIVES_SORT_SEG_SCATTER__MIDDLE)?,
-                        last: Some(kind(shaders::PRIMITIVES_SORT_SEG_SCATTER__LAST)?),
-                    }
-                })
-            } else {
-                None
-            },
+            pair_scatters: pairs
+                .then(|| PairScatters::new(gpu, wide, &spec))
+                .transpose()?,
             rows,
             segments,
             multisplit,
-            pairs: segments && tuning.sort_pairs,
-            unpack: if segments && tuning.sort_pairs {
-                Some(compute_pipeline(
-                    gpu,
-                    if wide {
-                        shaders::PRIMITIVES_SORT_UNPACK__WIDE64
-                    } else {
-                        shaders::PRIMITIVES_SORT_UNPACK
-                    },
-                    4,
-                    0,
-                    &spec[..2],
-                )?)
-            } else {
-                None
-            },
+            pairs,
+            unpack: pairs
+                .then(|| unpack_pipeline(gpu, wide, &spec))
+                .transpose()?,
             copy: compute_pipeline(
                 gpu,
                 shaders::PRIMITIVES_COPY_PAIRS,
@@ -676,4 +621,86 @@ struct PassPlan<'a> {
     cap: u32,
     passes: u32,
     bits: std::ops::Range<u32>,
+}
+
+/// Fails where `tuning` asks more shared memory than the device has, or the multisplit
+/// variant where the device cannot run it.
+fn check_tuning_fits(info: &PhysicalDeviceInfo, tuning: &Tuning) -> Result<()> {
+    let shared = info.limits.max_compute_shared_memory_size as u64;
+    if tuning.sort_shared_bytes(info) > shared {
+        return Err(VkError::Usage(format!(
+            "radix sort tuning needs {} bytes of shared memory; the device has {shared}",
+            tuning.sort_shared_bytes(info)
+        )));
+    }
+    if tuning.sort_multisplit
+        && (!multisplit_supported(info, tuning.sort_workgroup_size) || tuning.radix_bits > 8)
+    {
+        return Err(VkError::Usage(format!(
+            "radix sort: the multisplit variant ({}) cannot run on '{}' (it needs subgroup \
+             ballot, shuffle and arithmetic, full subgroups, a workgroup that is a multiple \
+             of the largest subgroup size {}, and digits of at most 8 bits)",
+            tuning.describe(),
+            info.name,
+            info.limits.max_subgroup_size
+        )));
+    }
+    Ok(())
+}
+
+/// The histogram and scatter kernels of a pass in the variant chosen.
+fn pass_kernels(
+    tuning: &Tuning,
+    multisplit: bool,
+    rows: bool,
+    segments: bool,
+    wide: bool,
+) -> (Kernel, Kernel) {
+    if multisplit {
+        (
+            shaders::PRIMITIVES_SORT_MS_COUNT,
+            shaders::PRIMITIVES_SORT_MS_SCATTER,
+        )
+    } else if segments && wide {
+        (
+            shaders::PRIMITIVES_SORT_SEG_COUNT__WIDE64,
+            shaders::PRIMITIVES_SORT_SEG_SCATTER,
+        )
+    } else if segments {
+        (
+            shaders::PRIMITIVES_SORT_SEG_COUNT,
+            shaders::PRIMITIVES_SORT_SEG_SCATTER,
+        )
+    } else if rows {
+        (
+            shaders::PRIMITIVES_SORT_HISTOGRAM__ROWS,
+            shaders::PRIMITIVES_SORT_SCATTER_ROWS,
+        )
+    } else if tuning.sort_keys_per_invocation % 4 == 0 {
+        // Runs read as uvec4s (a quarter of the per-lane accesses).
+        (
+            shaders::PRIMITIVES_SORT_HISTOGRAM__VEC4,
+            shaders::PRIMITIVES_SORT_SCATTER__VEC4,
+        )
+    } else {
+        (
+            shaders::PRIMITIVES_SORT_HISTOGRAM,
+            shaders::PRIMITIVES_SORT_SCATTER,
+        )
+    }
+}
+
+/// Pairs back to keys and values, from 64-bit words where the segments are `wide`.
+fn unpack_pipeline(gpu: &Gpu, wide: bool, spec: &[u32; 3]) -> Result<ComputePipeline> {
+    compute_pipeline(
+        gpu,
+        if wide {
+            shaders::PRIMITIVES_SORT_UNPACK__WIDE64
+        } else {
+            shaders::PRIMITIVES_SORT_UNPACK
+        },
+        4,
+        0,
+        &spec[..2],
+    )
 }
