@@ -11,7 +11,7 @@ use ash::vk;
 
 use super::buffer::{Buffer, BufferUsage, MemoryKind};
 use super::command::Recorder;
-use super::device::Gpu;
+use super::device::{AccelSupport, Gpu};
 use super::error::{CallContext, Result, VkError};
 
 /// Bytes per vertex of a triangle geometry: three packed f32 (R32G32B32_SFLOAT).
@@ -107,12 +107,7 @@ impl AccelerationStructure {
             .src_acceleration_structure(self.raw)
             .dst_acceleration_structure(self.raw)
             .geometries(&geometries)
-            .scratch_data(vk::DeviceOrHostAddressKHR {
-                device_address: self
-                    .scratch
-                    .device_address()
-                    .next_multiple_of(accel.scratch_alignment),
-            });
+            .scratch_data(self.scratch_data(accel));
         let ranges =
             [vk::AccelerationStructureBuildRangeInfoKHR::default()
                 .primitive_count(self.primitives)];
@@ -181,35 +176,19 @@ impl AccelerationStructure {
         updatable: bool,
     ) -> Result<Self> {
         let gpu = rec.gpu().clone();
-        let accel = gpu.0.accel.as_ref().ok_or_else(|| {
-            VkError::Usage(format!(
-                "acceleration structure '{name}': device '{}' was not opened with \
-                 VK_KHR_acceleration_structure",
-                gpu.info().name
-            ))
-        })?;
+        let accel = enabled_support(&gpu, name)?;
         let ty = if top_level {
             vk::AccelerationStructureTypeKHR::TOP_LEVEL
         } else {
             vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL
         };
         let geometries = [geometry];
-        let mut build_info = vk::AccelerationStructureBuildGeometryInfoKHR::default()
+        let build_info = vk::AccelerationStructureBuildGeometryInfoKHR::default()
             .ty(ty)
             .flags(build_flags(updatable))
             .mode(vk::BuildAccelerationStructureModeKHR::BUILD)
             .geometries(&geometries);
-        let mut sizes = vk::AccelerationStructureBuildSizesInfoKHR::default();
-        // SAFETY: valid device with the extension enabled; the build info and its
-        // geometry array live on this frame.
-        unsafe {
-            accel.loader.get_acceleration_structure_build_sizes(
-                vk::AccelerationStructureBuildTypeKHR::DEVICE,
-                &build_info,
-                &[primitives],
-                &mut sizes,
-            )
-        };
+        let sizes = build_sizes(accel, &build_info, primitives);
         let storage = gpu.create_buffer_with(
             name,
             sizes.acceleration_structure_size,
@@ -219,40 +198,8 @@ impl AccelerationStructure {
                 accel_storage: true,
             },
         )?;
-        // Scratch: over-allocate by the alignment and round the address up.
-        let align = accel.scratch_alignment;
-        let scratch_size = match updatable {
-            true => sizes.build_scratch_size.max(sizes.update_scratch_size),
-            false => sizes.build_scratch_size,
-        };
-        let scratch = gpu.create_buffer(
-            &format!("{name}:scratch"),
-            scratch_size + align,
-            MemoryKind::Device,
-        )?;
-        let scratch_address = scratch.device_address().next_multiple_of(align);
-        let create_info = vk::AccelerationStructureCreateInfoKHR::default()
-            .buffer(storage.raw)
-            .offset(0)
-            .size(sizes.acceleration_structure_size)
-            .ty(ty);
-        // SAFETY: the storage buffer has ACCELERATION_STRUCTURE_STORAGE usage and room
-        // for the size the driver asked for; offset 0 is 256-byte aligned.
-        let raw = unsafe {
-            accel
-                .loader
-                .create_acceleration_structure(&create_info, None)
-        }
-        .call("vkCreateAccelerationStructureKHR")?;
-        gpu.set_object_name(raw, name);
-        let address_info =
-            vk::AccelerationStructureDeviceAddressInfoKHR::default().acceleration_structure(raw);
-        // SAFETY: raw was just created on this device.
-        let address = unsafe {
-            accel
-                .loader
-                .get_acceleration_structure_device_address(&address_info)
-        };
+        let scratch = create_scratch(&gpu, accel, name, &sizes, updatable)?;
+        let (raw, address) = create_structure(&gpu, accel, name, &storage, &sizes, ty)?;
         // From here on Drop destroys `raw`.
         let built = Self {
             gpu: gpu.clone(),
@@ -265,23 +212,33 @@ impl AccelerationStructure {
             primitives,
             updatable,
         };
-        build_info =
-            build_info
-                .dst_acceleration_structure(raw)
-                .scratch_data(vk::DeviceOrHostAddressKHR {
-                    device_address: scratch_address,
-                });
+        built.record_build(rec, accel, name, build_info)?;
+        Ok(built)
+    }
+
+    /// Records the build of this structure, just created for `build_info`'s geometry, and
+    /// the barrier after it.
+    fn record_build(
+        &self,
+        rec: &mut Recorder,
+        accel: &AccelSupport,
+        name: &str,
+        build_info: vk::AccelerationStructureBuildGeometryInfoKHR<'_>,
+    ) -> Result<()> {
+        let build_info = build_info
+            .dst_acceleration_structure(self.raw)
+            .scratch_data(self.scratch_data(accel));
         let ranges = [vk::AccelerationStructureBuildRangeInfoKHR::default()
-            .primitive_count(primitives)
+            .primitive_count(self.primitives)
             .primitive_offset(0)
             .first_vertex(0)
             .transform_offset(0)];
         rec.begin_scope(&format!(
             "build-{}:{name}",
-            if top_level { "tlas" } else { "blas" }
+            if self.top_level { "tlas" } else { "blas" }
         ))?;
         // SAFETY: recording; the destination, scratch and input buffers are alive (the
-        // first two owned by `built`, the inputs the caller's contract) and sized by
+        // first two owned by `self`, the inputs the caller's contract) and sized by
         // vkGetAccelerationStructureBuildSizesKHR for this very geometry and count.
         unsafe {
             accel
@@ -290,7 +247,18 @@ impl AccelerationStructure {
         };
         rec.end_scope()?;
         rec.memory_barrier(after_build_barrier());
-        Ok(built)
+        Ok(())
+    }
+
+    /// The scratch's address rounded up to the device's alignment ([`create_scratch`]
+    /// over-allocates for it).
+    fn scratch_data(&self, accel: &AccelSupport) -> vk::DeviceOrHostAddressKHR {
+        vk::DeviceOrHostAddressKHR {
+            device_address: self
+                .scratch
+                .device_address()
+                .next_multiple_of(accel.scratch_alignment),
+        }
     }
 
     pub fn is_top_level(&self) -> bool {
@@ -306,6 +274,94 @@ impl AccelerationStructure {
     pub fn size(&self) -> u64 {
         self.storage.size()
     }
+}
+
+/// The device's acceleration-structure support, or an error naming the structure where
+/// the device was opened without it.
+fn enabled_support<'g>(gpu: &'g Gpu, name: &str) -> Result<&'g AccelSupport> {
+    gpu.0.accel.as_ref().ok_or_else(|| {
+        VkError::Usage(format!(
+            "acceleration structure '{name}': device '{}' was not opened with \
+             VK_KHR_acceleration_structure",
+            gpu.info().name
+        ))
+    })
+}
+
+/// The storage and scratch sizes the driver asks for the build of `build_info`.
+fn build_sizes(
+    accel: &AccelSupport,
+    build_info: &vk::AccelerationStructureBuildGeometryInfoKHR<'_>,
+    primitives: u32,
+) -> vk::AccelerationStructureBuildSizesInfoKHR<'static> {
+    let mut sizes = vk::AccelerationStructureBuildSizesInfoKHR::default();
+    // SAFETY: valid device with the extension enabled; the build info and its
+    // geometry array live on the caller's frame.
+    unsafe {
+        accel.loader.get_acceleration_structure_build_sizes(
+            vk::AccelerationStructureBuildTypeKHR::DEVICE,
+            build_info,
+            &[primitives],
+            &mut sizes,
+        )
+    };
+    sizes
+}
+
+/// The build scratch, and room for updates where the structure is `updatable`.
+fn create_scratch(
+    gpu: &Gpu,
+    accel: &AccelSupport,
+    name: &str,
+    sizes: &vk::AccelerationStructureBuildSizesInfoKHR<'_>,
+    updatable: bool,
+) -> Result<Buffer> {
+    // Scratch: over-allocate by the alignment and round the address up.
+    let align = accel.scratch_alignment;
+    let scratch_size = match updatable {
+        true => sizes.build_scratch_size.max(sizes.update_scratch_size),
+        false => sizes.build_scratch_size,
+    };
+    gpu.create_buffer(
+        &format!("{name}:scratch"),
+        scratch_size + align,
+        MemoryKind::Device,
+    )
+}
+
+/// Creates and names the structure at the start of `storage`; returns it and its
+/// device address.
+fn create_structure(
+    gpu: &Gpu,
+    accel: &AccelSupport,
+    name: &str,
+    storage: &Buffer,
+    sizes: &vk::AccelerationStructureBuildSizesInfoKHR<'_>,
+    ty: vk::AccelerationStructureTypeKHR,
+) -> Result<(vk::AccelerationStructureKHR, vk::DeviceAddress)> {
+    let create_info = vk::AccelerationStructureCreateInfoKHR::default()
+        .buffer(storage.raw)
+        .offset(0)
+        .size(sizes.acceleration_structure_size)
+        .ty(ty);
+    // SAFETY: the storage buffer has ACCELERATION_STRUCTURE_STORAGE usage and room
+    // for the size the driver asked for; offset 0 is 256-byte aligned.
+    let raw = unsafe {
+        accel
+            .loader
+            .create_acceleration_structure(&create_info, None)
+    }
+    .call("vkCreateAccelerationStructureKHR")?;
+    gpu.set_object_name(raw, name);
+    let address_info =
+        vk::AccelerationStructureDeviceAddressInfoKHR::default().acceleration_structure(raw);
+    // SAFETY: raw was just created on this device.
+    let address = unsafe {
+        accel
+            .loader
+            .get_acceleration_structure_device_address(&address_info)
+    };
+    Ok((raw, address))
 }
 
 /// Fast trace, and ALLOW_UPDATE where the structure will be refitted (the flags of an
