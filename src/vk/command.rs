@@ -259,67 +259,11 @@ impl Recorder {
         tlas: Option<&AccelerationStructure>,
         push: &[u8],
     ) -> Result<&'p Variant> {
-        if pipeline.tlas_binding != tlas.is_some() {
-            return Err(VkError::Usage(format!(
-                "kernel '{}' {} an acceleration structure, {} given",
-                pipeline.name(),
-                if pipeline.tlas_binding {
-                    "takes"
-                } else {
-                    "takes no"
-                },
-                if tlas.is_some() { "one" } else { "none" }
-            )));
-        }
-        if bindings.len() as u32 != pipeline.bindings {
-            return Err(VkError::Usage(format!(
-                "kernel '{}' takes {} buffers, {} given",
-                pipeline.name(),
-                pipeline.bindings,
-                bindings.len()
-            )));
-        }
-        if push.len() as u32 != pipeline.push_constant_bytes {
-            return Err(VkError::Usage(format!(
-                "kernel '{}' takes {} push-constant bytes, {} given",
-                pipeline.name(),
-                pipeline.push_constant_bytes,
-                push.len()
-            )));
-        }
+        check_arguments(pipeline, bindings, tlas, push)?;
         let variant = pipeline.variant_for(bindings)?;
+        self.check_descriptor_ranges(pipeline, variant, bindings)?;
         let descriptors = &variant.passing.descriptors;
-        let max_range = self.gpu.info().limits.max_storage_buffer_range;
-        if let Some(&b) = descriptors
-            .iter()
-            .find(|&&b| bindings[b as usize].size > max_range)
-        {
-            let slice = &bindings[b as usize];
-            return Err(VkError::Usage(format!(
-                "kernel '{}' binds buffer '{}' ({} bytes) as descriptor {b}, more than one \
-                 storage binding holds on this device (maxStorageBufferRange, {max_range} \
-                 bytes): the kernel must take it by address (glsl/common/address.glsl)",
-                pipeline.name(),
-                slice.buffer.name(),
-                slice.size
-            )));
-        }
-        let infos: Vec<[vk::DescriptorBufferInfo; 1]> = descriptors
-            .iter()
-            .map(|&b| {
-                let b = &bindings[b as usize];
-                // An empty range is invalid; bind 4 bytes the kernel will not read.
-                let range = if b.size == 0 {
-                    4
-                } else {
-                    b.size.next_multiple_of(4)
-                };
-                [vk::DescriptorBufferInfo::default()
-                    .buffer(b.buffer.raw)
-                    .offset(b.offset)
-                    .range(range)]
-            })
-            .collect();
+        let infos = descriptor_buffer_infos(descriptors, bindings);
         let mut writes: Vec<_> = infos
             .iter()
             .zip(descriptors)
@@ -343,6 +287,41 @@ impl Recorder {
                     .push_next(&mut tlas_write),
             );
         }
+        self.record_bind(variant, &writes, &push);
+        Ok(variant)
+    }
+
+    /// Fails where a buffer that `variant` takes as a descriptor is larger than one
+    /// storage binding holds on this device.
+    fn check_descriptor_ranges(
+        &self,
+        pipeline: &ComputePipeline,
+        variant: &Variant,
+        bindings: &[BufferSlice<'_>],
+    ) -> Result<()> {
+        let max_range = self.gpu.info().limits.max_storage_buffer_range;
+        if let Some(&b) = variant
+            .passing
+            .descriptors
+            .iter()
+            .find(|&&b| bindings[b as usize].size > max_range)
+        {
+            let slice = &bindings[b as usize];
+            return Err(VkError::Usage(format!(
+                "kernel '{}' binds buffer '{}' ({} bytes) as descriptor {b}, more than one \
+                 storage binding holds on this device (maxStorageBufferRange, {max_range} \
+                 bytes): the kernel must take it by address (glsl/common/address.glsl)",
+                pipeline.name(),
+                slice.buffer.name(),
+                slice.size
+            )));
+        }
+        Ok(())
+    }
+
+    /// Records the binding of `variant`, the push of its descriptor `writes` and of its
+    /// `push` constants.
+    fn record_bind(&self, variant: &Variant, writes: &[vk::WriteDescriptorSet<'_>], push: &[u8]) {
         // SAFETY: recording; the pipeline and buffers are alive; counts were checked.
         unsafe {
             let d = self.device();
@@ -353,7 +332,7 @@ impl Recorder {
                     vk::PipelineBindPoint::COMPUTE,
                     variant.layout,
                     0,
-                    &writes,
+                    writes,
                 );
             }
             if !push.is_empty() {
@@ -362,11 +341,10 @@ impl Recorder {
                     variant.layout,
                     vk::ShaderStageFlags::COMPUTE,
                     0,
-                    &push,
+                    push,
                 );
             }
         }
-        Ok(variant)
     }
 
     /// Records a dispatch of `groups` workgroups, timed under the kernel's name.
@@ -679,6 +657,66 @@ impl Recorder {
         self.submitted = true;
         Ok(gpu.timeline_point(self.stream, value))
     }
+}
+
+/// Fails unless `bindings`, `tlas` and `push` are what `pipeline` takes.
+fn check_arguments(
+    pipeline: &ComputePipeline,
+    bindings: &[BufferSlice<'_>],
+    tlas: Option<&AccelerationStructure>,
+    push: &[u8],
+) -> Result<()> {
+    if pipeline.tlas_binding != tlas.is_some() {
+        return Err(VkError::Usage(format!(
+            "kernel '{}' {} an acceleration structure, {} given",
+            pipeline.name(),
+            if pipeline.tlas_binding {
+                "takes"
+            } else {
+                "takes no"
+            },
+            if tlas.is_some() { "one" } else { "none" }
+        )));
+    }
+    for (what, takes, given) in [
+        ("buffers", pipeline.bindings, bindings.len()),
+        (
+            "push-constant bytes",
+            pipeline.push_constant_bytes,
+            push.len(),
+        ),
+    ] {
+        if given as u32 != takes {
+            return Err(VkError::Usage(format!(
+                "kernel '{}' takes {takes} {what}, {given} given",
+                pipeline.name()
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// The buffer infos of the bindings a kernel takes as `descriptors`.
+fn descriptor_buffer_infos(
+    descriptors: &[u32],
+    bindings: &[BufferSlice<'_>],
+) -> Vec<[vk::DescriptorBufferInfo; 1]> {
+    descriptors
+        .iter()
+        .map(|&b| {
+            let b = &bindings[b as usize];
+            // An empty range is invalid; bind 4 bytes the kernel will not read.
+            let range = if b.size == 0 {
+                4
+            } else {
+                b.size.next_multiple_of(4)
+            };
+            [vk::DescriptorBufferInfo::default()
+                .buffer(b.buffer.raw)
+                .offset(b.offset)
+                .range(range)]
+        })
+        .collect()
 }
 
 /// The push-constant bytes of a dispatch: the caller's values, then the device address
