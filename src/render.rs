@@ -345,15 +345,7 @@ fn render_prepared(
         start,
         stats_before,
     } = prepared;
-    let fingerprint = Fingerprint::new(
-        scene,
-        options.width,
-        options.height,
-        options.seed,
-        options.integrator.name(),
-        integrator.samples_per_pass(),
-        integrator.settings(),
-    );
+    let fingerprint = fingerprint_of(scene, options, integrator);
     let (first_pass, resumed_passes) = start_film(integrator, options, &plan, &fingerprint)?;
     if let Some(watch) = plan.watch.as_deref_mut() {
         watch.start(&WatchStart {
@@ -391,8 +383,48 @@ fn render_prepared(
     let integrator_stats = stats_since(integrator.stats(), &stats_before);
     let settings = integrator.settings();
     let seconds = start.elapsed().as_secs_f64();
-    let (_, peak_gpu_bytes) = gpu.memory_bytes();
+    let film = film_with_aovs(&sums, aovs)?;
+    let stats = render_stats(gpu, scene, options, &sums, &run, integrator_stats, seconds);
+    let record = PartRecord {
+        fingerprint,
+        passes: PassRanges::single(first_pass..first_pass + sums.passes),
+        samples_per_pass: sums.samples_per_pass,
+        second_moments: sums.sum_sq.is_some(),
+        shard: (!plan.shard.is_whole()).then_some(plan.shard),
+    };
+    let total_render_time_s = previous_time_s + seconds;
+    let metadata = render_metadata(&stats, settings, &record, total_render_time_s);
+    Ok(RenderOutput {
+        film,
+        sums,
+        record,
+        first_pass,
+        total_render_time_s,
+        metadata,
+        stats,
+        extra_images,
+    })
+}
 
+/// What decides the image of a render of `scene` with `options` on `integrator`.
+fn fingerprint_of(
+    scene: &Scene,
+    options: &RenderOptions,
+    integrator: &dyn Integrator,
+) -> Fingerprint {
+    Fingerprint::new(
+        scene,
+        options.width,
+        options.height,
+        options.seed,
+        options.integrator.name(),
+        integrator.samples_per_pass(),
+        integrator.settings(),
+    )
+}
+
+/// The film of `sums` (with its standard error where the sums have one) and the AOVs.
+fn film_with_aovs(sums: &FilmSums, aovs: aov::Aovs) -> Result<Film, RenderError> {
     let mut film = sums.to_film()?;
     if let Some(stderr) = sums.stderr() {
         film.set_stderr(stderr)?;
@@ -400,10 +432,24 @@ fn render_prepared(
     film.set_depth(aovs.depth)?;
     film.set_triangle_id(aovs.triangle_id)?;
     film.set_normal(aovs.normal)?;
-    let device = device_description(gpu);
+    Ok(film)
+}
+
+/// The figures of a render that took `seconds` and ended with `sums`; takes the GPU's
+/// profile.
+fn render_stats(
+    gpu: &Gpu,
+    scene: &Scene,
+    options: &RenderOptions,
+    sums: &FilmSums,
+    run: &PassRun,
+    integrator_stats: IntegratorStats,
+    seconds: f64,
+) -> RenderStats {
+    let (_, peak_gpu_bytes) = gpu.memory_bytes();
     let profile = gpu.take_profile();
     let pixels = options.width as f64 * options.height as f64;
-    let stats = RenderStats {
+    RenderStats {
         scene: scene.name.clone(),
         triangles: scene.triangles.len(),
         width: options.width,
@@ -413,7 +459,7 @@ fn render_prepared(
         seed: options.seed,
         integrator: options.integrator.name().into(),
         tracer: options.tracer.name().into(),
-        device: device.clone(),
+        device: device_description(gpu),
         render_time_s: seconds,
         samples_per_second: run.passes_rendered as f64 * sums.samples_per_pass as f64 * pixels
             / seconds.max(1e-9),
@@ -426,44 +472,36 @@ fn render_prepared(
         counters: integrator_stats.counters,
         kernels: profile.summary(),
         profile: profile.tree(),
-    };
+    }
+}
+
+/// The image files' header: the render's figures, the integrator's `settings` and the
+/// part `record`, with the render time of every run of the film.
+fn render_metadata(
+    stats: &RenderStats,
+    settings: Vec<(String, String)>,
+    record: &PartRecord,
+    render_time_s: f64,
+) -> RenderMetadata {
     let mut extra = vec![
-        ("scene".to_string(), scene.name.clone()),
+        ("scene".to_string(), stats.scene.clone()),
         ("rays_traced".to_string(), stats.rays_traced.to_string()),
-        ("passes".to_string(), sums.passes.to_string()),
+        ("passes".to_string(), stats.passes.to_string()),
     ];
-    if run.stopped {
+    if stats.stopped_early {
         extra.push(("stopped_early".into(), "true".into()));
     }
     extra.extend(settings);
-    let record = PartRecord {
-        fingerprint,
-        passes: PassRanges::single(first_pass..first_pass + sums.passes),
-        samples_per_pass: sums.samples_per_pass,
-        second_moments: sums.sum_sq.is_some(),
-        shard: (!plan.shard.is_whole()).then_some(plan.shard),
-    };
     extra.extend(record.extra());
-    let total_render_time_s = previous_time_s + seconds;
-    let metadata = RenderMetadata {
-        spp: sums.spp().min(u32::MAX as u64) as u32,
-        seed: options.seed,
-        integrator: options.integrator.name().into(),
-        tracer: options.tracer.name().into(),
-        device,
-        render_time_s: total_render_time_s,
+    RenderMetadata {
+        spp: stats.spp.min(u32::MAX as u64) as u32,
+        seed: stats.seed,
+        integrator: stats.integrator.clone(),
+        tracer: stats.tracer.clone(),
+        device: stats.device.clone(),
+        render_time_s,
         extra,
-    };
-    Ok(RenderOutput {
-        film,
-        sums,
-        record,
-        first_pass,
-        total_render_time_s,
-        metadata,
-        stats,
-        extra_images,
-    })
+    }
 }
 
 /// What an integrator counted since `before`.

@@ -16,10 +16,11 @@ use splitray::render::{
     render_from, Checkpoint, CheckpointHook, FilmSnapshot, Progress, RenderControl, RenderError,
     RenderOptions, RenderOutput, RenderPlan, Resume, Shard,
 };
+use splitray::scene::Scene;
 use splitray::trace::TracerKind;
-use splitray::vk::{GpuDesc, InstanceDesc};
+use splitray::vk::{Gpu, GpuDesc, InstanceDesc};
 
-use super::render_files::{write_stats, RenderFiles};
+use super::render_files::{write_stats, CheckpointFile, RenderFiles};
 use super::signals::{self, StopSignals};
 use options::{parse_shard, render_options};
 
@@ -248,6 +249,60 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<ExitCode> {
     }
     let signals = StopSignals::install()?;
     let mut timeline = super::timeline::TimelineOutput::start(args.timeline.as_deref())?;
+    let job = read_job(args)?;
+    let output = output_path(args, &job.scene.name, job.shard)?;
+    let mut files =
+        RenderFiles::create(&output, args.stats.as_deref(), args.checkpoint.as_deref())?;
+    let mut watching = watch::Watching::open(
+        args,
+        &job.scene.name,
+        &output,
+        [job.options.width, job.options.height],
+    )?;
+    let gpu = watching.open_gpu(&gpu_desc(args))?;
+    if let Some(t) = timeline.as_mut() {
+        t.attach(&gpu)?;
+    }
+    watching.attach(&gpu)?;
+
+    let result = render_watched(args, &gpu, &job, &watching, &signals, &mut files.checkpoint);
+    let window_closed = watching.window_closed();
+    watching.finish();
+    let result = result?;
+
+    let messages = gpu.validation_messages();
+    if !messages.is_empty() {
+        bail!(
+            "{} validation message(s) (see the log above); nothing was written",
+            messages.len()
+        );
+    }
+    let stopped_by = signals.received();
+    if result.sums.passes == 0 {
+        return nothing_rendered(window_closed, stopped_by);
+    }
+    let exr = write_outputs(args, &job, &result, files)?;
+    if let Some(t) = timeline {
+        t.finish(&super::timeline::command_line())?;
+    }
+    report_early_stop(stopped_by, window_closed, &result, &exr);
+    Ok(exit_code(stopped_by))
+}
+
+/// What one render makes, read before any output is created.
+struct RenderJob<'a> {
+    /// The scene as given (a name or a path), recorded in checkpoints.
+    scene_spec: String,
+    scene: Scene,
+    shard: Shard,
+    options: RenderOptions,
+    /// The checkpoint continued, and its path.
+    resume: Option<(Checkpoint, &'a Path)>,
+}
+
+/// The checkpoint to resume, the scene, the shard and the options: the command line's,
+/// else the checkpoint's, else the defaults.
+fn read_job(args: &RenderArgs) -> anyhow::Result<RenderJob<'_>> {
     let resume = match &args.resume {
         Some(path) => Some((Checkpoint::read(path)?, path.as_path())),
         None => None,
@@ -268,22 +323,33 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<ExitCode> {
     if !(args.checkpoint_every.is_finite() && args.checkpoint_every >= 0.0) {
         bail!("--checkpoint-every must be a number of seconds, 0 or more");
     }
-    let output = output_path(args, &scene.name, shard)?;
-    let files = RenderFiles::create(&output, args.stats.as_deref(), args.checkpoint.as_deref())?;
-    let mut watching =
-        watch::Watching::open(args, &scene.name, &output, [options.width, options.height])?;
-    let gpu = watching.open_gpu(&gpu_desc(args))?;
-    if let Some(t) = timeline.as_mut() {
-        t.attach(&gpu)?;
-    }
-    watching.attach(&gpu)?;
-    let mut publisher = watching.publisher();
+    Ok(RenderJob {
+        scene_spec,
+        scene,
+        shard,
+        options,
+        resume,
+    })
+}
 
-    let RenderFiles {
-        image,
-        stats,
-        checkpoint: mut checkpoint_file,
-    } = files;
+/// Renders `job` behind a progress bar, saving `checkpoint_file` as it goes and showing
+/// the film to whoever watches; a signal or a closed preview window stops it.
+fn render_watched(
+    args: &RenderArgs,
+    gpu: &Gpu,
+    job: &RenderJob<'_>,
+    watching: &watch::Watching,
+    signals: &StopSignals,
+    checkpoint_file: &mut Option<CheckpointFile>,
+) -> Result<RenderOutput, RenderError> {
+    let RenderJob {
+        scene_spec,
+        scene,
+        shard,
+        options,
+        resume,
+    } = job;
+    let mut publisher = watching.publisher();
     let label = match shard.is_whole() {
         true => format!("{} {}x{}", scene.name, options.width, options.height),
         false => format!(
@@ -291,16 +357,16 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<ExitCode> {
             scene.name, options.width, options.height
         ),
     };
-    let bar = progress_bar(&options, &label);
+    let bar = progress_bar(options, &label);
     let pixels = options.width as f64 * options.height as f64;
     let mut save = |snapshot: &FilmSnapshot<'_>| -> Result<(), RenderError> {
         if let Some(file) = checkpoint_file.as_mut() {
-            file.save(&Checkpoint::new(&scene_spec, &options, snapshot))?;
+            file.save(&Checkpoint::new(scene_spec, options, snapshot))?;
         }
         Ok(())
     };
     let plan = RenderPlan {
-        shard,
+        shard: *shard,
         resume: resume
             .as_ref()
             .map(|(checkpoint, path)| Resume { checkpoint, path }),
@@ -311,9 +377,9 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<ExitCode> {
         watch: publisher.as_mut().map(|p| p as _),
     };
     let result = render_from(
-        &gpu,
-        &scene,
-        &options,
+        gpu,
+        scene,
+        options,
         plan,
         RenderControl {
             progress: &mut |p| show_progress(&bar, &label, p, pixels, options.time_limit),
@@ -321,32 +387,39 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<ExitCode> {
         },
     );
     bar.finish_and_clear();
-    let window_closed = watching.window_closed();
-    watching.finish();
-    let result = result?;
+    result
+}
 
-    let messages = gpu.validation_messages();
-    if !messages.is_empty() {
-        bail!(
-            "{} validation message(s) (see the log above); nothing was written",
-            messages.len()
-        );
+/// A render that holds no passes writes nothing: fine when the window was closed or a
+/// signal came first, an error otherwise.
+fn nothing_rendered(window_closed: bool, stopped_by: Option<i32>) -> anyhow::Result<ExitCode> {
+    if window_closed && stopped_by.is_none() {
+        eprintln!("preview window closed before the first pass; nothing written");
+        return Ok(ExitCode::SUCCESS);
     }
-    let stopped_by = signals.received();
-    if result.sums.passes == 0 {
-        if window_closed && stopped_by.is_none() {
-            eprintln!("preview window closed before the first pass; nothing written");
-            return Ok(ExitCode::SUCCESS);
-        }
-        let Some(signal) = stopped_by else {
-            bail!("the render holds no passes; nothing was written");
-        };
-        eprintln!(
-            "{}: stopped before the first pass; nothing written",
-            signals::name(signal)
-        );
-        return Ok(exit_code(stopped_by));
-    }
+    let Some(signal) = stopped_by else {
+        bail!("the render holds no passes; nothing was written");
+    };
+    eprintln!(
+        "{}: stopped before the first pass; nothing written",
+        signals::name(signal)
+    );
+    Ok(exit_code(stopped_by))
+}
+
+/// Writes the image, the technique images, the stats and the last checkpoint, and tells
+/// the user; returns the EXR's path.
+fn write_outputs(
+    args: &RenderArgs,
+    job: &RenderJob<'_>,
+    result: &RenderOutput,
+    files: RenderFiles,
+) -> anyhow::Result<PathBuf> {
+    let RenderFiles {
+        image,
+        stats,
+        checkpoint,
+    } = files;
     let written = {
         let _span = tracing::info_span!("write outputs").entered();
         image.write(&result.film, &result.metadata)?
@@ -355,7 +428,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<ExitCode> {
         let _span = tracing::info_span!("write technique images").entered();
         write_technique_images(dir, &result.extra_images, &result.metadata)?;
     }
-    print_summary(&result, args.profile);
+    print_summary(result, args.profile);
     println!(
         "wrote {} and {}",
         written.exr.display(),
@@ -364,8 +437,12 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<ExitCode> {
     if let Some(file) = stats {
         write_stats(file, &result.stats)?;
     }
-    if let Some(file) = checkpoint_file.as_mut() {
-        let path = file.save(&Checkpoint::new(&scene_spec, &options, &result.snapshot()))?;
+    if let Some(mut file) = checkpoint {
+        let path = file.save(&Checkpoint::new(
+            &job.scene_spec,
+            &job.options,
+            &result.snapshot(),
+        ))?;
         println!(
             "checkpoint {} holds {} spp: `splitray render --resume {} --spp N` continues it",
             path.display(),
@@ -373,25 +450,32 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<ExitCode> {
             path.display()
         );
     }
-    if let Some(t) = timeline {
-        t.finish(&super::timeline::command_line())?;
-    }
+    Ok(written.exr)
+}
+
+/// Tells the user when a signal or the closed window stopped the render short of its
+/// target.
+fn report_early_stop(
+    stopped_by: Option<i32>,
+    window_closed: bool,
+    result: &RenderOutput,
+    exr: &Path,
+) {
     if let Some(signal) = stopped_by {
         eprintln!(
             "{}: the render stopped at {} spp; {} records the samples reached",
             signals::name(signal),
             result.sums.spp(),
-            written.exr.display()
+            exr.display()
         );
     } else if window_closed && result.stats.stopped_early {
         eprintln!(
             "preview window closed: the render stopped at {} spp; {} records the samples \
              reached",
             result.sums.spp(),
-            written.exr.display()
+            exr.display()
         );
     }
-    Ok(exit_code(stopped_by))
 }
 
 /// The device `--device` names, with validation where asked for.

@@ -80,43 +80,46 @@ pub fn load_obj_mesh(path: &Path) -> Result<ObjMesh, SceneError> {
     let file = label(path);
     let scan = prescan_obj(&text, &file)?;
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let (models, tobj_materials) = parse_obj(&text, &file, &dir, &scan)?;
 
+    let mut out = ObjMesh {
+        triangles: Vec::new(),
+        materials: tobj_materials.iter().map(convert_material).collect(),
+    };
+    warn_of_unknown_materials(&scan, &out.materials, &file);
+    let mut default_index: Option<u32> = None;
+    for model in &models {
+        let material = match model.mesh.material_id {
+            Some(id) if id < out.materials.len() => id as u32,
+            _ => *default_index.get_or_insert_with(|| {
+                out.materials.push(Material::named(DEFAULT_MATERIAL_NAME));
+                (out.materials.len() - 1) as u32
+            }),
+        };
+        push_model_triangles(model, material, &file, &mut out.triangles)?;
+    }
+    Ok(out)
+}
+
+/// Parses pre-scanned OBJ text with `tobj`, with the MTL files it names (relative to
+/// `dir`): its models and their materials.
+fn parse_obj(
+    text: &str,
+    file: &str,
+    dir: &Path,
+    scan: &ObjScan,
+) -> Result<(Vec<tobj::Model>, Vec<tobj::Material>), SceneError> {
     let mtl_error: RefCell<Option<SceneError>> = RefCell::new(None);
     let loader = |mtl: &Path| -> tobj::MTLLoadResult {
         let name = mtl.to_string_lossy().into_owned();
         let full = dir.join(mtl);
-        let line = scan
-            .mtllibs
-            .iter()
-            .find(|(n, _)| *n == name)
-            .map(|(_, l)| *l);
-        let at = match line {
-            Some(l) => Location::line(file.clone(), l),
-            None => Location::file(file.clone()),
-        };
-        let result = match std::fs::read_to_string(&full) {
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
-                Err(SceneError::MissingReference {
-                    at,
-                    what: "material library",
-                    name,
-                    path: full.clone(),
-                })
-            }
-            Err(source) => Err(SceneError::Io {
-                path: full.clone(),
-                source,
-            }),
-            Ok(mtl_text) => {
-                let mtl_label = label(&full);
-                prescan_mtl(&mtl_text, &mtl_label).and_then(|()| {
-                    tobj::load_mtl_buf(&mut mtl_text.as_bytes()).map_err(|e| SceneError::Syntax {
-                        at: Location::file(mtl_label),
-                        message: format!("malformed MTL: {e}"),
-                    })
-                })
-            }
-        };
+        let at = mtllib_location(scan, file, &name);
+        let result = read_mtl(&full, at, name).and_then(|mtl_text| {
+            tobj::load_mtl_buf(&mut mtl_text.as_bytes()).map_err(|e| SceneError::Syntax {
+                at: Location::file(label(&full)),
+                message: format!("malformed MTL: {e}"),
+            })
+        });
         result.map_err(|e| {
             let mut slot = mtl_error.borrow_mut();
             if slot.is_none() {
@@ -159,69 +162,101 @@ pub fn load_obj_mesh(path: &Path) -> Result<ObjMesh, SceneError> {
         Ok(Ok(v)) => v,
     };
     // An Err here can only be "no mtllib at all" style failures already reported above.
-    let tobj_materials = materials.unwrap_or_default();
+    Ok((models, materials.unwrap_or_default()))
+}
 
-    let mut out = ObjMesh {
-        triangles: Vec::new(),
-        materials: tobj_materials.iter().map(convert_material).collect(),
-    };
+/// Where `file` names the material library `name`: its `mtllib` line, else the file.
+fn mtllib_location(scan: &ObjScan, file: &str, name: &str) -> Location {
+    let line = scan
+        .mtllibs
+        .iter()
+        .find(|(n, _)| n == name)
+        .map(|(_, l)| *l);
+    match line {
+        Some(l) => Location::line(file, l),
+        None => Location::file(file),
+    }
+}
+
+/// The text of the MTL file `full` (named at `at` as `name`), pre-scanned.
+fn read_mtl(full: &Path, at: Location, name: String) -> Result<String, SceneError> {
+    match std::fs::read_to_string(full) {
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Err(SceneError::MissingReference {
+            at,
+            what: "material library",
+            name,
+            path: full.to_path_buf(),
+        }),
+        Err(source) => Err(SceneError::Io {
+            path: full.to_path_buf(),
+            source,
+        }),
+        Ok(mtl_text) => prescan_mtl(&mtl_text, &label(full)).map(|()| mtl_text),
+    }
+}
+
+/// Warns of each `usemtl` that names none of `materials` (its faces get the default
+/// material).
+fn warn_of_unknown_materials(scan: &ObjScan, materials: &[Material], file: &str) {
     for (name, line) in &scan.usemtl {
-        if !out.materials.iter().any(|m| &m.name == name) {
+        if !materials.iter().any(|m| &m.name == name) {
             log::warn!(
                 "{file}:{line}: usemtl '{name}' names no material of the MTL files; using the default material"
             );
         }
     }
-    let mut default_index: Option<u32> = None;
-    for model in &models {
-        let m = &model.mesh;
-        let material = match m.material_id {
-            Some(id) if id < out.materials.len() => id as u32,
-            _ => *default_index.get_or_insert_with(|| {
-                out.materials.push(Material::named(DEFAULT_MATERIAL_NAME));
-                (out.materials.len() - 1) as u32
-            }),
-        };
-        let has_normals = !m.normals.is_empty() && m.normals.len() == m.positions.len();
-        let vertex = |data: &[f32], i: u32| -> Option<Vec3> {
-            let i = i as usize * 3;
-            data.get(i..i + 3).map(Vec3::from_slice)
-        };
-        for (k, tri) in m.indices.chunks_exact(3).enumerate() {
-            let p = [
-                vertex(&m.positions, tri[0]),
-                vertex(&m.positions, tri[1]),
-                vertex(&m.positions, tri[2]),
-            ];
-            let [Some(p0), Some(p1), Some(p2)] = p else {
-                return Err(SceneError::Syntax {
-                    at: Location::file(file),
-                    message: format!(
-                        "object '{}' triangle {k} has an index out of range",
-                        model.name
-                    ),
-                });
-            };
-            let n = if has_normals {
-                match (
-                    vertex(&m.normals, tri[0]),
-                    vertex(&m.normals, tri[1]),
-                    vertex(&m.normals, tri[2]),
-                ) {
-                    (Some(a), Some(b), Some(c)) => Some([a, b, c]),
-                    _ => None,
-                }
-            } else {
-                None
-            };
-            out.triangles.push(Triangle {
-                p: [p0, p1, p2],
-                n,
-                material,
+}
+
+/// The triangles of one `tobj` model, all of `material`, appended to `triangles`; with
+/// normals where every vertex of the model has one.
+fn push_model_triangles(
+    model: &tobj::Model,
+    material: u32,
+    file: &str,
+    triangles: &mut Vec<Triangle>,
+) -> Result<(), SceneError> {
+    let m = &model.mesh;
+    let has_normals = !m.normals.is_empty() && m.normals.len() == m.positions.len();
+    for (k, tri) in m.indices.chunks_exact(3).enumerate() {
+        let p = [
+            vec3_at(&m.positions, tri[0]),
+            vec3_at(&m.positions, tri[1]),
+            vec3_at(&m.positions, tri[2]),
+        ];
+        let [Some(p0), Some(p1), Some(p2)] = p else {
+            return Err(SceneError::Syntax {
+                at: Location::file(file),
+                message: format!(
+                    "object '{}' triangle {k} has an index out of range",
+                    model.name
+                ),
             });
-        }
+        };
+        let n = if has_normals {
+            match (
+                vec3_at(&m.normals, tri[0]),
+                vec3_at(&m.normals, tri[1]),
+                vec3_at(&m.normals, tri[2]),
+            ) {
+                (Some(a), Some(b), Some(c)) => Some([a, b, c]),
+                _ => None,
+            }
+        } else {
+            None
+        };
+        triangles.push(Triangle {
+            p: [p0, p1, p2],
+            n,
+            material,
+        });
     }
-    Ok(out)
+    Ok(())
+}
+
+/// Vector `i` of flat xyz `data`, if it has one.
+fn vec3_at(data: &[f32], i: u32) -> Option<Vec3> {
+    let i = i as usize * 3;
+    data.get(i..i + 3).map(Vec3::from_slice)
 }
 
 fn convert_material(m: &tobj::Material) -> Material {
@@ -310,17 +345,7 @@ fn require_finite(vals: &[f32], at: &Location, what: String) -> Result<(), Scene
 /// Line-by-line check of OBJ text: vertex / normal numbers parse and are finite, face
 /// indices are non-zero integers inside the file's vertex / texcoord / normal counts.
 fn prescan_obj(text: &str, file: &str) -> Result<ObjScan, SceneError> {
-    let (mut nv, mut nvt, mut nvn) = (0usize, 0usize, 0usize);
-    for line in text.lines() {
-        match line.split_whitespace().next() {
-            Some("v") => nv += 1,
-            Some("vt") => nvt += 1,
-            Some("vn") => nvn += 1,
-            _ => {}
-        }
-    }
-    let totals = [nv, nvt, nvn];
-    const KINDS: [&str; 3] = ["vertex", "texcoord", "normal"];
+    let totals = count_elements(text);
     let mut seen = [0usize; 3];
     let mut face = 0usize;
     let mut scan = ObjScan::default();
@@ -333,17 +358,7 @@ fn prescan_obj(text: &str, file: &str) -> Result<ObjScan, SceneError> {
         match keyword {
             "v" => {
                 seen[0] += 1;
-                let xyz = parse_floats(&words[1..], 3, &at(), "vertex position")?;
-                require_finite(&xyz, &at(), format!("vertex {}", seen[0]))?;
-                if words.len() == 5 {
-                    let w = parse_floats(&words[4..], 1, &at(), "vertex w")?[0];
-                    if w == 0.0 || !w.is_finite() {
-                        return Err(SceneError::Syntax {
-                            at: at(),
-                            message: format!("vertex {} has weight w = {w}", seen[0]),
-                        });
-                    }
-                }
+                check_vertex(&words[1..], seen[0], &at())?;
             }
             "vt" => {
                 seen[1] += 1;
@@ -356,57 +371,7 @@ fn prescan_obj(text: &str, file: &str) -> Result<ObjScan, SceneError> {
             }
             "f" => {
                 face += 1;
-                if words.len() < 4 {
-                    return Err(SceneError::Syntax {
-                        at: at(),
-                        message: format!(
-                            "face {face} has {} vertices; a face needs at least 3",
-                            words.len() - 1
-                        ),
-                    });
-                }
-                for w in &words[1..] {
-                    let parts: Vec<&str> = w.split('/').collect();
-                    if parts.len() > 3 || parts[0].is_empty() {
-                        return Err(SceneError::Syntax {
-                            at: at(),
-                            message: format!("face {face}: malformed vertex reference '{w}'"),
-                        });
-                    }
-                    for (k, part) in parts.iter().enumerate() {
-                        if part.is_empty() {
-                            continue;
-                        }
-                        let idx: i64 = part.parse().map_err(|_| SceneError::Syntax {
-                            at: at(),
-                            message: format!("face {face}: '{part}' in '{w}' is not an index"),
-                        })?;
-                        // Relative (negative) indices count back from the elements seen
-                        // so far; absolute ones may point anywhere in the file.
-                        let ok = match idx {
-                            0 => {
-                                return Err(SceneError::Syntax {
-                                    at: at(),
-                                    message: format!(
-                                    "face {face}: {} index 0 is invalid (OBJ indices start at 1)",
-                                    KINDS[k]
-                                ),
-                                })
-                            }
-                            i if i < 0 => i.unsigned_abs() <= seen[k] as u64,
-                            i => i as u64 <= totals[k] as u64,
-                        };
-                        if !ok {
-                            return Err(SceneError::IndexOutOfRange {
-                                at: at(),
-                                face,
-                                kind: KINDS[k],
-                                index: idx,
-                                count: if idx < 0 { seen[k] } else { totals[k] },
-                            });
-                        }
-                    }
-                }
+                check_face(&words[1..], face, &seen, &totals, &at)?;
             }
             "mtllib" => scan
                 .mtllibs
@@ -425,6 +390,116 @@ fn prescan_obj(text: &str, file: &str) -> Result<ObjScan, SceneError> {
         }
     }
     Ok(scan)
+}
+
+/// The kinds of element a face refers to, in the order of a face vertex's `v/vt/vn`.
+const FACE_INDEX_KINDS: [&str; 3] = ["vertex", "texcoord", "normal"];
+
+/// The file's vertices, texture coordinates and normals ([`FACE_INDEX_KINDS`]).
+fn count_elements(text: &str) -> [usize; 3] {
+    let (mut nv, mut nvt, mut nvn) = (0usize, 0usize, 0usize);
+    for line in text.lines() {
+        match line.split_whitespace().next() {
+            Some("v") => nv += 1,
+            Some("vt") => nvt += 1,
+            Some("vn") => nvn += 1,
+            _ => {}
+        }
+    }
+    [nv, nvt, nvn]
+}
+
+/// Checks the numbers of vertex `index` (`x y z [w]`): finite, and a weight that is not 0.
+fn check_vertex(numbers: &[&str], index: usize, at: &Location) -> Result<(), SceneError> {
+    let xyz = parse_floats(numbers, 3, at, "vertex position")?;
+    require_finite(&xyz, at, format!("vertex {index}"))?;
+    if numbers.len() == 4 {
+        let w = parse_floats(&numbers[3..], 1, at, "vertex w")?[0];
+        if w == 0.0 || !w.is_finite() {
+            return Err(SceneError::Syntax {
+                at: at.clone(),
+                message: format!("vertex {index} has weight w = {w}"),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Checks face `face`'s vertex references against the elements `seen` before it and
+/// the file's `totals`.
+fn check_face(
+    vertices: &[&str],
+    face: usize,
+    seen: &[usize; 3],
+    totals: &[usize; 3],
+    at: &dyn Fn() -> Location,
+) -> Result<(), SceneError> {
+    if vertices.len() < 3 {
+        return Err(SceneError::Syntax {
+            at: at(),
+            message: format!(
+                "face {face} has {} vertices; a face needs at least 3",
+                vertices.len()
+            ),
+        });
+    }
+    for w in vertices {
+        let parts: Vec<&str> = w.split('/').collect();
+        if parts.len() > 3 || parts[0].is_empty() {
+            return Err(SceneError::Syntax {
+                at: at(),
+                message: format!("face {face}: malformed vertex reference '{w}'"),
+            });
+        }
+        for (k, part) in parts.iter().enumerate() {
+            if part.is_empty() {
+                continue;
+            }
+            let idx: i64 = part.parse().map_err(|_| SceneError::Syntax {
+                at: at(),
+                message: format!("face {face}: '{part}' in '{w}' is not an index"),
+            })?;
+            check_face_index(idx, k, face, seen[k], totals[k], at)?;
+        }
+    }
+    Ok(())
+}
+
+/// Checks index `idx` of kind `k` ([`FACE_INDEX_KINDS`]) in face `face`, where `seen`
+/// elements of that kind come before the face and the file has `total`.
+fn check_face_index(
+    idx: i64,
+    k: usize,
+    face: usize,
+    seen: usize,
+    total: usize,
+    at: &dyn Fn() -> Location,
+) -> Result<(), SceneError> {
+    // Relative (negative) indices count back from the elements seen so far; absolute
+    // ones may point anywhere in the file.
+    let ok = match idx {
+        0 => {
+            return Err(SceneError::Syntax {
+                at: at(),
+                message: format!(
+                    "face {face}: {} index 0 is invalid (OBJ indices start at 1)",
+                    FACE_INDEX_KINDS[k]
+                ),
+            })
+        }
+        i if i < 0 => i.unsigned_abs() <= seen as u64,
+        i => i as u64 <= total as u64,
+    };
+    if !ok {
+        return Err(SceneError::IndexOutOfRange {
+            at: at(),
+            face,
+            kind: FACE_INDEX_KINDS[k],
+            index: idx,
+            count: if idx < 0 { seen } else { total },
+        });
+    }
+    Ok(())
 }
 
 /// Line-by-line check of MTL text: colour and scalar parameters parse and are finite.

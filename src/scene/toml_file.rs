@@ -105,11 +105,11 @@ use serde::Deserialize;
 use toml::Spanned;
 
 use super::animation::toml::{CameraToml, MeshToml};
-use super::animation::{AnimatedScene, Animation};
+use super::animation::{AnimatedScene, Animation, Keyframes};
 use super::obj::read_text;
 use super::{
     framing_camera, validate, BsdfKind, Camera, FilmSize, Location, Material, MaterialBsdf,
-    MaterialLayer, MicrofacetModel, PointLight, RenderSettings, Scene, SceneError,
+    MaterialLayer, MicrofacetModel, PointLight, RenderSettings, Scene, SceneError, Triangle,
 };
 use crate::bsdf::MAX_LAYERS;
 
@@ -458,59 +458,14 @@ pub fn parse_toml_animated(
         message: e.message().trim().replace('`', "'"),
     })?;
 
-    let mut triangles = Vec::new();
-    let mut materials: Vec<Material> = Vec::new();
-    let mut animation = Animation::default();
-    // (first triangle, end, material name) for per-mesh overrides, resolved at the end.
-    let mut overrides = Vec::new();
-    for mesh in &doc.mesh {
-        let loaded = mesh.load(dir, &at_span)?;
-        let offset = materials.len() as u32;
-        let start = triangles.len();
-        materials.extend(loaded.mesh.materials);
-        triangles.extend(loaded.mesh.triangles.into_iter().map(|mut t| {
-            t.material += offset;
-            t
-        }));
-        if let Some(mut motion) = loaded.motion {
-            motion.range = start..triangles.len();
-            animation.meshes.push(motion);
-        }
-        if let Some(name) = &mesh.material {
-            overrides.push((start, triangles.len(), name));
-        }
-    }
-
-    for m in &doc.material {
-        let bsdf = m.explicit_bsdf(&at_span)?;
-        let name = m.name.get_ref();
-        let mut found = false;
-        for existing in materials.iter_mut().filter(|e| &e.name == name) {
-            m.apply(existing, &bsdf);
-            found = true;
-        }
-        if !found {
-            let mut new = Material::named(name.clone());
-            m.apply(&mut new, &bsdf);
-            materials.push(new);
-        }
-    }
-
-    for (start, end, name) in overrides {
-        let Some(index) = materials.iter().position(|m| &m.name == name.get_ref()) else {
-            let mut names: Vec<&str> = materials.iter().map(|m| m.name.as_str()).collect();
-            names.dedup();
-            return Err(SceneError::Unknown {
-                at: at_span(name.span()),
-                what: "material",
-                name: name.get_ref().clone(),
-                hint: format!(" (known: {})", names.join(", ")),
-            });
-        };
-        for t in &mut triangles[start..end] {
-            t.material = index as u32;
-        }
-    }
+    let Meshes {
+        mut triangles,
+        mut materials,
+        mut animation,
+        overrides,
+    } = load_meshes(&doc.mesh, dir, &at_span)?;
+    apply_material_tables(&doc.material, &mut materials, &at_span)?;
+    apply_mesh_materials(&overrides, &materials, &mut triangles, &at_span)?;
 
     let mut scene = Scene {
         name: doc.name.unwrap_or_else(|| default_name.to_string()),
@@ -531,16 +486,7 @@ pub fn parse_toml_animated(
                 intensity: l.intensity.into(),
             })
             .collect(),
-        settings: doc
-            .render
-            .map(|r| RenderSettings {
-                spp: r.spp,
-                seed: r.seed,
-                integrator: r.integrator,
-                tracer: r.tracer,
-                max_depth: r.max_depth,
-            })
-            .unwrap_or_default(),
+        settings: doc.render.map(render_settings).unwrap_or_default(),
     };
 
     let whole = Location::file(file);
@@ -555,26 +501,144 @@ pub fn parse_toml_animated(
         });
     }
     if let Some(f) = &doc.film {
-        let film = f.get_ref();
-        scene.film = FilmSize {
-            width: film.width,
-            height: film.height,
-        };
-        validate::validate_film(&scene.film, &at_span(f.span()))?;
+        scene.film = film_size(f, &at_span)?;
     }
-    match &doc.camera {
+    animation.camera = place_camera(doc.camera.as_ref(), &mut scene, &at_span)?;
+    validate::validate_scene(&scene, &whole)?;
+    Ok(AnimatedScene { scene, animation })
+}
+
+/// The `[film]` size, validated.
+fn film_size(film: &Spanned<FilmToml>, at: &Loc) -> Result<FilmSize, SceneError> {
+    let size = FilmSize {
+        width: film.get_ref().width,
+        height: film.get_ref().height,
+    };
+    validate::validate_film(&size, &at(film.span()))?;
+    Ok(size)
+}
+
+/// Sets the scene's camera: the `[camera]` table's, else one framing the geometry (where
+/// its bounds are finite; `validate_scene` reports them where not). Returns the camera's
+/// keyframes.
+fn place_camera(
+    camera: Option<&Spanned<CameraToml>>,
+    scene: &mut Scene,
+    at: &Loc,
+) -> Result<Option<Keyframes<Camera>>, SceneError> {
+    match camera {
         Some(c) => {
-            let (camera, keys) = c.get_ref().resolve(c.span(), &at_span)?;
+            let (camera, keys) = c.get_ref().resolve(c.span(), at)?;
             scene.camera = camera;
-            animation.camera = keys;
+            Ok(keys)
         }
         None => {
             let bounds = scene.bounds();
             if bounds.min.is_finite() && bounds.max.is_finite() {
                 scene.camera = framing_camera(&bounds);
             }
+            Ok(None)
         }
     }
-    validate::validate_scene(&scene, &whole)?;
-    Ok(AnimatedScene { scene, animation })
+}
+
+/// The triangles and materials of every `[[mesh]]`, in file order, and how they move.
+struct Meshes<'d> {
+    triangles: Vec<Triangle>,
+    materials: Vec<Material>,
+    animation: Animation,
+    /// (first triangle, end, material name) for per-mesh overrides, resolved once every
+    /// material is known.
+    overrides: Vec<(usize, usize, &'d Spanned<String>)>,
+}
+
+/// Loads every mesh, its triangles indexing the materials of all meshes.
+fn load_meshes<'d>(meshes: &'d [MeshToml], dir: &Path, at: &Loc) -> Result<Meshes<'d>, SceneError> {
+    let mut triangles = Vec::new();
+    let mut materials: Vec<Material> = Vec::new();
+    let mut animation = Animation::default();
+    let mut overrides = Vec::new();
+    for mesh in meshes {
+        let loaded = mesh.load(dir, at)?;
+        let offset = materials.len() as u32;
+        let start = triangles.len();
+        materials.extend(loaded.mesh.materials);
+        triangles.extend(loaded.mesh.triangles.into_iter().map(|mut t| {
+            t.material += offset;
+            t
+        }));
+        if let Some(mut motion) = loaded.motion {
+            motion.range = start..triangles.len();
+            animation.meshes.push(motion);
+        }
+        if let Some(name) = &mesh.material {
+            overrides.push((start, triangles.len(), name));
+        }
+    }
+    Ok(Meshes {
+        triangles,
+        materials,
+        animation,
+        overrides,
+    })
+}
+
+/// Applies each `[[material]]` to every loaded material of its name, or adds it as a new
+/// material when none has that name.
+fn apply_material_tables(
+    tables: &[MaterialToml],
+    materials: &mut Vec<Material>,
+    at: &Loc,
+) -> Result<(), SceneError> {
+    for m in tables {
+        let bsdf = m.explicit_bsdf(at)?;
+        let name = m.name.get_ref();
+        let mut found = false;
+        for existing in materials.iter_mut().filter(|e| &e.name == name) {
+            m.apply(existing, &bsdf);
+            found = true;
+        }
+        if !found {
+            let mut new = Material::named(name.clone());
+            m.apply(&mut new, &bsdf);
+            materials.push(new);
+        }
+    }
+    Ok(())
+}
+
+/// Gives the triangles of each mesh with a `material` key that material (the first of
+/// its name).
+fn apply_mesh_materials(
+    overrides: &[(usize, usize, &Spanned<String>)],
+    materials: &[Material],
+    triangles: &mut [Triangle],
+    at: &Loc,
+) -> Result<(), SceneError> {
+    for &(start, end, name) in overrides {
+        let Some(index) = materials.iter().position(|m| &m.name == name.get_ref()) else {
+            let mut names: Vec<&str> = materials.iter().map(|m| m.name.as_str()).collect();
+            names.dedup();
+            return Err(SceneError::Unknown {
+                at: at(name.span()),
+                what: "material",
+                name: name.get_ref().clone(),
+                hint: format!(" (known: {})", names.join(", ")),
+            });
+        };
+        for t in &mut triangles[start..end] {
+            t.material = index as u32;
+        }
+    }
+    Ok(())
+}
+
+fn render_settings(r: RenderToml) -> RenderSettings {
+    RenderSettings {
+        spp: r.spp,
+        seed: r.seed,
+        integrator: r.integrator,
+        tracer: r.tracer,
+        max_depth: r.max_depth,
+    }
 }
