@@ -606,8 +606,8 @@ pub fn run(
     })
 }
 
-impl fmt::Display for CbptBenchReport {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+impl CbptBenchReport {
+    fn write_header(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         writeln!(
             f,
             "bench cbpt {} ({} triangles) {}x{}, tracer {}, on {} and {} ({} threads), {}",
@@ -627,7 +627,10 @@ impl fmt::Display for CbptBenchReport {
             "check: GPU against CPU combination data: {} visibility bits and {} shading \
              values differ",
             self.visibility_mismatches, self.shading_mismatches
-        )?;
+        )
+    }
+
+    fn write_throughput(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         writeln!(f, "\ncombination throughput (Table 1), millions per second")?;
         writeln!(f, "{:<30} {:>10} {:>10} {:>8}", "", "GPU", "CPU", "GPU/CPU")?;
         for r in &self.throughput {
@@ -643,6 +646,10 @@ impl fmt::Display for CbptBenchReport {
                 r.gpu / r.cpu
             )?;
         }
+        Ok(())
+    }
+
+    fn write_batches(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         writeln!(f, "\nbatch size (Fig. 6), millions per second on the GPU")?;
         writeln!(
             f,
@@ -656,6 +663,10 @@ impl fmt::Display for CbptBenchReport {
                 r.batch, r.visibility, r.shading
             )?;
         }
+        Ok(())
+    }
+
+    fn write_contributions(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         writeln!(f, "\nbasic contributions per second (Table 3)")?;
         let bpt = self
             .contributions
@@ -674,6 +685,10 @@ impl fmt::Display for CbptBenchReport {
                 r.seconds
             )?;
         }
+        Ok(())
+    }
+
+    fn write_steps(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         writeln!(f, "\na step's parts (Algorithm 2), ms per step")?;
         writeln!(
             f,
@@ -707,35 +722,58 @@ impl fmt::Display for CbptBenchReport {
                 r.wall
             )?;
         }
-        if let [p, s] = self.steps.as_slice() {
-            // The CPU thread's work, and the combination's: the GPU's busy time, or the
-            // driver's host time where submissions run to completion (lavapipe).
-            let cpu = p.sample + p.pack + p.light_tracing + p.combine;
-            let device = p.gpu.max(p.submit + p.finish);
-            let hidden = (cpu + device - p.wall) / cpu.min(device).max(1e-9);
-            writeln!(
-                f,
-                "pipelining: {:.2} ms per step against {:.2} synchronous ({:.2}x); per step the \
-                 CPU works {cpu:.2} ms and the combination takes {device:.2} (GPU busy {:.2}, \
-                 driver {:.2}): {:.0}% of the shorter hidden behind the longer",
-                p.wall,
-                s.wall,
-                s.wall / p.wall,
-                p.gpu,
-                p.submit + p.finish,
-                100.0 * hidden
-            )?;
-        }
-        if let Some(e) = &self.equal_time {
-            writeln!(f, "\nequal time\n{e}")?;
-            let row = |k: &str| e.rows.iter().find(|r| r.integrator == k);
-            let efficiency = |k: &str| Some(row(k)?.comparable_mse()? * row(k)?.seconds);
-            for other in ["pt", "bpt"] {
-                if let (Some(c), Some(o)) = (efficiency("cbpt"), efficiency(other)) {
-                    writeln!(f, "relative MSE x seconds, cbpt / {other}: {:.3}", c / o)?;
-                }
+        Ok(())
+    }
+
+    /// How much of a step the pipelined mode hides, from its two rows (pipelined, then
+    /// synchronous).
+    fn write_pipelining(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let [p, s] = self.steps.as_slice() else {
+            return Ok(());
+        };
+        // The CPU thread's work, and the combination's: the GPU's busy time, or the
+        // driver's host time where submissions run to completion (lavapipe).
+        let cpu = p.sample + p.pack + p.light_tracing + p.combine;
+        let device = p.gpu.max(p.submit + p.finish);
+        let hidden = (cpu + device - p.wall) / cpu.min(device).max(1e-9);
+        writeln!(
+            f,
+            "pipelining: {:.2} ms per step against {:.2} synchronous ({:.2}x); per step the \
+             CPU works {cpu:.2} ms and the combination takes {device:.2} (GPU busy {:.2}, \
+             driver {:.2}): {:.0}% of the shorter hidden behind the longer",
+            p.wall,
+            s.wall,
+            s.wall / p.wall,
+            p.gpu,
+            p.submit + p.finish,
+            100.0 * hidden
+        )
+    }
+
+    fn write_equal_time(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let Some(e) = &self.equal_time else {
+            return Ok(());
+        };
+        writeln!(f, "\nequal time\n{e}")?;
+        let row = |k: &str| e.rows.iter().find(|r| r.integrator == k);
+        let efficiency = |k: &str| Some(row(k)?.comparable_mse()? * row(k)?.seconds);
+        for other in ["pt", "bpt"] {
+            if let (Some(c), Some(o)) = (efficiency("cbpt"), efficiency(other)) {
+                writeln!(f, "relative MSE x seconds, cbpt / {other}: {:.3}", c / o)?;
             }
         }
         Ok(())
+    }
+}
+
+impl fmt::Display for CbptBenchReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        self.write_header(f)?;
+        self.write_throughput(f)?;
+        self.write_batches(f)?;
+        self.write_contributions(f)?;
+        self.write_steps(f)?;
+        self.write_pipelining(f)?;
+        self.write_equal_time(f)
     }
 }

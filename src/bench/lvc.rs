@@ -253,17 +253,28 @@ pub fn equal_spp(
         .collect())
 }
 
-/// The equal-spp section of `bench bdpt`'s report.
-pub fn write_equal_spp(f: &mut std::fmt::Formatter<'_>, rows: &[SppRow]) -> std::fmt::Result {
-    let Some(first) = rows.first() else {
-        return Ok(());
-    };
-    writeln!(
-        f,
-        "equal spp: {} passes, median of the rounds; GPU busy per stream and the time two \
-         or more were busy at once (all rounds)",
-        first.passes
-    )?;
+/// The median time of `integrator` with `streams` streams, sorted or not, where measured.
+fn seconds_of(rows: &[SppRow], integrator: &str, streams: u32, sorted: bool) -> Option<f64> {
+    rows.iter()
+        .find(|r| r.integrator == integrator && r.streams == streams && r.sorted == sorted)
+        .map(|r| r.seconds)
+}
+
+/// The first configuration of `integrator`: the one with its own default sorting.
+fn first_of<'a>(rows: &'a [SppRow], integrator: &str) -> Option<&'a SppRow> {
+    rows.iter().find(|r| r.integrator == integrator)
+}
+
+fn on_off(sorted: bool) -> &'static str {
+    if sorted {
+        "sorted"
+    } else {
+        "unsorted"
+    }
+}
+
+/// The heading and one line per configuration: time, busy time per stream, overlap.
+fn write_spp_table(f: &mut std::fmt::Formatter<'_>, rows: &[SppRow]) -> std::fmt::Result {
     writeln!(
         f,
         "{:<10} {:>7} {:>6} {:>9} {:>28} {:>11}",
@@ -292,12 +303,13 @@ pub fn write_equal_spp(f: &mut std::fmt::Formatter<'_>, rows: &[SppRow]) -> std:
             r.overlap_ms
         )?;
     }
-    let time = |k: &str, streams: u32, sorted: bool| {
-        rows.iter()
-            .find(|r| r.integrator == k && r.streams == streams && r.sorted == sorted)
-            .map(|r| r.seconds)
-    };
-    let on_off = |sorted: bool| if sorted { "sorted" } else { "unsorted" };
+    Ok(())
+}
+
+/// lvc-bdpt's time over cis-lbdpt's: at the same settings, and each with its own
+/// default sorting where those differ.
+fn write_method_ratios(f: &mut std::fmt::Formatter<'_>, rows: &[SppRow]) -> std::fmt::Result {
+    let time = |k: &str, streams: u32, sorted: bool| seconds_of(rows, k, streams, sorted);
     for (streams, sorted) in [(1, false), (3, false), (1, true), (3, true)] {
         if let (Some(lvc), Some(cis)) = (
             time("lvc-bdpt", streams, sorted),
@@ -312,8 +324,7 @@ pub fn write_equal_spp(f: &mut std::fmt::Formatter<'_>, rows: &[SppRow]) -> std:
         }
     }
     // Each method with its own default sorting (the first configuration of each).
-    let first = |k: &str| rows.iter().find(|r| r.integrator == k);
-    if let (Some(lvc), Some(cis)) = (first("lvc-bdpt"), first("cis-lbdpt")) {
+    if let (Some(lvc), Some(cis)) = (first_of(rows, "lvc-bdpt"), first_of(rows, "cis-lbdpt")) {
         if lvc.sorted != cis.sorted {
             for streams in [1, 3] {
                 if let (Some(l), Some(c)) = (
@@ -331,6 +342,12 @@ pub fn write_equal_spp(f: &mut std::fmt::Formatter<'_>, rows: &[SppRow]) -> std:
             }
         }
     }
+    Ok(())
+}
+
+/// Within each method: one stream's time over three's, and unsorted over sorted.
+fn write_setting_ratios(f: &mut std::fmt::Formatter<'_>, rows: &[SppRow]) -> std::fmt::Result {
+    let time = |k: &str, streams: u32, sorted: bool| seconds_of(rows, k, streams, sorted);
     for k in ["lvc-bdpt", "cis-lbdpt"] {
         for sorted in [false, true] {
             if let (Some(one), Some(three)) = (time(k, 1, sorted), time(k, 3, sorted)) {
@@ -352,9 +369,14 @@ pub fn write_equal_spp(f: &mut std::fmt::Formatter<'_>, rows: &[SppRow]) -> std:
             }
         }
     }
+    Ok(())
+}
+
+/// Each method's connection shadow rays per camera path and the share unoccluded.
+fn write_connection_counts(f: &mut std::fmt::Formatter<'_>, rows: &[SppRow]) -> std::fmt::Result {
     // The images, and so these counts, are the same in every configuration of a method.
     for k in ["lvc-bdpt", "cis-lbdpt"] {
-        if let Some(r) = first(k) {
+        if let Some(r) = first_of(rows, k) {
             writeln!(
                 f,
                 "{k}: {:.2} connection shadow rays per camera path, {:.1} % unoccluded",
@@ -363,6 +385,11 @@ pub fn write_equal_spp(f: &mut std::fmt::Formatter<'_>, rows: &[SppRow]) -> std:
             )?;
         }
     }
+    Ok(())
+}
+
+/// The eight kernels with the longest self time of each three-stream configuration.
+fn write_top_kernels(f: &mut std::fmt::Formatter<'_>, rows: &[SppRow]) -> std::fmt::Result {
     for r in rows.iter().filter(|r| r.streams == 3) {
         let mut kernels = r.kernels.clone();
         kernels.sort_by(|a, b| b.self_ms.total_cmp(&a.self_ms));
@@ -386,6 +413,24 @@ pub fn write_equal_spp(f: &mut std::fmt::Formatter<'_>, rows: &[SppRow]) -> std:
         )?;
     }
     Ok(())
+}
+
+/// The equal-spp section of `bench bdpt`'s report.
+pub fn write_equal_spp(f: &mut std::fmt::Formatter<'_>, rows: &[SppRow]) -> std::fmt::Result {
+    let Some(first) = rows.first() else {
+        return Ok(());
+    };
+    writeln!(
+        f,
+        "equal spp: {} passes, median of the rounds; GPU busy per stream and the time two \
+         or more were busy at once (all rounds)",
+        first.passes
+    )?;
+    write_spp_table(f, rows)?;
+    write_method_ratios(f, rows)?;
+    write_setting_ratios(f, rows)?;
+    write_connection_counts(f, rows)?;
+    write_top_kernels(f, rows)
 }
 
 #[cfg(test)]

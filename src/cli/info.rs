@@ -4,7 +4,8 @@ use anyhow::Context;
 use clap::Args;
 use serde::Serialize;
 use splitray::vk::{
-    self, Instance, InstanceDesc, PhysicalDeviceInfo, StreamKind, StreamMapping, StreamPlacement,
+    self, CapabilityInfo, Instance, InstanceDesc, LimitsInfo, PhysicalDeviceInfo, QueueFamilyInfo,
+    StreamKind, StreamMapping, StreamPlacement,
 };
 
 #[derive(Debug, Args)]
@@ -32,14 +33,12 @@ struct InfoReport {
     devices: Vec<DeviceReport>,
 }
 
-pub fn run(args: &InfoArgs) -> anyhow::Result<()> {
-    let instance =
-        Instance::new(InstanceDesc::default()).context("cannot create a Vulkan instance")?;
-    let devices = vk::enumerate(&instance)?;
-    let selected = vk::select(&devices, args.device.as_deref())
-        .ok()
-        .map(|d| d.index);
-    let report = InfoReport {
+/// Every device `instance` lists, with what splitray makes of it; `device` marks the one
+/// `render` would use.
+fn report(instance: &Instance, device: Option<&str>) -> anyhow::Result<InfoReport> {
+    let devices = vk::enumerate(instance)?;
+    let selected = vk::select(&devices, device).ok().map(|d| d.index);
+    Ok(InfoReport {
         validation_layer_available: vk::validation_layer_available(),
         devices: devices
             .iter()
@@ -50,7 +49,122 @@ pub fn run(args: &InfoArgs) -> anyhow::Result<()> {
                 streams: StreamMapping::plan(d, StreamPlacement::Spread),
             })
             .collect(),
-    };
+    })
+}
+
+fn print_queue_families(families: &[QueueFamilyInfo]) {
+    println!("    queue families:");
+    for q in families {
+        let mut caps = vec![];
+        if q.graphics {
+            caps.push("graphics");
+        }
+        if q.compute {
+            caps.push("compute");
+        }
+        if q.transfer {
+            caps.push("transfer");
+        }
+        println!(
+            "      {}: {} queue(s), {}, timestamps {} bits",
+            q.index,
+            q.count,
+            caps.join("+"),
+            q.timestamp_valid_bits
+        );
+    }
+}
+
+fn print_streams(streams: &StreamMapping) {
+    println!("    streams:");
+    for kind in StreamKind::ALL {
+        let s = streams.slot(kind);
+        println!(
+            "      {:<9} -> family {} queue {}",
+            kind.name(),
+            s.family,
+            s.index
+        );
+    }
+    if streams.is_single_queue() {
+        println!("      (one queue: streams are ordered by timeline semaphores on it)");
+    }
+}
+
+fn print_limits(l: &LimitsInfo) {
+    println!(
+        "    limits: maxStorageBufferRange {} MiB (kernels pass larger buffers by address), largest buffer {} MiB (maxBufferSize {} MiB, maxMemoryAllocationSize {} MiB), device-local memory {} MiB, shared memory {} KiB, workgroup invocations {}, subgroup size {} ({}..{}), push constants {} B, timestampPeriod {} ns",
+        l.max_storage_buffer_range >> 20,
+        l.max_buffer_size.min(l.max_memory_allocation_size) >> 20,
+        l.max_buffer_size >> 20,
+        l.max_memory_allocation_size >> 20,
+        l.device_local_bytes >> 20,
+        l.max_compute_shared_memory_size >> 10,
+        l.max_compute_work_group_invocations,
+        l.subgroup_size,
+        l.min_subgroup_size,
+        l.max_subgroup_size,
+        l.max_push_constants_size,
+        l.timestamp_period_ns
+    );
+}
+
+fn print_calibrated_timestamps(time_domains: &[String]) {
+    println!(
+        "    calibrated timestamps: {}",
+        if time_domains.is_empty() {
+            "none (timelines align GPU times at submission)".to_string()
+        } else {
+            format!("{} (timelines use them)", time_domains.join(", "))
+        }
+    );
+}
+
+fn print_features(c: &CapabilityInfo) {
+    println!(
+        "    features: timeline semaphores {}, synchronization2 {}, maintenance4 {}, push descriptors {}, buffer device address {}, ray query {}, subgroup arithmetic {}, subgroup ballot+shuffle {}, full subgroups {}, 64-bit buffer atomics {}",
+        c.timeline_semaphore,
+        c.synchronization2,
+        c.maintenance4,
+        c.push_descriptor,
+        c.buffer_device_address,
+        c.ray_query,
+        c.subgroup_arithmetic,
+        c.subgroup_ballot_shuffle,
+        c.compute_full_subgroups,
+        c.buffer_int64_atomics
+    );
+}
+
+fn print_device(d: &DeviceReport) {
+    let i = &d.info;
+    println!(
+        "\n[{}] {}{}\n    type {}, Vulkan {}, driver {} {}",
+        i.index,
+        i.name,
+        if d.selected { "  (selected)" } else { "" },
+        i.device_type,
+        i.api_version,
+        i.driver_name,
+        i.driver_info
+    );
+    if !d.missing_requirements.is_empty() {
+        println!(
+            "    cannot run splitray: lacks {}",
+            d.missing_requirements.join(", ")
+        );
+    }
+    print_queue_families(&i.queue_families);
+    print_streams(&d.streams);
+    print_limits(&i.limits);
+    print_calibrated_timestamps(&i.calibrated_time_domains);
+    print_features(&i.capabilities);
+}
+
+pub fn run(args: &InfoArgs) -> anyhow::Result<()> {
+    let instance =
+        Instance::new(InstanceDesc::default()).context("cannot create a Vulkan instance")?;
+    let report = report(&instance, args.device.as_deref())?;
     if args.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
         return Ok(());
@@ -64,97 +178,7 @@ pub fn run(args: &InfoArgs) -> anyhow::Result<()> {
         }
     );
     for d in &report.devices {
-        let i = &d.info;
-        println!(
-            "\n[{}] {}{}\n    type {}, Vulkan {}, driver {} {}",
-            i.index,
-            i.name,
-            if d.selected { "  (selected)" } else { "" },
-            i.device_type,
-            i.api_version,
-            i.driver_name,
-            i.driver_info
-        );
-        if !d.missing_requirements.is_empty() {
-            println!(
-                "    cannot run splitray: lacks {}",
-                d.missing_requirements.join(", ")
-            );
-        }
-        println!("    queue families:");
-        for q in &i.queue_families {
-            let mut caps = vec![];
-            if q.graphics {
-                caps.push("graphics");
-            }
-            if q.compute {
-                caps.push("compute");
-            }
-            if q.transfer {
-                caps.push("transfer");
-            }
-            println!(
-                "      {}: {} queue(s), {}, timestamps {} bits",
-                q.index,
-                q.count,
-                caps.join("+"),
-                q.timestamp_valid_bits
-            );
-        }
-        println!("    streams:");
-        for kind in StreamKind::ALL {
-            let s = d.streams.slot(kind);
-            println!(
-                "      {:<9} -> family {} queue {}",
-                kind.name(),
-                s.family,
-                s.index
-            );
-        }
-        if d.streams.is_single_queue() {
-            println!("      (one queue: streams are ordered by timeline semaphores on it)");
-        }
-        let l = &i.limits;
-        let c = &i.capabilities;
-        println!(
-            "    limits: maxStorageBufferRange {} MiB (kernels pass larger buffers by address), largest buffer {} MiB (maxBufferSize {} MiB, maxMemoryAllocationSize {} MiB), device-local memory {} MiB, shared memory {} KiB, workgroup invocations {}, subgroup size {} ({}..{}), push constants {} B, timestampPeriod {} ns",
-            l.max_storage_buffer_range >> 20,
-            l.max_buffer_size.min(l.max_memory_allocation_size) >> 20,
-            l.max_buffer_size >> 20,
-            l.max_memory_allocation_size >> 20,
-            l.device_local_bytes >> 20,
-            l.max_compute_shared_memory_size >> 10,
-            l.max_compute_work_group_invocations,
-            l.subgroup_size,
-            l.min_subgroup_size,
-            l.max_subgroup_size,
-            l.max_push_constants_size,
-            l.timestamp_period_ns
-        );
-        println!(
-            "    calibrated timestamps: {}",
-            if i.calibrated_time_domains.is_empty() {
-                "none (timelines align GPU times at submission)".to_string()
-            } else {
-                format!(
-                    "{} (timelines use them)",
-                    i.calibrated_time_domains.join(", ")
-                )
-            }
-        );
-        println!(
-            "    features: timeline semaphores {}, synchronization2 {}, maintenance4 {}, push descriptors {}, buffer device address {}, ray query {}, subgroup arithmetic {}, subgroup ballot+shuffle {}, full subgroups {}, 64-bit buffer atomics {}",
-            c.timeline_semaphore,
-            c.synchronization2,
-            c.maintenance4,
-            c.push_descriptor,
-            c.buffer_device_address,
-            c.ray_query,
-            c.subgroup_arithmetic,
-            c.subgroup_ballot_shuffle,
-            c.compute_full_subgroups,
-            c.buffer_int64_atomics
-        );
+        print_device(d);
     }
     Ok(())
 }

@@ -4,10 +4,12 @@
 //! same SVG rasterised by `resvg` (labels need a system sans-serif font; without one
 //! the bars are drawn unlabelled).
 
+use plotters::coord::types::RangedCoordf64;
+use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::HSLColor;
 
-use super::model::{Slice, Trace, GPU_PID};
+use super::model::{Counter, Slice, Trace, GPU_PID};
 use super::TimelineError;
 
 /// Chart size and time window.
@@ -128,8 +130,12 @@ fn track_bars(
     rows
 }
 
-/// The chart as an SVG document.
-pub fn svg(trace: &Trace, options: &DrawOptions) -> Result<String, TimelineError> {
+/// The plot: milliseconds across; y from 0 at the bottom to the number of rows at the top
+/// (a row's place is [`row_y`]).
+type Chart<'a, 'b> = ChartContext<'a, SVGBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+
+/// The window to draw, in ms: the options' bounds, else the trace's extent.
+fn time_window(trace: &Trace, options: &DrawOptions) -> Result<(f64, f64), TimelineError> {
     let (t0, t1) = trace
         .extent_ns()
         .ok_or_else(|| TimelineError::Draw("the trace has no slices and no counters".into()))?;
@@ -143,9 +149,24 @@ pub fn svg(trace: &Trace, options: &DrawOptions) -> Result<String, TimelineError
             window.0, window.1
         )));
     }
-    let plot_px = options.width.max(LABEL_WIDTH + 200) - LABEL_WIDTH - 20;
-    let ms_per_px = (window.1 - window.0) / plot_px as f64;
+    Ok(window)
+}
 
+/// The largest value of a counter series (0 without samples).
+fn counter_max(c: &Counter) -> f64 {
+    c.samples.iter().map(|&(_, v)| v).fold(0.0, f64::max)
+}
+
+/// Where everything goes: the bars, each track's and counter series' label by its first
+/// row, the first counter row and the number of rows (at least one).
+struct Layout {
+    bars: Vec<Bar>,
+    labels: Vec<(u32, String)>,
+    first_counter_row: u32,
+    rows: u32,
+}
+
+fn layout(trace: &Trace, window: (f64, f64), ms_per_px: f64) -> Layout {
     // Rows: GPU tracks first, then host tracks, then counters.
     let mut order: Vec<_> = trace.tracks.iter().collect();
     order.sort_by_key(|t| t.pid != GPU_PID);
@@ -158,126 +179,199 @@ pub fn svg(trace: &Trace, options: &DrawOptions) -> Result<String, TimelineError
     }
     let first_counter_row = row;
     for c in &trace.counters {
-        let max = c.samples.iter().map(|&(_, v)| v).fold(0.0, f64::max);
+        let max = counter_max(c);
         labels.push((row, format!("{} {} (max {max})", c.name, c.series)));
         row += COUNTER_ROWS;
     }
-    let rows = row.max(1);
-    let height = TOP_PX + rows * ROW_PX + AXIS_PX;
+    Layout {
+        bars,
+        labels,
+        first_counter_row,
+        rows: row.max(1),
+    }
+}
+
+/// Row `r` of `rows` spans y from `rows − r` (top) to `rows − r − 1`.
+fn row_y(rows: u32, r: f64) -> f64 {
+    rows as f64 - r
+}
+
+/// The title (device and clock alignment) and, below it, the command that was traced.
+fn draw_title(
+    root: &DrawingArea<SVGBackend<'_>, Shift>,
+    trace: &Trace,
+) -> Result<(), TimelineError> {
+    let title = format!(
+        "{} — {}",
+        trace
+            .metadata
+            .get("device")
+            .and_then(|d| d.as_str())
+            .unwrap_or("splitray timeline"),
+        trace
+            .metadata
+            .get("clock")
+            .and_then(|c| c.get("alignment"))
+            .and_then(|a| a.as_str())
+            .map_or(String::new(), |a| format!("GPU clock aligned: {a}"))
+    );
+    root.draw(&Text::new(title, (10, 6), ("sans-serif", 13).into_font()))
+        .map_err(draw_error)?;
+    if let Some(command) = trace.metadata.get("command").and_then(|c| c.as_str()) {
+        root.draw(&Text::new(
+            command.to_string(),
+            (10, 22),
+            ("sans-serif", FONT_PX)
+                .into_font()
+                .color(&RGBColor(90, 90, 90)),
+        ))
+        .map_err(draw_error)?;
+    }
+    Ok(())
+}
+
+fn draw_row_labels(
+    left: &DrawingArea<SVGBackend<'_>, Shift>,
+    labels: &[(u32, String)],
+) -> Result<(), TimelineError> {
+    for (r, name) in labels {
+        let y = (TOP_PX + r * ROW_PX + 2) as i32;
+        left.draw(&Text::new(
+            name.clone(),
+            (8, y),
+            ("sans-serif", FONT_PX).into_font(),
+        ))
+        .map_err(draw_error)?;
+    }
+    Ok(())
+}
+
+/// The plot of `rows` rows over `window`, with its time axis.
+fn chart<'a, 'b>(
+    right: &'a DrawingArea<SVGBackend<'b>, Shift>,
+    window: (f64, f64),
+    rows: u32,
+) -> Result<Chart<'a, 'b>, TimelineError> {
+    let mut chart = ChartBuilder::on(right)
+        .margin_top(TOP_PX)
+        .margin_right(20)
+        .x_label_area_size(AXIS_PX)
+        .build_cartesian_2d(window.0..window.1, 0.0..rows as f64)
+        .map_err(draw_error)?;
+    chart
+        .configure_mesh()
+        .disable_y_mesh()
+        .disable_y_axis()
+        .x_desc("ms")
+        .x_labels(12)
+        .x_max_light_lines(2)
+        .draw()
+        .map_err(draw_error)?;
+    Ok(chart)
+}
+
+/// The bars, then the labels of those wide enough to hold them.
+fn draw_bars(
+    chart: &mut Chart<'_, '_>,
+    bars: &[Bar],
+    rows: u32,
+    ms_per_px: f64,
+) -> Result<(), TimelineError> {
+    chart
+        .draw_series(bars.iter().map(|b| {
+            // A pixel of gap at the end of wide bars tells neighbours apart.
+            let x1 = if (b.x1 - b.x0) > 3.0 * ms_per_px {
+                b.x1 - ms_per_px
+            } else {
+                b.x1
+            };
+            Rectangle::new(
+                [
+                    (b.x0, row_y(rows, b.row as f64 + 0.08)),
+                    (x1, row_y(rows, b.row as f64 + 0.92)),
+                ],
+                b.color.filled(),
+            )
+        }))
+        .map_err(draw_error)?;
+    let font = ("sans-serif", FONT_PX).into_font();
+    chart
+        .draw_series(
+            bars.iter()
+                .filter(|b| (b.x1 - b.x0) / ms_per_px > b.label.len() as f64 * CHAR_PX + 4.0)
+                .map(|b| {
+                    Text::new(
+                        b.label.clone(),
+                        (b.x0 + 2.0 * ms_per_px, row_y(rows, b.row as f64 + 0.15)),
+                        font.clone(),
+                    )
+                }),
+        )
+        .map_err(draw_error)?;
+    Ok(())
+}
+
+/// Each counter series as a step line over its rows, from `first_row` on, scaled to its
+/// maximum.
+fn draw_counters(
+    chart: &mut Chart<'_, '_>,
+    counters: &[Counter],
+    first_row: u32,
+    rows: u32,
+    window: (f64, f64),
+) -> Result<(), TimelineError> {
+    for (i, c) in counters.iter().enumerate() {
+        let max = counter_max(c).max(1e-30);
+        let base = (first_row + i as u32 * COUNTER_ROWS) as f64;
+        let level = |v: f64| {
+            row_y(
+                rows,
+                base + COUNTER_ROWS as f64 - 0.2 - (COUNTER_ROWS as f64 - 0.6) * v / max,
+            )
+        };
+        let mut points = Vec::new();
+        for (k, &(t, v)) in c.samples.iter().enumerate() {
+            let x = (t as f64 * 1e-6).clamp(window.0, window.1);
+            let next = c.samples.get(k + 1).map_or(window.1, |&(t, _)| {
+                (t as f64 * 1e-6).clamp(window.0, window.1)
+            });
+            points.push((x, level(v)));
+            points.push((next, level(v)));
+        }
+        chart
+            .draw_series(std::iter::once(PathElement::new(
+                points,
+                BLUE.stroke_width(1),
+            )))
+            .map_err(draw_error)?;
+    }
+    Ok(())
+}
+
+/// The chart as an SVG document.
+pub fn svg(trace: &Trace, options: &DrawOptions) -> Result<String, TimelineError> {
+    let window = time_window(trace, options)?;
+    let plot_px = options.width.max(LABEL_WIDTH + 200) - LABEL_WIDTH - 20;
+    let ms_per_px = (window.1 - window.0) / plot_px as f64;
+    let layout = layout(trace, window, ms_per_px);
+    let height = TOP_PX + layout.rows * ROW_PX + AXIS_PX;
 
     let mut out = String::new();
     {
         let root = SVGBackend::with_string(&mut out, (options.width, height)).into_drawing_area();
         root.fill(&WHITE).map_err(draw_error)?;
-        let title = format!(
-            "{} — {}",
-            trace
-                .metadata
-                .get("device")
-                .and_then(|d| d.as_str())
-                .unwrap_or("splitray timeline"),
-            trace
-                .metadata
-                .get("clock")
-                .and_then(|c| c.get("alignment"))
-                .and_then(|a| a.as_str())
-                .map_or(String::new(), |a| format!("GPU clock aligned: {a}"))
-        );
-        root.draw(&Text::new(title, (10, 6), ("sans-serif", 13).into_font()))
-            .map_err(draw_error)?;
-        if let Some(command) = trace.metadata.get("command").and_then(|c| c.as_str()) {
-            root.draw(&Text::new(
-                command.to_string(),
-                (10, 22),
-                ("sans-serif", FONT_PX)
-                    .into_font()
-                    .color(&RGBColor(90, 90, 90)),
-            ))
-            .map_err(draw_error)?;
-        }
+        draw_title(&root, trace)?;
         let (left, right) = root.split_horizontally(LABEL_WIDTH);
-        for (r, name) in &labels {
-            let y = (TOP_PX + r * ROW_PX + 2) as i32;
-            left.draw(&Text::new(
-                name.clone(),
-                (8, y),
-                ("sans-serif", FONT_PX).into_font(),
-            ))
-            .map_err(draw_error)?;
-        }
-        let total = rows as f64;
-        let mut chart = ChartBuilder::on(&right)
-            .margin_top(TOP_PX)
-            .margin_right(20)
-            .x_label_area_size(AXIS_PX)
-            .build_cartesian_2d(window.0..window.1, 0.0..total)
-            .map_err(draw_error)?;
-        chart
-            .configure_mesh()
-            .disable_y_mesh()
-            .disable_y_axis()
-            .x_desc("ms")
-            .x_labels(12)
-            .x_max_light_lines(2)
-            .draw()
-            .map_err(draw_error)?;
-        // Row r spans y from total − r (top) to total − r − 1.
-        let y = |r: f64| total - r;
-        chart
-            .draw_series(bars.iter().map(|b| {
-                // A pixel of gap at the end of wide bars tells neighbours apart.
-                let x1 = if (b.x1 - b.x0) > 3.0 * ms_per_px {
-                    b.x1 - ms_per_px
-                } else {
-                    b.x1
-                };
-                Rectangle::new(
-                    [(b.x0, y(b.row as f64 + 0.08)), (x1, y(b.row as f64 + 0.92))],
-                    b.color.filled(),
-                )
-            }))
-            .map_err(draw_error)?;
-        let font = ("sans-serif", FONT_PX).into_font();
-        chart
-            .draw_series(
-                bars.iter()
-                    .filter(|b| (b.x1 - b.x0) / ms_per_px > b.label.len() as f64 * CHAR_PX + 4.0)
-                    .map(|b| {
-                        Text::new(
-                            b.label.clone(),
-                            (b.x0 + 2.0 * ms_per_px, y(b.row as f64 + 0.15)),
-                            font.clone(),
-                        )
-                    }),
-            )
-            .map_err(draw_error)?;
-        for (i, c) in trace.counters.iter().enumerate() {
-            let max = c
-                .samples
-                .iter()
-                .map(|&(_, v)| v)
-                .fold(0.0, f64::max)
-                .max(1e-30);
-            let base = (first_counter_row + i as u32 * COUNTER_ROWS) as f64;
-            let level = |v: f64| {
-                y(base + COUNTER_ROWS as f64 - 0.2 - (COUNTER_ROWS as f64 - 0.6) * v / max)
-            };
-            let mut points = Vec::new();
-            for (k, &(t, v)) in c.samples.iter().enumerate() {
-                let x = (t as f64 * 1e-6).clamp(window.0, window.1);
-                let next = c.samples.get(k + 1).map_or(window.1, |&(t, _)| {
-                    (t as f64 * 1e-6).clamp(window.0, window.1)
-                });
-                points.push((x, level(v)));
-                points.push((next, level(v)));
-            }
-            chart
-                .draw_series(std::iter::once(PathElement::new(
-                    points,
-                    BLUE.stroke_width(1),
-                )))
-                .map_err(draw_error)?;
-        }
+        draw_row_labels(&left, &layout.labels)?;
+        let mut chart = chart(&right, window, layout.rows)?;
+        draw_bars(&mut chart, &layout.bars, layout.rows, ms_per_px)?;
+        draw_counters(
+            &mut chart,
+            &trace.counters,
+            layout.first_counter_row,
+            layout.rows,
+            window,
+        )?;
         root.present().map_err(draw_error)?;
     }
     Ok(out)

@@ -151,14 +151,11 @@ fn track(tracks: &mut Vec<Track>, pid: u32, tid: u32) -> &mut Track {
     }
 }
 
-/// Reads a trace-event JSON document (object form with `traceEvents`, or a bare array)
-/// back into a [`Trace`]: `X` slices, `C` counters, names and sort orders from `M`
-/// events; other phases are skipped.
-pub fn from_json(text: &str) -> Result<Trace, TimelineError> {
-    let doc: Value = serde_json::from_str(text)?;
-    let (events, metadata) = match &doc {
-        Value::Array(events) => (events, Map::new()),
-        Value::Object(o) => (
+/// The events of a document and its metadata (`otherData`; none in the bare-array form).
+fn events_and_metadata(doc: &Value) -> Result<(&Vec<Value>, Map<String, Value>), TimelineError> {
+    match doc {
+        Value::Array(events) => Ok((events, Map::new())),
+        Value::Object(o) => Ok((
             o.get("traceEvents")
                 .and_then(Value::as_array)
                 .ok_or_else(|| TimelineError::Format("no \"traceEvents\" array".into()))?,
@@ -166,19 +163,147 @@ pub fn from_json(text: &str) -> Result<Trace, TimelineError> {
                 .and_then(Value::as_object)
                 .cloned()
                 .unwrap_or_default(),
-        ),
-        _ => {
-            return Err(TimelineError::Format(
-                "neither an object nor an array".into(),
-            ))
-        }
+        )),
+        _ => Err(TimelineError::Format(
+            "neither an object nor an array".into(),
+        )),
+    }
+}
+
+/// The sort indices that `M` events give processes and tracks.
+#[derive(Default)]
+struct SortIndices {
+    processes: Vec<(u32, f64)>,
+    tracks: Vec<((u32, u32), f64)>,
+}
+
+impl SortIndices {
+    /// Orders `tracks` by their process's sort index, then their own, then by id; a
+    /// process or track without an index comes after those with one.
+    fn sort(&self, tracks: &mut [Track]) {
+        let process_rank = |pid: u32| {
+            self.processes
+                .iter()
+                .find(|(p, _)| *p == pid)
+                .map_or(f64::MAX, |(_, r)| *r)
+        };
+        let track_rank = |t: &Track| {
+            self.tracks
+                .iter()
+                .find(|(k, _)| *k == (t.pid, t.tid))
+                .map_or(f64::MAX, |(_, r)| *r)
+        };
+        tracks.sort_by(|a, b| {
+            process_rank(a.pid)
+                .total_cmp(&process_rank(b.pid))
+                .then(track_rank(a).total_cmp(&track_rank(b)))
+                .then((a.pid, a.tid).cmp(&(b.pid, b.tid)))
+        });
+    }
+}
+
+/// An `X` event, `index` in the document: a slice on its track.
+fn read_slice(
+    trace: &mut Trace,
+    e: &Value,
+    index: usize,
+    name: &str,
+    args: Map<String, Value>,
+) -> Result<(), TimelineError> {
+    let slice = Slice {
+        name: name.to_string(),
+        category: e
+            .get("cat")
+            .and_then(Value::as_str)
+            .unwrap_or("")
+            .to_string(),
+        start_ns: ns(number(e, "ts", index)?),
+        dur_ns: ns(number(e, "dur", index)?),
+        args,
     };
+    track(
+        &mut trace.tracks,
+        id(e, "pid", index)?,
+        id(e, "tid", index)?,
+    )
+    .slices
+    .push(slice);
+    Ok(())
+}
+
+/// A `C` event, `index` in the document: a sample of each of its numeric series.
+fn read_counter_samples(
+    counters: &mut Vec<Counter>,
+    e: &Value,
+    index: usize,
+    name: &str,
+    args: Map<String, Value>,
+) -> Result<(), TimelineError> {
+    let (pid, ts) = (id(e, "pid", index)?, ns(number(e, "ts", index)?));
+    for (series, value) in args {
+        let Some(value) = value.as_f64() else {
+            continue;
+        };
+        match counters
+            .iter_mut()
+            .find(|c| c.pid == pid && c.name == name && c.series == series)
+        {
+            Some(c) => c.samples.push((ts, value)),
+            None => counters.push(Counter {
+                pid,
+                name: name.to_string(),
+                series,
+                samples: vec![(ts, value)],
+            }),
+        }
+    }
+    Ok(())
+}
+
+/// An `M` event, `index` in the document: a process's or track's name or sort index.
+fn read_metadata_event(
+    trace: &mut Trace,
+    order: &mut SortIndices,
+    e: &Value,
+    index: usize,
+    name: &str,
+    args: &Map<String, Value>,
+) -> Result<(), TimelineError> {
+    let pid = id(e, "pid", index)?;
+    let arg = |k: &str| args.get(k).cloned().unwrap_or(Value::Null);
+    match name {
+        "process_name" => trace.processes.push(Process {
+            pid,
+            name: arg("name").as_str().unwrap_or("").to_string(),
+        }),
+        "process_sort_index" => order
+            .processes
+            .push((pid, arg("sort_index").as_f64().unwrap_or(0.0))),
+        "thread_name" => {
+            let tid = id(e, "tid", index)?;
+            track(&mut trace.tracks, pid, tid).name =
+                arg("name").as_str().unwrap_or("").to_string();
+        }
+        "thread_sort_index" => order.tracks.push((
+            (pid, id(e, "tid", index)?),
+            arg("sort_index").as_f64().unwrap_or(0.0),
+        )),
+        _ => {}
+    }
+    Ok(())
+}
+
+/// Reads a trace-event JSON document (object form with `traceEvents`, or a bare array)
+/// back into a [`Trace`]: `X` slices, `C` counters, names and sort orders from `M`
+/// events; other phases are skipped.
+pub fn from_json(text: &str) -> Result<Trace, TimelineError> {
+    let doc: Value = serde_json::from_str(text)?;
+    let (events, metadata) = events_and_metadata(&doc)?;
     let mut trace = Trace {
         metadata,
         ..Default::default()
     };
-    let mut track_order: Vec<((u32, u32), f64)> = Vec::new();
-    let mut process_order: Vec<(u32, f64)> = Vec::new();
+    let mut order = SortIndices::default();
     for (i, e) in events.iter().enumerate() {
         let phase = field(e, "ph", i)?.as_str().unwrap_or("");
         let name = e.get("name").and_then(Value::as_str).unwrap_or("");
@@ -188,87 +313,13 @@ pub fn from_json(text: &str) -> Result<Trace, TimelineError> {
             .cloned()
             .unwrap_or_default();
         match phase {
-            "X" => {
-                let slice = Slice {
-                    name: name.to_string(),
-                    category: e
-                        .get("cat")
-                        .and_then(Value::as_str)
-                        .unwrap_or("")
-                        .to_string(),
-                    start_ns: ns(number(e, "ts", i)?),
-                    dur_ns: ns(number(e, "dur", i)?),
-                    args,
-                };
-                track(&mut trace.tracks, id(e, "pid", i)?, id(e, "tid", i)?)
-                    .slices
-                    .push(slice);
-            }
-            "C" => {
-                let (pid, ts) = (id(e, "pid", i)?, ns(number(e, "ts", i)?));
-                for (series, value) in args {
-                    let Some(value) = value.as_f64() else {
-                        continue;
-                    };
-                    match trace
-                        .counters
-                        .iter_mut()
-                        .find(|c| c.pid == pid && c.name == name && c.series == series)
-                    {
-                        Some(c) => c.samples.push((ts, value)),
-                        None => trace.counters.push(Counter {
-                            pid,
-                            name: name.to_string(),
-                            series,
-                            samples: vec![(ts, value)],
-                        }),
-                    }
-                }
-            }
-            "M" => {
-                let pid = id(e, "pid", i)?;
-                let arg = |k: &str| args.get(k).cloned().unwrap_or(Value::Null);
-                match name {
-                    "process_name" => trace.processes.push(Process {
-                        pid,
-                        name: arg("name").as_str().unwrap_or("").to_string(),
-                    }),
-                    "process_sort_index" => {
-                        process_order.push((pid, arg("sort_index").as_f64().unwrap_or(0.0)))
-                    }
-                    "thread_name" => {
-                        let tid = id(e, "tid", i)?;
-                        track(&mut trace.tracks, pid, tid).name =
-                            arg("name").as_str().unwrap_or("").to_string();
-                    }
-                    "thread_sort_index" => track_order.push((
-                        (pid, id(e, "tid", i)?),
-                        arg("sort_index").as_f64().unwrap_or(0.0),
-                    )),
-                    _ => {}
-                }
-            }
+            "X" => read_slice(&mut trace, e, i, name, args)?,
+            "C" => read_counter_samples(&mut trace.counters, e, i, name, args)?,
+            "M" => read_metadata_event(&mut trace, &mut order, e, i, name, &args)?,
             _ => {}
         }
     }
-    let process_rank = |pid: u32| {
-        process_order
-            .iter()
-            .find(|(p, _)| *p == pid)
-            .map_or(f64::MAX, |(_, r)| *r)
-    };
-    let track_rank = |t: &Track| {
-        track_order
-            .iter()
-            .find(|(k, _)| *k == (t.pid, t.tid))
-            .map_or(f64::MAX, |(_, r)| *r)
-    };
-    trace.tracks.sort_by(|a, b| {
-        process_rank(a.pid)
-            .total_cmp(&process_rank(b.pid))
-            .then(track_rank(a).total_cmp(&track_rank(b)))
-            .then((a.pid, a.tid).cmp(&(b.pid, b.tid)))
-    });
+    order.sort(&mut trace.tracks);
     for t in &mut trace.tracks {
         sort_slices(&mut t.slices);
     }
