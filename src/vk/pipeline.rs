@@ -293,8 +293,34 @@ impl<'a, 'd> Prepared<'a, 'd> {
     /// Creates the pipeline of this form.
     fn build(self, gpu: &Gpu) -> Result<Variant> {
         let device = &gpu.0.raw;
-        let Prepared { words, passing, .. } = self;
-        let mut bindings: Vec<_> = passing
+        let (set_layout, layout) =
+            create_layouts(device, &self.set_layout_bindings(), self.passing.push_bytes)?;
+        let raw = match self.create_pipeline(device, layout) {
+            Ok(raw) => raw,
+            Err(e) => {
+                // SAFETY: both layouts were just created, and no pipeline uses them.
+                unsafe {
+                    device.destroy_pipeline_layout(layout, None);
+                    device.destroy_descriptor_set_layout(set_layout, None);
+                }
+                return Err(e);
+            }
+        };
+        gpu.set_object_name(raw, self.desc.kernel.name);
+        Ok(Variant {
+            raw,
+            layout,
+            set_layout,
+            passing: self.passing,
+            dispatched: AtomicBool::new(false),
+        })
+    }
+
+    /// The pushed descriptors of this form: its storage buffers taken as descriptors,
+    /// then the acceleration structure where it reads one.
+    fn set_layout_bindings(&self) -> Vec<vk::DescriptorSetLayoutBinding<'static>> {
+        let mut bindings: Vec<_> = self
+            .passing
             .descriptors
             .iter()
             .map(|&b| {
@@ -314,13 +340,16 @@ impl<'a, 'd> Prepared<'a, 'd> {
                     .stage_flags(vk::ShaderStageFlags::COMPUTE),
             );
         }
-        let set_info = vk::DescriptorSetLayoutCreateInfo::default()
-            .flags(vk::DescriptorSetLayoutCreateFlags::PUSH_DESCRIPTOR_KHR)
-            .bindings(&bindings);
-        let ranges = [vk::PushConstantRange::default()
-            .stage_flags(vk::ShaderStageFlags::COMPUTE)
-            .offset(0)
-            .size(passing.push_bytes)];
+        bindings
+    }
+
+    /// Creates the compute pipeline of this form's SPIR-V, with its specialization
+    /// constants, over `layout`.
+    fn create_pipeline(
+        &self,
+        device: &ash::Device,
+        layout: vk::PipelineLayout,
+    ) -> Result<vk::Pipeline> {
         let spec_entries: Vec<_> = (0..self.desc.spec.len() as u32)
             .map(|i| {
                 vk::SpecializationMapEntry::default()
@@ -333,40 +362,13 @@ impl<'a, 'd> Prepared<'a, 'd> {
         let spec_info = vk::SpecializationInfo::default()
             .map_entries(&spec_entries)
             .data(spec_data);
-
-        // SAFETY: valid device; every create info and the SPIR-V live across the calls;
-        // objects are destroyed on the error paths and in Drop.
+        let module_info = vk::ShaderModuleCreateInfo::default().code(&self.words);
+        // SAFETY: valid device and layout; every create info and the SPIR-V live across
+        // the calls; the module is destroyed once the pipeline is created from it.
         unsafe {
-            let set_layout = device
-                .create_descriptor_set_layout(&set_info, None)
-                .call("vkCreateDescriptorSetLayout")?;
-            let set_layouts = [set_layout];
-            let mut layout_info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
-            if passing.push_bytes > 0 {
-                layout_info = layout_info.push_constant_ranges(&ranges);
-            }
-            let layout = match device.create_pipeline_layout(&layout_info, None) {
-                Ok(l) => l,
-                Err(e) => {
-                    device.destroy_descriptor_set_layout(set_layout, None);
-                    return Err(VkError::Call {
-                        call: "vkCreatePipelineLayout",
-                        result: e,
-                    });
-                }
-            };
-            let module_info = vk::ShaderModuleCreateInfo::default().code(&words);
-            let module = match device.create_shader_module(&module_info, None) {
-                Ok(m) => m,
-                Err(e) => {
-                    device.destroy_pipeline_layout(layout, None);
-                    device.destroy_descriptor_set_layout(set_layout, None);
-                    return Err(VkError::Call {
-                        call: "vkCreateShaderModule",
-                        result: e,
-                    });
-                }
-            };
+            let module = device
+                .create_shader_module(&module_info, None)
+                .call("vkCreateShaderModule")?;
             let mut stage = vk::PipelineShaderStageCreateInfo::default()
                 .stage(vk::ShaderStageFlags::COMPUTE)
                 .module(module)
@@ -382,25 +384,51 @@ impl<'a, 'd> Prepared<'a, 'd> {
                 .layout(layout);
             let result = device.create_compute_pipelines(vk::PipelineCache::null(), &[info], None);
             device.destroy_shader_module(module, None);
-            let raw = match result {
-                Ok(p) => p[0],
-                Err((_, e)) => {
-                    device.destroy_pipeline_layout(layout, None);
-                    device.destroy_descriptor_set_layout(set_layout, None);
-                    return Err(VkError::Call {
-                        call: "vkCreateComputePipelines",
-                        result: e,
-                    });
-                }
-            };
-            gpu.set_object_name(raw, self.desc.kernel.name);
-            Ok(Variant {
-                raw,
-                layout,
-                set_layout,
-                passing,
-                dispatched: AtomicBool::new(false),
-            })
+            match result {
+                Ok(p) => Ok(p[0]),
+                Err((_, e)) => Err(VkError::Call {
+                    call: "vkCreateComputePipelines",
+                    result: e,
+                }),
+            }
+        }
+    }
+}
+
+/// Creates the push-descriptor set layout of `bindings` and the pipeline layout over it
+/// with `push_bytes` of push constants.
+fn create_layouts(
+    device: &ash::Device,
+    bindings: &[vk::DescriptorSetLayoutBinding<'_>],
+    push_bytes: u32,
+) -> Result<(vk::DescriptorSetLayout, vk::PipelineLayout)> {
+    let set_info = vk::DescriptorSetLayoutCreateInfo::default()
+        .flags(vk::DescriptorSetLayoutCreateFlags::PUSH_DESCRIPTOR_KHR)
+        .bindings(bindings);
+    let ranges = [vk::PushConstantRange::default()
+        .stage_flags(vk::ShaderStageFlags::COMPUTE)
+        .offset(0)
+        .size(push_bytes)];
+    // SAFETY: valid device; every create info lives across the calls; the set layout is
+    // destroyed on the error path, and the caller owns both layouts otherwise.
+    unsafe {
+        let set_layout = device
+            .create_descriptor_set_layout(&set_info, None)
+            .call("vkCreateDescriptorSetLayout")?;
+        let set_layouts = [set_layout];
+        let mut layout_info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
+        if push_bytes > 0 {
+            layout_info = layout_info.push_constant_ranges(&ranges);
+        }
+        match device.create_pipeline_layout(&layout_info, None) {
+            Ok(layout) => Ok((set_layout, layout)),
+            Err(e) => {
+                device.destroy_descriptor_set_layout(set_layout, None);
+                Err(VkError::Call {
+                    call: "vkCreatePipelineLayout",
+                    result: e,
+                })
+            }
         }
     }
 }
