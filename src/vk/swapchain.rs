@@ -215,7 +215,24 @@ impl Swapchain {
 
     /// Rebuilds the images for a window of `size` pixels.
     pub fn resize(&mut self, size: [u32; 2]) -> Result<()> {
-        let gpu = self.gpu().clone();
+        let caps = self.surface_capabilities()?;
+        let extent = image_extent(&caps, size);
+        self.retire()?;
+        let old = self.chain.take();
+        self.extent = [0, 0];
+        if extent.width == 0 || extent.height == 0 {
+            self.destroy_chain(old);
+            return Ok(());
+        }
+        let raw = self.create_swapchain(&caps, extent, old)?;
+        self.chain = Some(self.new_chain(raw)?);
+        self.extent = [extent.width, extent.height];
+        Ok(())
+    }
+
+    /// The surface's capabilities, or an error where its images cannot be copied into.
+    fn surface_capabilities(&self) -> Result<vk::SurfaceCapabilitiesKHR> {
+        let gpu = self.gpu();
         // SAFETY: valid physical device and surface.
         let caps = unsafe {
             self.surface
@@ -232,34 +249,22 @@ impl Swapchain {
                 what: "swapchain images that copies can write (TRANSFER_DST)".into(),
             });
         }
-        let extent = if caps.current_extent.width != u32::MAX {
-            caps.current_extent
-        } else {
-            vk::Extent2D {
-                width: size[0].clamp(caps.min_image_extent.width, caps.max_image_extent.width),
-                height: size[1].clamp(caps.min_image_extent.height, caps.max_image_extent.height),
-            }
-        };
-        self.retire()?;
-        let old = self.chain.take();
-        self.extent = [0, 0];
-        if extent.width == 0 || extent.height == 0 {
-            self.destroy_chain(old);
-            return Ok(());
-        }
+        Ok(caps)
+    }
+
+    /// Creates the swapchain of `extent` images, retiring `old` (whose frames
+    /// [`Swapchain::retire`] waited for) and destroying it whether or not creation
+    /// succeeds.
+    fn create_swapchain(
+        &self,
+        caps: &vk::SurfaceCapabilitiesKHR,
+        extent: vk::Extent2D,
+        old: Option<Chain>,
+    ) -> Result<vk::SwapchainKHR> {
         let image_count = match caps.max_image_count {
             0 => caps.min_image_count + 1,
             max => (caps.min_image_count + 1).min(max),
         };
-        let alpha = [
-            vk::CompositeAlphaFlagsKHR::OPAQUE,
-            vk::CompositeAlphaFlagsKHR::INHERIT,
-            vk::CompositeAlphaFlagsKHR::PRE_MULTIPLIED,
-            vk::CompositeAlphaFlagsKHR::POST_MULTIPLIED,
-        ]
-        .into_iter()
-        .find(|a| caps.supported_composite_alpha.contains(*a))
-        .unwrap_or(vk::CompositeAlphaFlagsKHR::OPAQUE);
         let info = vk::SwapchainCreateInfoKHR::default()
             .surface(self.surface.raw)
             .min_image_count(image_count)
@@ -270,7 +275,7 @@ impl Swapchain {
             .image_usage(vk::ImageUsageFlags::TRANSFER_DST)
             .image_sharing_mode(vk::SharingMode::EXCLUSIVE)
             .pre_transform(caps.current_transform)
-            .composite_alpha(alpha)
+            .composite_alpha(composite_alpha(caps))
             // FIFO is the one mode every device offers; frames are paced by the caller.
             .present_mode(vk::PresentModeKHR::FIFO)
             .clipped(true)
@@ -279,7 +284,13 @@ impl Swapchain {
         // and destroyed below once nothing uses it (retire() waited for its frames).
         let created = unsafe { self.loader.create_swapchain(&info, None) };
         self.destroy_chain(old);
-        let raw = created.call("vkCreateSwapchainKHR")?;
+        created.call("vkCreateSwapchainKHR")
+    }
+
+    /// The images of the swapchain `raw`, just created, named, with their "rendered"
+    /// semaphores. Destroys `raw` on error.
+    fn new_chain(&self, raw: vk::SwapchainKHR) -> Result<Chain> {
+        let gpu = self.gpu();
         // SAFETY: raw was just created.
         let images = match unsafe { self.loader.get_swapchain_images(raw) } {
             Ok(images) => images,
@@ -317,9 +328,7 @@ impl Swapchain {
         for (i, image) in chain.images.iter().enumerate() {
             gpu.set_object_name(*image, &format!("swapchain-image-{i}"));
         }
-        self.chain = Some(chain);
-        self.extent = [extent.width, extent.height];
-        Ok(())
+        Ok(chain)
     }
 
     /// Presents one frame: `draw` records work on the swapchain's stream that leaves
@@ -463,6 +472,32 @@ fn choose_format(formats: &[vk::SurfaceFormatKHR]) -> Option<(vk::Format, PixelO
             .iter()
             .any(|f| f.format == *format && f.color_space == vk::ColorSpaceKHR::SRGB_NONLINEAR)
     })
+}
+
+/// The images' extent: the surface's own, or `size` within the surface's limits where
+/// the window takes the swapchain's.
+fn image_extent(caps: &vk::SurfaceCapabilitiesKHR, size: [u32; 2]) -> vk::Extent2D {
+    if caps.current_extent.width != u32::MAX {
+        caps.current_extent
+    } else {
+        vk::Extent2D {
+            width: size[0].clamp(caps.min_image_extent.width, caps.max_image_extent.width),
+            height: size[1].clamp(caps.min_image_extent.height, caps.max_image_extent.height),
+        }
+    }
+}
+
+/// The first composite-alpha mode the surface supports, opaque preferred.
+fn composite_alpha(caps: &vk::SurfaceCapabilitiesKHR) -> vk::CompositeAlphaFlagsKHR {
+    [
+        vk::CompositeAlphaFlagsKHR::OPAQUE,
+        vk::CompositeAlphaFlagsKHR::INHERIT,
+        vk::CompositeAlphaFlagsKHR::PRE_MULTIPLIED,
+        vk::CompositeAlphaFlagsKHR::POST_MULTIPLIED,
+    ]
+    .into_iter()
+    .find(|a| caps.supported_composite_alpha.contains(*a))
+    .unwrap_or(vk::CompositeAlphaFlagsKHR::OPAQUE)
 }
 
 /// A layout change of a whole colour image, between the given (stages, accesses).
