@@ -6,7 +6,7 @@ use ash::vk;
 
 use super::accel::AccelerationStructure;
 use super::buffer::{Buffer, BufferSlice};
-use super::device::{CommandSlot, Gpu, InFlight, QUERIES_PER_POOL};
+use super::device::{CommandSlot, Gpu, InFlight, StreamState, QUERIES_PER_POOL};
 use super::error::{CallContext, Result, VkError};
 use super::pipeline::{ComputePipeline, Variant};
 use super::profiler::{QueryBatch, ScopeInfo, ScopeQueries};
@@ -579,23 +579,8 @@ impl Recorder {
         waits: &[&TimelinePoint],
         binary: Option<vk::Semaphore>,
     ) -> Result<TimelinePoint> {
-        while !self.open_scopes.is_empty() {
-            self.end_scope()?;
-        }
-        // Make results visible to the host (mapped readback) once the timeline is reached.
-        self.memory_barrier(
-            vk::MemoryBarrier2::default()
-                .src_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
-                .src_access_mask(vk::AccessFlags2::MEMORY_WRITE)
-                .dst_stage_mask(vk::PipelineStageFlags2::HOST)
-                .dst_access_mask(vk::AccessFlags2::HOST_READ),
-        );
+        self.end_recording()?;
         let gpu = self.gpu.clone();
-        let device = &gpu.0.raw;
-        // SAFETY: recording started in Gpu::recorder.
-        unsafe { device.end_command_buffer(self.slot.cmd) }.call("vkEndCommandBuffer")?;
-        // Recording ends here; the submission is a span of its own.
-        drop(std::mem::replace(&mut self.span, tracing::Span::none()));
         let stream = gpu.stream(self.stream);
         let mut state = stream.state.lock().unwrap();
         let value = state.last_value + 1;
@@ -608,45 +593,17 @@ impl Recorder {
         .entered();
         let mut wait_infos: Vec<vk::SemaphoreSubmitInfo> = waits
             .iter()
-            .map(|p| {
-                vk::SemaphoreSubmitInfo::default()
-                    .semaphore(p.semaphore.raw)
-                    .value(p.value)
-                    .stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
-            })
+            .map(|p| semaphore_submit_info(p.semaphore.raw, p.value))
             .collect();
         if state.last_value > 0 {
-            wait_infos.push(
-                vk::SemaphoreSubmitInfo::default()
-                    .semaphore(stream.timeline.raw)
-                    .value(state.last_value)
-                    .stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS),
-            );
+            wait_infos.push(semaphore_submit_info(stream.timeline.raw, state.last_value));
         }
-        let mut signal = vec![vk::SemaphoreSubmitInfo::default()
-            .semaphore(stream.timeline.raw)
-            .value(value)
-            .stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)];
+        let mut signal = vec![semaphore_submit_info(stream.timeline.raw, value)];
         if let Some(semaphore) = binary {
-            signal.push(
-                vk::SemaphoreSubmitInfo::default()
-                    .semaphore(semaphore)
-                    .stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS),
-            );
+            // A binary semaphore ignores the value.
+            signal.push(semaphore_submit_info(semaphore, 0));
         }
-        let cmds = [vk::CommandBufferSubmitInfo::default().command_buffer(self.slot.cmd)];
-        let submit = vk::SubmitInfo2::default()
-            .wait_semaphore_infos(&wait_infos)
-            .command_buffer_infos(&cmds)
-            .signal_semaphore_infos(&signal);
-        let submitted = std::time::Instant::now();
-        {
-            let queue = gpu.0.queues[stream.queue].lock().unwrap();
-            // SAFETY: the queue is externally synchronised by its mutex; the command
-            // buffer is executable; semaphores belong to this device.
-            unsafe { device.queue_submit2(*queue, &[submit], vk::Fence::null()) }
-                .call("vkQueueSubmit2")?;
-        }
+        let submitted = self.queue_submit(stream, &wait_infos, &signal)?;
         state.last_value = value;
         state.in_flight.push_back(InFlight {
             value,
@@ -657,6 +614,60 @@ impl Recorder {
         self.submitted = true;
         Ok(gpu.timeline_point(self.stream, value))
     }
+
+    /// Closes the scopes still open, makes the results visible to the host and ends the
+    /// command buffer.
+    fn end_recording(&mut self) -> Result<()> {
+        while !self.open_scopes.is_empty() {
+            self.end_scope()?;
+        }
+        // Make results visible to the host (mapped readback) once the timeline is reached.
+        self.memory_barrier(
+            vk::MemoryBarrier2::default()
+                .src_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+                .src_access_mask(vk::AccessFlags2::MEMORY_WRITE)
+                .dst_stage_mask(vk::PipelineStageFlags2::HOST)
+                .dst_access_mask(vk::AccessFlags2::HOST_READ),
+        );
+        // SAFETY: recording started in Gpu::recorder.
+        unsafe { self.device().end_command_buffer(self.slot.cmd) }.call("vkEndCommandBuffer")?;
+        // Recording ends here; the submission is a span of its own.
+        drop(std::mem::replace(&mut self.span, tracing::Span::none()));
+        Ok(())
+    }
+
+    /// Submits the recorded command buffer to `stream`'s queue, waiting for `waits` and
+    /// signalling `signal`; returns when the host submitted it.
+    fn queue_submit(
+        &self,
+        stream: &StreamState,
+        waits: &[vk::SemaphoreSubmitInfo<'_>],
+        signal: &[vk::SemaphoreSubmitInfo<'_>],
+    ) -> Result<std::time::Instant> {
+        let cmds = [vk::CommandBufferSubmitInfo::default().command_buffer(self.slot.cmd)];
+        let submit = vk::SubmitInfo2::default()
+            .wait_semaphore_infos(waits)
+            .command_buffer_infos(&cmds)
+            .signal_semaphore_infos(signal);
+        let submitted = std::time::Instant::now();
+        let queue = self.gpu.0.queues[stream.queue].lock().unwrap();
+        // SAFETY: the queue is externally synchronised by its mutex; the command
+        // buffer is executable; semaphores belong to this device.
+        unsafe {
+            self.device()
+                .queue_submit2(*queue, &[submit], vk::Fence::null())
+        }
+        .call("vkQueueSubmit2")?;
+        Ok(submitted)
+    }
+}
+
+/// A wait for, or signal of, `semaphore` reaching `value`, covering all commands.
+fn semaphore_submit_info(semaphore: vk::Semaphore, value: u64) -> vk::SemaphoreSubmitInfo<'static> {
+    vk::SemaphoreSubmitInfo::default()
+        .semaphore(semaphore)
+        .value(value)
+        .stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
 }
 
 /// Fails unless `bindings`, `tlas` and `push` are what `pipeline` takes.
