@@ -27,6 +27,25 @@ pub(super) struct TerminalBuffer {
     pub(super) hits_written: bool,
 }
 
+/// The arrays a flush sorts and reduces the terminal entries in: a word per entry each,
+/// but `run_total`.
+struct FlushArrays {
+    /// Each entry's hit t; then, reused by the runs, each ray's closest.
+    entry_t: Buffer,
+    /// Each entry's hit triangle; then each ray's closest.
+    entry_tri: Buffer,
+    /// Each entry's ray id, sorted in place.
+    keys: Buffer,
+    /// The entries' order by ray id; then each run's ray id.
+    order: Buffer,
+    /// `entry_t` in ray order.
+    sorted_t: Buffer,
+    /// `entry_tri` in ray order.
+    sorted_tri: Buffer,
+    /// The number of runs (rays with an entry).
+    run_total: Buffer,
+}
+
 impl TerminalBuffer {
     /// Counts a level's terminal nodes in, once its scatter has been recorded.
     pub(super) fn add(&mut self, totals: &LevelTotals) {
@@ -137,24 +156,7 @@ impl PdacrtTracer {
         if self.params.flush_reduce == FlushReduce::AtomicMin {
             return self.flush_atomic(term, chunk);
         }
-        let &Chunk {
-            offset: ray_offset,
-            n: chunk_rays,
-            hits,
-            ..
-        } = chunk;
-        self.sort_scratch(entries)?;
-        self.misc_scratch(entries, true)?;
-        let entry_t = self.pool.take("pdacrt-entry-t", entries as u64 * 4)?;
-        let entry_tri = self.pool.take("pdacrt-entry-tri", entries as u64 * 4)?;
-        let keys = self.pool.take("pdacrt-entry-rays", entries as u64 * 4)?;
-        let order = self.pool.take("pdacrt-entry-order", entries as u64 * 4)?;
-        let sorted_t = self.pool.take("pdacrt-sorted-t", entries as u64 * 4)?;
-        let sorted_tri = self.pool.take("pdacrt-sorted-tri", entries as u64 * 4)?;
-        let run_total = self.pool.take("pdacrt-run-total", 4)?;
-        let (_, sort_scratch) = self.scratch.sort.as_ref().unwrap();
-        let misc = self.scratch.misc.as_ref().unwrap();
-
+        let arrays = self.take_flush_arrays(entries)?;
         let mut rec = gpu.recorder(StreamKind::Main)?;
         rec.begin_scope("pdacrt-flush")?;
         // Algorithm 3 lines 2–10.
@@ -162,13 +164,86 @@ impl PdacrtTracer {
             &mut rec,
             term,
             chunk,
-            &[(&entry_t).into(), (&entry_tri).into()],
+            &[(&arrays.entry_t).into(), (&arrays.entry_tri).into()],
         )?;
         // Lines 12–13: sort the entries by ray id, then the segmented arg-min.
-        rec.copy(&term.ray_ids, 0, &keys, 0, entries as u64 * 4);
+        self.record_sort_by_ray(&mut rec, term, &arrays, chunk.n)?;
+        self.record_arg_min(&mut rec, &arrays, entries)?;
+        // Algorithm 1 line 9.
+        rec.dispatch_items(
+            &self.kernels.update_hits,
+            &[
+                (&arrays.order).into(),
+                (&arrays.entry_t).into(),
+                (&arrays.entry_tri).into(),
+                (&arrays.run_total).into(),
+                chunk.hits.into(),
+            ],
+            &UpdateHitsPush {
+                max_runs: entries,
+                ray_offset: chunk.offset,
+            },
+            entries as u64,
+        )?;
+        rec.barrier();
+        rec.end_scope()?;
+        rec.submit(&[])?;
+        self.give_flush_arrays(arrays);
+        term.clear();
+        Ok(())
+    }
+
+    /// The [`FlushArrays`] for `entries` terminal entries, and scratch for their sort,
+    /// gathers and reduction.
+    fn take_flush_arrays(&mut self, entries: u32) -> vk::Result<FlushArrays> {
+        self.sort_scratch(entries)?;
+        self.misc_scratch(entries, true)?;
+        let bytes = entries as u64 * 4;
+        Ok(FlushArrays {
+            entry_t: self.pool.take("pdacrt-entry-t", bytes)?,
+            entry_tri: self.pool.take("pdacrt-entry-tri", bytes)?,
+            keys: self.pool.take("pdacrt-entry-rays", bytes)?,
+            order: self.pool.take("pdacrt-entry-order", bytes)?,
+            sorted_t: self.pool.take("pdacrt-sorted-t", bytes)?,
+            sorted_tri: self.pool.take("pdacrt-sorted-tri", bytes)?,
+            run_total: self.pool.take("pdacrt-run-total", 4)?,
+        })
+    }
+
+    /// Returns a flush's arrays to the pool.
+    fn give_flush_arrays(&mut self, arrays: FlushArrays) {
+        let FlushArrays {
+            entry_t,
+            entry_tri,
+            keys,
+            order,
+            sorted_t,
+            sorted_tri,
+            run_total,
+        } = arrays;
+        for b in [
+            entry_t, entry_tri, keys, order, sorted_t, sorted_tri, run_total,
+        ] {
+            self.pool.give(b);
+        }
+    }
+
+    /// Sorts the entries' ray ids (`keys`, from the terminal buffer) with their order,
+    /// and gathers their t and triangle into that order.
+    fn record_sort_by_ray(
+        &self,
+        rec: &mut Recorder,
+        term: &TerminalBuffer,
+        arrays: &FlushArrays,
+        chunk_rays: u32,
+    ) -> vk::Result<()> {
+        let entries = term.rays;
+        let (_, sort_scratch) = self.scratch.sort.as_ref().unwrap();
+        let misc = self.scratch.misc.as_ref().unwrap();
+        rec.copy(&term.ray_ids, 0, &arrays.keys, 0, entries as u64 * 4);
         rec.dispatch_items(
             &self.kernels.iota,
-            &[(&order).into(), (&sorted_t).into()],
+            &[(&arrays.order).into(), (&arrays.sorted_t).into()],
             &IotaPush {
                 n: entries,
                 base: 0,
@@ -178,68 +253,58 @@ impl PdacrtTracer {
         )?;
         rec.barrier();
         self.sort.record(
-            &mut rec,
+            rec,
             entries,
-            (&keys).into(),
-            Some((&order).into()),
+            (&arrays.keys).into(),
+            Some((&arrays.order).into()),
             0..bits_for(chunk_rays),
             sort_scratch,
         )?;
-        for (src, out) in [(&entry_t, &sorted_t), (&entry_tri, &sorted_tri)] {
+        for (src, out) in [
+            (&arrays.entry_t, &arrays.sorted_t),
+            (&arrays.entry_tri, &arrays.sorted_tri),
+        ] {
             self.gather.record(
-                &mut rec,
+                rec,
                 entries,
                 Direction::Gather,
                 src.into(),
-                (&order).into(),
+                (&arrays.order).into(),
                 out.into(),
                 misc,
             )?;
         }
+        Ok(())
+    }
+
+    /// The segmented arg-min over the sorted entries: per ray, its closest t and
+    /// triangle, into `order`, `entry_t` and `entry_tri`, and the ray count into
+    /// `run_total`.
+    fn record_arg_min(
+        &self,
+        rec: &mut Recorder,
+        arrays: &FlushArrays,
+        entries: u32,
+    ) -> vk::Result<()> {
+        let misc = self.scratch.misc.as_ref().unwrap();
         self.reduce.record(
-            &mut rec,
+            rec,
             entries,
-            (&keys).into(),
+            (&arrays.keys).into(),
             Reduction::ArgMin {
-                t: (&sorted_t).into(),
-                ids: (&sorted_tri).into(),
+                t: (&arrays.sorted_t).into(),
+                ids: (&arrays.sorted_tri).into(),
             },
             // The per-entry arrays are dead once gathered into sorted order: the runs
             // (at most one per entry) reuse them, which keeps a flush at six arrays.
             RunOutputs {
-                keys: (&order).into(),
-                a: (&entry_t).into(),
-                b: Some((&entry_tri).into()),
-                count: (&run_total).into(),
+                keys: (&arrays.order).into(),
+                a: (&arrays.entry_t).into(),
+                b: Some((&arrays.entry_tri).into()),
+                count: (&arrays.run_total).into(),
             },
             misc,
-        )?;
-        // Algorithm 1 line 9.
-        rec.dispatch_items(
-            &self.kernels.update_hits,
-            &[
-                (&order).into(),
-                (&entry_t).into(),
-                (&entry_tri).into(),
-                (&run_total).into(),
-                hits.into(),
-            ],
-            &UpdateHitsPush {
-                max_runs: entries,
-                ray_offset,
-            },
-            entries as u64,
-        )?;
-        rec.barrier();
-        rec.end_scope()?;
-        rec.submit(&[])?;
-        for b in [
-            entry_t, entry_tri, keys, order, sorted_t, sorted_tri, run_total,
-        ] {
-            self.pool.give(b);
-        }
-        term.clear();
-        Ok(())
+        )
     }
 
     /// The segmented intersection over the terminal buffer (Algorithm 3 lines 2–10): one
