@@ -189,10 +189,56 @@ impl PdacrtTracer {
         depth: u32,
         out: &LevelOutputs,
     ) -> vk::Result<Option<(Buffer, Buffer)>> {
-        let child_count = level.node_count * 2;
+        let push = self.children_push(level, depth, out);
+        let channel_words = CHANNELS * out.stride;
+        // The split: ranked, the scan of the side counts (or all of the plan in one
+        // dispatch); sorted, the sort and the per-node count tables.
+        let counts = match &out.ranks {
+            Some(ranks)
+                if self.params.one_dispatch_plan
+                    && ranks.len().max(channel_words) <= SMALL_SCAN_MAX =>
+            {
+                rec.dispatch(
+                    &self.kernels.level_plan,
+                    &[
+                        (&level.nodes).into(),
+                        (&ranks.buffer).into(),
+                        (&out.children).into(),
+                        (&out.channels).into(),
+                        (&level.bounds).into(),
+                        (&out.offsets).into(),
+                        (&out.summary).into(),
+                    ],
+                    &LevelPlanPush {
+                        children: push,
+                        ranks_len: ranks.len(),
+                    },
+                    [1, 1, 1],
+                )?;
+                return Ok(None);
+            }
+            Some(ranks) => {
+                // Every tile-count array in one exclusive scan: each array's ranks come
+                // out offset by the arrays before it, which cancels in every use (a
+                // child's size and an element's offset are differences of ranks).
+                let all = (&ranks.buffer).into();
+                let misc = self.scratch.misc.as_ref().unwrap();
+                self.scan
+                    .record(rec, ranks.len(), all, all, ScanKind::Exclusive, misc)?;
+                None
+            }
+            None => Some(self.record_sort_split(rec, level)?),
+        };
+        self.record_children(rec, level, out, counts.as_ref(), &push)?;
+        self.record_positions_and_totals(rec, out, push.child_count)?;
+        Ok(counts)
+    }
+
+    /// What the children's kernels of `level` (at `depth`) take, beside their buffers.
+    fn children_push(&self, level: &Level, depth: u32, out: &LevelOutputs) -> ChildrenPush {
         let (tri_bases, ray_bases) = Ranks::bases(out.ranks.as_ref());
-        let push = ChildrenPush {
-            child_count,
+        ChildrenPush {
+            child_count: level.node_count * 2,
             stride: out.stride,
             alpha: self.params.alpha,
             beta: self.params.beta,
@@ -206,48 +252,23 @@ impl PdacrtTracer {
             ray_right_base: ray_bases.1,
             tight: self.params.tight_boxes as u32,
             terminal_cost: self.params.terminal_cost_at(level.rays.total),
-        };
-        let misc = self.scratch.misc.as_ref().unwrap();
-        let channel_words = CHANNELS * out.stride;
-        // The split: ranked, the scan of the side counts (or all of the plan in one
-        // dispatch); sorted, the sort and the per-node count tables.
-        let counts = match &out.ranks {
-            Some(ranks) => {
-                let all = (&ranks.buffer).into();
-                if self.params.one_dispatch_plan && ranks.len().max(channel_words) <= SMALL_SCAN_MAX
-                {
-                    rec.dispatch(
-                        &self.kernels.level_plan,
-                        &[
-                            (&level.nodes).into(),
-                            all,
-                            (&out.children).into(),
-                            (&out.channels).into(),
-                            (&level.bounds).into(),
-                            (&out.offsets).into(),
-                            (&out.summary).into(),
-                        ],
-                        &LevelPlanPush {
-                            children: push,
-                            ranks_len: ranks.len(),
-                        },
-                        [1, 1, 1],
-                    )?;
-                    return Ok(None);
-                }
-                // Every tile-count array in one exclusive scan: each array's ranks come
-                // out offset by the arrays before it, which cancels in every use (a
-                // child's size and an element's offset are differences of ranks).
-                self.scan
-                    .record(rec, ranks.len(), all, all, ScanKind::Exclusive, misc)?;
-                None
-            }
-            None => Some(self.record_sort_split(rec, level)?),
-        };
+        }
+    }
+
+    /// The children of the level's nodes, from the split: the ranks, or (sorted) the
+    /// `counts` tables.
+    fn record_children(
+        &self,
+        rec: &mut Recorder,
+        level: &Level,
+        out: &LevelOutputs,
+        counts: Option<&(Buffer, Buffer)>,
+        push: &ChildrenPush,
+    ) -> vk::Result<()> {
         // The children read the split's tables: the scanned side counts, or the
         // triangle and ray count tables.
         let mut bindings: Vec<BufferSlice> = vec![(&level.nodes).into()];
-        match &counts {
+        match counts {
             Some((tri_counts, ray_counts)) => {
                 bindings.extend([BufferSlice::from(tri_counts), ray_counts.into()])
             }
@@ -258,16 +279,31 @@ impl PdacrtTracer {
             (&out.channels).into(),
             (&level.bounds).into(),
         ]);
-        rec.dispatch_items(&self.kernels.children, &bindings, &push, child_count as u64)?;
+        rec.dispatch_items(
+            &self.kernels.children,
+            &bindings,
+            push,
+            push.child_count as u64,
+        )?;
         rec.barrier();
-        // Algorithm 1 line 11: positions of the next level and of the terminal nodes.
+        Ok(())
+    }
+
+    /// Algorithm 1 line 11: positions of the next level and of the terminal nodes, and
+    /// the level's totals.
+    fn record_positions_and_totals(
+        &self,
+        rec: &mut Recorder,
+        out: &LevelOutputs,
+        child_count: u32,
+    ) -> vk::Result<()> {
         // One scan runs through all the channels back to back; each channel's offsets
         // come out raised by the channels before it (and by the unwritten padding up to
         // `stride`), which the readers subtract (channel_offset in pdacrt.glsl).
         let misc = self.scratch.misc.as_ref().unwrap();
         self.scan.record(
             rec,
-            channel_words,
+            CHANNELS * out.stride,
             (&out.channels).into(),
             (&out.offsets).into(),
             ScanKind::Exclusive,
@@ -285,8 +321,7 @@ impl PdacrtTracer {
                 stride: out.stride,
             },
             [1, 1, 1],
-        )?;
-        Ok(counts)
+        )
     }
 
     /// The paper's split ([`LevelSplit::SortByKey`]): sorts each list by status key
