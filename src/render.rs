@@ -294,10 +294,7 @@ pub fn render_from(
         .collect();
     let camera = scene.camera.frame(options.width, options.height);
 
-    gpu.wait_idle()?;
-    let _ = gpu.take_profile();
-    gpu.reset_peak_memory();
-    let start = Instant::now();
+    let start = start_measuring(gpu)?;
     let mut tracer = options.tracer.create(gpu, &triangles)?;
     let aovs = {
         let triangle_buffer = gpu.upload("aov-triangles", &triangles)?;
@@ -317,6 +314,15 @@ pub fn render_from(
         plan,
         control,
     )
+}
+
+/// Waits for the device's earlier work and clears its profile and peak memory, so that a
+/// render's figures are its own; returns when the render starts.
+fn start_measuring(gpu: &Gpu) -> Result<Instant, RenderError> {
+    gpu.wait_idle()?;
+    let _ = gpu.take_profile();
+    gpu.reset_peak_memory();
+    Ok(Instant::now())
 }
 
 /// An integrator ready for passes, with the render's AOVs.
