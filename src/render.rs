@@ -23,7 +23,7 @@ use crate::integrator::{
     self, aov, EyeInputs, EyeIntegrator, EyeOptions, GpuMaterial, Integrator, IntegratorError,
     IntegratorKind, IntegratorStats, NamedImage,
 };
-use crate::scene::{Scene, SceneError};
+use crate::scene::{CameraFrame, Scene, SceneError};
 use crate::trace::{GpuTriangle, Tracer, TracerKind};
 use crate::vk::{self, Gpu, KernelTime, ProfileTree};
 pub use checkpoint::Checkpoint;
@@ -294,10 +294,7 @@ pub fn render_from(
         .collect();
     let camera = scene.camera.frame(options.width, options.height);
 
-    gpu.wait_idle()?;
-    let _ = gpu.take_profile();
-    gpu.reset_peak_memory();
-    let start = Instant::now();
+    let start = start_measuring(gpu)?;
     let mut tracer = options.tracer.create(gpu, &triangles)?;
     let aovs = {
         let triangle_buffer = gpu.upload("aov-triangles", &triangles)?;
@@ -317,6 +314,15 @@ pub fn render_from(
         plan,
         control,
     )
+}
+
+/// Waits for the device's earlier work and clears its profile and peak memory, so that a
+/// render's figures are its own; returns when the render starts.
+fn start_measuring(gpu: &Gpu) -> Result<Instant, RenderError> {
+    gpu.wait_idle()?;
+    let _ = gpu.take_profile();
+    gpu.reset_peak_memory();
+    Ok(Instant::now())
 }
 
 /// An integrator ready for passes, with the render's AOVs.
@@ -545,18 +551,7 @@ fn integrator_on(
             tracer,
             &integrator::pt::PtScene::new(scene),
             &camera,
-            &integrator::pt::PtOptions {
-                spp: options.spp,
-                time_limit: options.time_limit,
-                seed: options.seed,
-                max_depth: options.max_depth,
-                rr_depth: options.rr_depth,
-                sort: options
-                    .sort_materials
-                    .unwrap_or_else(|| integrator::pt::sort_pays(gpu)),
-                strategy: options.strategy,
-                ..Default::default()
-            },
+            &pt_options(gpu, options),
         )?),
         IntegratorKind::Bpt | IntegratorKind::Light => {
             // The CPU integrators cast their own rays; the tracer is not needed.
@@ -579,24 +574,12 @@ fn integrator_on(
             ))
         }
         IntegratorKind::LvcBdpt | IntegratorKind::CisLbdpt => {
-            let variant = match options.integrator {
-                IntegratorKind::CisLbdpt => integrator::lvc::Variant::CisLbdpt,
-                _ => integrator::lvc::Variant::LvcBdpt,
-            };
-            let mut lvc = options
-                .lvc
-                .options(variant, integrator::lvc::sort_pays(gpu));
-            lvc.seed = options.seed;
-            lvc.max_depth = options.max_depth;
-            lvc.rr_depth = options.rr_depth;
-            lvc.spp = options.spp;
-            lvc.technique_images = options.bdpt_techniques;
             Box::new(integrator::lvc::LvcIntegrator::new(
                 gpu,
                 tracer,
                 &integrator::pt::PtScene::new(scene),
                 &camera,
-                &lvc,
+                &lvc_options(gpu, options),
             )?)
         }
         IntegratorKind::Cbpt => Box::new(integrator::cbpt::CbptIntegrator::new(
@@ -611,37 +594,84 @@ fn integrator_on(
             },
             Some((gpu, tracer)),
         )?),
-        kind => {
-            let triangle_material: Vec<u32> = scene.triangles.iter().map(|t| t.material).collect();
-            let materials: Vec<GpuMaterial> = scene
-                .materials
-                .iter()
-                .map(|m| GpuMaterial {
-                    diffuse: m.diffuse.extend(0.0).into(),
-                    emission: m.emission.extend(0.0).into(),
-                })
-                .collect();
-            Box::new(EyeIntegrator::new(
-                gpu,
-                tracer,
-                &EyeInputs {
-                    triangles,
-                    triangle_material: &triangle_material,
-                    materials: &materials,
-                    camera,
-                    scene_radius: scene.bounds().radius(),
-                    light: shadow_light(scene),
-                },
-                &EyeOptions {
-                    integrator: kind,
-                    spp: options.spp,
-                    seed: options.seed,
-                    ao_rays: options.ao_rays,
-                    ..Default::default()
-                },
-            )?)
-        }
+        kind => eye_integrator(gpu, scene, options, kind, triangles, camera, tracer)?,
     })
+}
+
+/// `pt`'s settings: the render's, its material sorting where it pays on `gpu` unless
+/// chosen.
+fn pt_options(gpu: &Gpu, options: &RenderOptions) -> integrator::pt::PtOptions {
+    integrator::pt::PtOptions {
+        spp: options.spp,
+        time_limit: options.time_limit,
+        seed: options.seed,
+        max_depth: options.max_depth,
+        rr_depth: options.rr_depth,
+        sort: options
+            .sort_materials
+            .unwrap_or_else(|| integrator::pt::sort_pays(gpu)),
+        strategy: options.strategy,
+        ..Default::default()
+    }
+}
+
+/// `lvc-bdpt`'s and `cis-lbdpt`'s settings: the variant's, with the render's seed, depths,
+/// spp and technique images.
+fn lvc_options(gpu: &Gpu, options: &RenderOptions) -> integrator::lvc::LvcOptions {
+    let variant = match options.integrator {
+        IntegratorKind::CisLbdpt => integrator::lvc::Variant::CisLbdpt,
+        _ => integrator::lvc::Variant::LvcBdpt,
+    };
+    let mut lvc = options
+        .lvc
+        .options(variant, integrator::lvc::sort_pays(gpu));
+    lvc.seed = options.seed;
+    lvc.max_depth = options.max_depth;
+    lvc.rr_depth = options.rr_depth;
+    lvc.spp = options.spp;
+    lvc.technique_images = options.bdpt_techniques;
+    lvc
+}
+
+/// The PDACRT workloads' integrators (`kind`: `primary`, `ao`, `shadow`, `reflection`,
+/// `path`), on the scene's diffuse and emissive colours.
+fn eye_integrator(
+    gpu: &Gpu,
+    scene: &Scene,
+    options: &RenderOptions,
+    kind: IntegratorKind,
+    triangles: &[GpuTriangle],
+    camera: CameraFrame,
+    tracer: Box<dyn Tracer>,
+) -> Result<Box<dyn Integrator>, RenderError> {
+    let triangle_material: Vec<u32> = scene.triangles.iter().map(|t| t.material).collect();
+    let materials: Vec<GpuMaterial> = scene
+        .materials
+        .iter()
+        .map(|m| GpuMaterial {
+            diffuse: m.diffuse.extend(0.0).into(),
+            emission: m.emission.extend(0.0).into(),
+        })
+        .collect();
+    Ok(Box::new(EyeIntegrator::new(
+        gpu,
+        tracer,
+        &EyeInputs {
+            triangles,
+            triangle_material: &triangle_material,
+            materials: &materials,
+            camera,
+            scene_radius: scene.bounds().radius(),
+            light: shadow_light(scene),
+        },
+        &EyeOptions {
+            integrator: kind,
+            spp: options.spp,
+            seed: options.seed,
+            ao_rays: options.ao_rays,
+            ..Default::default()
+        },
+    )?))
 }
 
 /// What the pass loop continues from and hands its film to.
@@ -717,20 +747,9 @@ fn run_passes(
             break;
         }
         let count = batch.min(block.end - next);
-        let batch_start = Instant::now();
-        integrator.render_passes(next, count)?;
-        let time_left_s = options
-            .time_limit
-            .map(|t| t - start.elapsed().as_secs_f64());
-        let time_left_s = match (time_left_s, watched_batch_s) {
-            (Some(t), Some(w)) => Some(t.min(w)),
-            (t, w) => t.or(w),
-        };
-        batch = batch_size(
-            batch_start.elapsed().as_secs_f64() / count as f64,
-            time_left_s,
-            integrator.passes_per_call(),
-        );
+        batch = render_batch(integrator, next, count, || {
+            batch_time_left_s(options.time_limit, start, watched_batch_s)
+        })?;
         next += count;
         passes += count;
         let elapsed_s = start.elapsed().as_secs_f64();
@@ -738,7 +757,7 @@ fn run_passes(
         let last = next == block.end || out_of_time;
         if let Some(reference) = &options.reference {
             if last || elapsed_s - mse_read_at >= MSE_INTERVAL_S {
-                reference_error = reference.error(&integrator.sums()?.mean());
+                reference_error = error_against(reference, integrator)?;
                 mse_read_at = elapsed_s;
             }
         }
@@ -754,31 +773,87 @@ fn run_passes(
         if let Some(watch) = job.watch.as_deref_mut() {
             watch.batch(&progress, &mut || integrator.sums())?;
         }
-        if let Some(hook) = &mut job.checkpoint {
-            if !last && elapsed_s - saved_at >= hook.every_s {
-                let sums = integrator.sums()?;
-                (hook.save)(&FilmSnapshot {
-                    sums: &sums,
-                    fingerprint: job.fingerprint,
-                    shard: job.shard,
-                    first_pass: job.first_pass,
-                    render_time_s: job.previous_time_s + elapsed_s,
-                })?;
-                saved_at = elapsed_s;
-            }
+        if !last {
+            saved_at = job.save_checkpoint_if_due(integrator, elapsed_s, saved_at)?;
         }
         if out_of_time {
             break;
         }
     }
     if let (true, Some(reference)) = (stopped, &options.reference) {
-        reference_error = reference.error(&integrator.sums()?.mean());
+        reference_error = error_against(reference, integrator)?;
     }
     Ok(PassRun {
         stopped,
         passes_rendered: passes - job.resumed_passes,
         reference_error,
     })
+}
+
+/// Renders passes `first..first + count`; returns the size of the next batch, from the
+/// time per pass just measured and the seconds `time_left_s` leaves it.
+fn render_batch(
+    integrator: &mut dyn Integrator,
+    first: u32,
+    count: u32,
+    time_left_s: impl FnOnce() -> Option<f64>,
+) -> Result<u32, RenderError> {
+    let batch_start = Instant::now();
+    integrator.render_passes(first, count)?;
+    let time_left_s = time_left_s();
+    Ok(batch_size(
+        batch_start.elapsed().as_secs_f64() / count as f64,
+        time_left_s,
+        integrator.passes_per_call(),
+    ))
+}
+
+/// The most seconds the next batch may last: what the time limit leaves of the render
+/// begun at `start`, and no more than a watcher's batch target.
+fn batch_time_left_s(
+    time_limit: Option<f64>,
+    start: Instant,
+    watched_batch_s: Option<f64>,
+) -> Option<f64> {
+    let time_left_s = time_limit.map(|t| t - start.elapsed().as_secs_f64());
+    match (time_left_s, watched_batch_s) {
+        (Some(t), Some(w)) => Some(t.min(w)),
+        (t, w) => t.or(w),
+    }
+}
+
+/// The film's error against `reference` now.
+fn error_against(
+    reference: &film::Reference,
+    integrator: &mut dyn Integrator,
+) -> Result<Option<film::ReferenceError>, RenderError> {
+    Ok(reference.error(&integrator.sums()?.mean()))
+}
+
+impl PassLoop<'_, '_, '_> {
+    /// Hands the film to the checkpoint hook, if there is one and its interval has passed
+    /// since the film was last saved at `saved_at`; returns when the film was last saved.
+    fn save_checkpoint_if_due(
+        &mut self,
+        integrator: &mut dyn Integrator,
+        elapsed_s: f64,
+        saved_at: f64,
+    ) -> Result<f64, RenderError> {
+        if let Some(hook) = &mut self.checkpoint {
+            if elapsed_s - saved_at >= hook.every_s {
+                let sums = integrator.sums()?;
+                (hook.save)(&FilmSnapshot {
+                    sums: &sums,
+                    fingerprint: self.fingerprint,
+                    shard: self.shard,
+                    first_pass: self.first_pass,
+                    render_time_s: self.previous_time_s + elapsed_s,
+                })?;
+                return Ok(elapsed_s);
+            }
+        }
+        Ok(saved_at)
+    }
 }
 
 /// The `shadow` integrator's light: the scene's first point light (RGB intensity

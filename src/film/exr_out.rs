@@ -37,7 +37,7 @@ use std::collections::HashMap;
 use std::io::{BufReader, Seek, Write};
 use std::path::Path;
 
-use exr::image::{AnyChannel, AnyChannels, Encoding, FlatSamples, Image, Layer};
+use exr::image::{AnyChannel, AnyChannels, Encoding, FlatSamples, Image, Layer, Layers};
 use exr::meta::attribute::{AttributeValue, Text};
 use exr::meta::header::LayerAttributes;
 use exr::prelude::{ReadChannels, ReadLayers, SmallVec, WritableImage};
@@ -236,8 +236,18 @@ pub(crate) fn encode_exr<W: Write + Seek>(
 /// absent keep their [`Default`] value; `extra` comes back sorted by key.
 pub fn read_exr(path: impl AsRef<Path>) -> Result<(Film, RenderMetadata), FilmError> {
     let path = path.as_ref();
+    let image = read_exr_image(path)?;
+    let film = ExrChannels::gather(&image, path)?.film()?;
+    let meta = parse_metadata(&exr_attributes(&image), path)?;
+    Ok((film, meta))
+}
+
+/// An EXR as read: every channel of every layer, at its largest resolution.
+type ExrImage = Image<Layers<AnyChannels<FlatSamples>>>;
+
+fn read_exr_image(path: &Path) -> Result<ExrImage, FilmError> {
     let file = std::fs::File::open(path).map_err(|e| FilmError::io(path, "open", e))?;
-    let image = exr::prelude::read()
+    exr::prelude::read()
         .no_deep_data()
         .largest_resolution_level()
         .all_channels()
@@ -247,37 +257,94 @@ pub fn read_exr(path: impl AsRef<Path>) -> Result<(Film, RenderMetadata), FilmEr
         .map_err(|error| FilmError::Exr {
             path: path.to_path_buf(),
             error,
-        })?;
+        })
+}
 
-    // Gather channels of all layers under their full `layer.channel` names.
-    let mut size = None;
-    let mut channels: HashMap<String, &FlatSamples> = HashMap::new();
+/// The image's attributes and every layer's.
+fn exr_attributes(image: &ExrImage) -> HashMap<&Text, &AttributeValue> {
     let mut attrs: HashMap<&Text, &AttributeValue> = image.attributes.other.iter().collect();
     for layer in &image.layer_data {
         attrs.extend(layer.attributes.other.iter());
-        let prefix = layer
-            .attributes
-            .layer_name
-            .as_ref()
-            .map(|n| format!("{}.", text_to_string(n)))
-            .unwrap_or_default();
-        for ch in &layer.channel_data.list {
-            let name = format!("{prefix}{}", text_to_string(&ch.name));
-            if name == "R" || name == "G" || name == "B" {
-                size = Some(layer.size);
-            }
-            channels.insert(name, &ch.sample_data);
-        }
     }
-    let size = size.ok_or_else(|| FilmError::invalid(path, "no R/G/B channels"))?;
-    let (width, height) = match (u32::try_from(size.0), u32::try_from(size.1)) {
-        (Ok(w), Ok(h)) => (w, h),
-        _ => return Err(FilmError::invalid(path, "image too large")),
-    };
-    let n = size.0 * size.1;
+    attrs
+}
 
-    let f32_channel = |name: &str| -> Result<Option<Vec<f32>>, FilmError> {
-        let Some(samples) = channels.get(name) else {
+/// The channels of an EXR's layers, checked against the size of its `R`/`G`/`B` layer.
+struct ExrChannels<'a> {
+    /// Every channel under its full `layer.channel` name.
+    by_name: HashMap<String, &'a FlatSamples>,
+    width: u32,
+    height: u32,
+    /// Pixels: the samples a channel must hold.
+    n: usize,
+    /// The file, for error messages.
+    path: &'a Path,
+}
+
+impl<'a> ExrChannels<'a> {
+    /// Every layer's channels; refused when none is `R`, `G` or `B`, or when the image is
+    /// too large for a film.
+    fn gather(image: &'a ExrImage, path: &'a Path) -> Result<Self, FilmError> {
+        // Gather channels of all layers under their full `layer.channel` names.
+        let mut size = None;
+        let mut by_name: HashMap<String, &FlatSamples> = HashMap::new();
+        for layer in &image.layer_data {
+            let prefix = layer
+                .attributes
+                .layer_name
+                .as_ref()
+                .map(|n| format!("{}.", text_to_string(n)))
+                .unwrap_or_default();
+            for ch in &layer.channel_data.list {
+                let name = format!("{prefix}{}", text_to_string(&ch.name));
+                if name == "R" || name == "G" || name == "B" {
+                    size = Some(layer.size);
+                }
+                by_name.insert(name, &ch.sample_data);
+            }
+        }
+        let size = size.ok_or_else(|| FilmError::invalid(path, "no R/G/B channels"))?;
+        let (width, height) = match (u32::try_from(size.0), u32::try_from(size.1)) {
+            (Ok(w), Ok(h)) => (w, h),
+            _ => return Err(FilmError::invalid(path, "image too large")),
+        };
+        Ok(Self {
+            by_name,
+            width,
+            height,
+            n: size.0 * size.1,
+            path,
+        })
+    }
+
+    /// The film these channels hold: the estimate, with whichever AOVs and standard error
+    /// the file has.
+    fn film(&self) -> Result<Film, FilmError> {
+        let (r, g, b) = (
+            self.required_channel("R")?,
+            self.required_channel("G")?,
+            self.required_channel("B")?,
+        );
+        let mut film = Film::from_mean_rgb(self.width, self.height, &interleave(&r, &g, &b))?;
+        if let Some(depth) = self.depth()? {
+            film.depth = Some(depth);
+        }
+        if let Some(normal) = self.float_triples(CHANNELS_NORMAL)? {
+            film.normal = Some(normal);
+        }
+        if let Some(stderr) = self.float_triples(CHANNELS_STDERR)? {
+            film.stderr = Some(stderr);
+        }
+        if let Some(ids) = self.triangle_ids()? {
+            film.triangle_id = Some(ids);
+        }
+        Ok(film)
+    }
+
+    /// Channel `name` as f32 samples; `None` when the file has no such channel.
+    fn float_channel(&self, name: &str) -> Result<Option<Vec<f32>>, FilmError> {
+        let n = self.n;
+        let Some(samples) = self.by_name.get(name) else {
             return Ok(None);
         };
         let values: Vec<f32> = match samples {
@@ -285,60 +352,68 @@ pub fn read_exr(path: impl AsRef<Path>) -> Result<(Film, RenderMetadata), FilmEr
             FlatSamples::F16(v) => v.iter().map(|h| h.to_f32()).collect(),
             FlatSamples::U32(_) => {
                 return Err(FilmError::invalid(
-                    path,
+                    self.path,
                     format!("channel {name} has u32 samples, expected float"),
                 ))
             }
         };
         if values.len() != n {
             return Err(FilmError::invalid(
-                path,
+                self.path,
                 format!("channel {name} has {} samples, expected {n}", values.len()),
             ));
         }
         Ok(Some(values))
-    };
-    let required = |name: &str| {
-        f32_channel(name)?
-            .ok_or_else(|| FilmError::invalid(path, format!("missing channel {name}")))
-    };
-    let (r, g, b) = (required("R")?, required("G")?, required("B")?);
-    let rgb: Vec<[f32; 3]> = (0..n).map(|i| [r[i], g[i], b[i]]).collect();
-    let mut film = Film::from_mean_rgb(width, height, &rgb)?;
+    }
 
-    for name in [CHANNEL_DEPTH, "depth", "Z"] {
-        if let Some(depth) = f32_channel(name)? {
-            film.depth = Some(depth);
-            break;
+    fn required_channel(&self, name: &str) -> Result<Vec<f32>, FilmError> {
+        self.float_channel(name)?
+            .ok_or_else(|| FilmError::invalid(self.path, format!("missing channel {name}")))
+    }
+
+    /// Depth under the first of its accepted names the file has.
+    fn depth(&self) -> Result<Option<Vec<f32>>, FilmError> {
+        for name in [CHANNEL_DEPTH, "depth", "Z"] {
+            if let Some(depth) = self.float_channel(name)? {
+                return Ok(Some(depth));
+            }
         }
+        Ok(None)
     }
-    let normal: Vec<Option<Vec<f32>>> = CHANNELS_NORMAL
-        .iter()
-        .map(|name| f32_channel(name))
-        .collect::<Result<_, _>>()?;
-    if let [Some(x), Some(y), Some(z)] = normal.as_slice() {
-        film.normal = Some((0..n).map(|i| [x[i], y[i], z[i]]).collect());
+
+    /// The three channels `names` as one triple per pixel; `None` unless all three are
+    /// there.
+    fn float_triples(&self, names: [&str; 3]) -> Result<Option<Vec<[f32; 3]>>, FilmError> {
+        let channels: Vec<Option<Vec<f32>>> = names
+            .iter()
+            .map(|name| self.float_channel(name))
+            .collect::<Result<_, _>>()?;
+        Ok(match channels.as_slice() {
+            [Some(x), Some(y), Some(z)] => Some(interleave(x, y, z)),
+            _ => None,
+        })
     }
-    let stderr: Vec<Option<Vec<f32>>> = CHANNELS_STDERR
-        .iter()
-        .map(|name| f32_channel(name))
-        .collect::<Result<_, _>>()?;
-    if let [Some(r), Some(g), Some(b)] = stderr.as_slice() {
-        film.stderr = Some((0..n).map(|i| [r[i], g[i], b[i]]).collect());
-    }
-    match channels.get(CHANNEL_TRIANGLE_ID) {
-        None => {}
-        Some(FlatSamples::U32(ids)) if ids.len() == n => film.triangle_id = Some(ids.clone()),
-        Some(_) => {
-            return Err(FilmError::invalid(
-                path,
+
+    fn triangle_ids(&self) -> Result<Option<Vec<u32>>, FilmError> {
+        let n = self.n;
+        match self.by_name.get(CHANNEL_TRIANGLE_ID) {
+            None => Ok(None),
+            Some(FlatSamples::U32(ids)) if ids.len() == n => Ok(Some(ids.clone())),
+            Some(_) => Err(FilmError::invalid(
+                self.path,
                 format!("channel {CHANNEL_TRIANGLE_ID} must have {n} u32 samples"),
-            ))
+            )),
         }
     }
+}
 
-    let meta = parse_metadata(&attrs, path)?;
-    Ok((film, meta))
+/// One triple per pixel from three channels of equal length.
+fn interleave(a: &[f32], b: &[f32], c: &[f32]) -> Vec<[f32; 3]> {
+    a.iter()
+        .zip(b)
+        .zip(c)
+        .map(|((&a, &b), &c)| [a, b, c])
+        .collect()
 }
 
 fn parse_metadata(

@@ -17,8 +17,8 @@ use std::rc::Rc;
 use std::time::Instant;
 
 use super::{
-    integrator_on, render_prepared, Prepared, Progress, RenderControl, RenderError, RenderOptions,
-    RenderOutput, RenderPlan,
+    integrator_on, render_prepared, start_measuring, Prepared, Progress, RenderControl,
+    RenderError, RenderOptions, RenderOutput, RenderPlan,
 };
 use crate::film::FilmSums;
 use crate::integrator::{aov, Integrator, IntegratorStats, SceneFrame};
@@ -163,24 +163,7 @@ pub fn render_frames(
     control: FramesControl<'_>,
 ) -> Result<FramesRun, RenderError> {
     check_frames(animated, options, range)?;
-    let mut t = range.time(range.first);
-    let mut scene = animated.pose(t);
-    // Every frame has the first frame's triangle count and film.
-    super::device_fit::check(gpu, &scene, options)?;
-    let mut triangles = gpu_triangles(&scene);
-    let tracer = Rc::new(RefCell::new(Shared {
-        tracer: options.tracer.create(gpu, &triangles)?,
-        holds: range.first,
-        current: range.first,
-    }));
-    let mut integrator = integrator_on(
-        gpu,
-        &scene,
-        options,
-        &triangles,
-        Box::new(SharedTracer(tracer.clone())),
-    )?;
-    let aov_triangles = gpu.upload("aov-triangles", &triangles)?;
+    let mut sequence = Sequence::start(gpu, animated, options, range)?;
     let mut run = FramesRun {
         frames: 0,
         stopped: false,
@@ -196,68 +179,155 @@ pub fn render_frames(
             break;
         }
         let _span = tracing::info_span!("frame", index = k).entered();
-        gpu.wait_idle()?;
-        let _ = gpu.take_profile();
-        gpu.reset_peak_memory();
-        let start = Instant::now();
+        let start = start_measuring(gpu)?;
         let mut changed_triangles = 0;
         if k != range.first {
-            let next = range.time(k);
-            let changed = animated.advance(&mut scene, t, next);
-            t = next;
-            changed_triangles = move_triangles(&mut triangles, &scene, &changed);
-            {
-                // Where nothing moved, the tracer already holds this frame's geometry.
-                let mut shared = tracer.borrow_mut();
-                shared.current = k;
-                if changed_triangles == 0 {
-                    shared.holds = k;
-                }
-            }
-            next_frame(integrator.as_mut(), &scene, &triangles, &changed, options)?;
-            // The CPU integrators trace without it: the AOVs still need it moved.
-            SharedTracer(tracer.clone()).update_geometry(&triangles, &changed)?;
-            crate::integrator::frame::write_ranges(&aov_triangles, &triangles, &changed, 1)?;
+            changed_triangles = sequence.advance(animated, options, k, range.time(k))?;
         }
-        let camera = scene.camera.frame(options.width, options.height);
-        let aovs = aov::render_aovs(
+        let mut output = sequence.render(
             gpu,
-            &mut SharedTracer(tracer.clone()),
-            &aov_triangles,
-            &camera,
-        )?;
-        let mut output = render_prepared(
-            gpu,
-            &scene,
             options,
-            Prepared {
-                integrator: integrator.as_mut(),
-                aovs,
-                start,
-                stats_before: stats_before.clone(),
-            },
-            RenderPlan::default(),
+            start,
+            stats_before.clone(),
             RenderControl {
                 progress: &mut |p| (control.progress)(k, p),
                 stop: control.stop,
             },
         )?;
-        stats_before = integrator.stats();
+        stats_before = sequence.integrator.stats();
         if output.stats.stopped_early {
             run.stopped = true;
             break;
         }
         output.metadata.extra.push(("frame".into(), k.to_string()));
-        output.metadata.extra.push(("time".into(), t.to_string()));
+        output
+            .metadata
+            .extra
+            .push(("time".into(), sequence.time.to_string()));
         (control.frame_done)(Frame {
             index: k,
-            time: t,
+            time: sequence.time,
             output,
             changed_triangles,
         })?;
         run.frames += 1;
     }
     Ok(run)
+}
+
+/// A sequence as it renders: the scene posed at the current frame, with the one tracer
+/// and integrator that follow it from frame to frame. The fields drop in the order
+/// declared: the AOVs' triangles, then the integrator, then the tracer it shares.
+struct Sequence {
+    /// The triangles the AOVs are rendered from.
+    aov_triangles: Buffer,
+    integrator: Box<dyn Integrator>,
+    tracer: Rc<RefCell<Shared>>,
+    triangles: Vec<GpuTriangle>,
+    scene: Scene,
+    /// The scene time the scene is posed at.
+    time: f32,
+}
+
+impl Sequence {
+    /// The scene posed at the range's first frame, and the tracer and integrator on it.
+    fn start(
+        gpu: &Gpu,
+        animated: &AnimatedScene,
+        options: &RenderOptions,
+        range: &FrameRange,
+    ) -> Result<Self, RenderError> {
+        let time = range.time(range.first);
+        let scene = animated.pose(time);
+        // Every frame has the first frame's triangle count and film.
+        super::device_fit::check(gpu, &scene, options)?;
+        let triangles = gpu_triangles(&scene);
+        let tracer = Rc::new(RefCell::new(Shared {
+            tracer: options.tracer.create(gpu, &triangles)?,
+            holds: range.first,
+            current: range.first,
+        }));
+        let integrator = integrator_on(
+            gpu,
+            &scene,
+            options,
+            &triangles,
+            Box::new(SharedTracer(tracer.clone())),
+        )?;
+        let aov_triangles = gpu.upload("aov-triangles", &triangles)?;
+        Ok(Self {
+            aov_triangles,
+            integrator,
+            tracer,
+            triangles,
+            scene,
+            time,
+        })
+    }
+
+    /// Poses the scene at frame `frame`, time `time`, and moves the tracer, the
+    /// integrator and the AOVs' triangles with it; returns how many triangles moved.
+    fn advance(
+        &mut self,
+        animated: &AnimatedScene,
+        options: &RenderOptions,
+        frame: u32,
+        time: f32,
+    ) -> Result<usize, RenderError> {
+        let changed = animated.advance(&mut self.scene, self.time, time);
+        self.time = time;
+        let changed_triangles = move_triangles(&mut self.triangles, &self.scene, &changed);
+        {
+            // Where nothing moved, the tracer already holds this frame's geometry.
+            let mut shared = self.tracer.borrow_mut();
+            shared.current = frame;
+            if changed_triangles == 0 {
+                shared.holds = frame;
+            }
+        }
+        next_frame(
+            self.integrator.as_mut(),
+            &self.scene,
+            &self.triangles,
+            &changed,
+            options,
+        )?;
+        // The CPU integrators trace without it: the AOVs still need it moved.
+        SharedTracer(self.tracer.clone()).update_geometry(&self.triangles, &changed)?;
+        crate::integrator::frame::write_ranges(&self.aov_triangles, &self.triangles, &changed, 1)?;
+        Ok(changed_triangles)
+    }
+
+    /// Renders the frame the scene is posed at: its AOVs, then its passes.
+    fn render(
+        &mut self,
+        gpu: &Gpu,
+        options: &RenderOptions,
+        start: Instant,
+        stats_before: IntegratorStats,
+        control: RenderControl<'_>,
+    ) -> Result<RenderOutput, RenderError> {
+        let camera = self.scene.camera.frame(options.width, options.height);
+        let aovs = aov::render_aovs(
+            gpu,
+            &mut SharedTracer(self.tracer.clone()),
+            &self.aov_triangles,
+            &camera,
+        )?;
+        render_prepared(
+            gpu,
+            &self.scene,
+            options,
+            Prepared {
+                integrator: self.integrator.as_mut(),
+                aovs,
+                start,
+                stats_before,
+            },
+            RenderPlan::default(),
+            control,
+        )
+    }
 }
 
 /// Moves the integrator to the scene as posed now, and clears its film.

@@ -16,9 +16,11 @@ use std::process::ExitCode;
 use anyhow::{anyhow, bail};
 use splitray::film::ImageFiles;
 use splitray::render::frames::{
-    check_frames, frame_path, render_frames, Frame, FrameRange, FramesControl, DEFAULT_FPS,
+    check_frames, frame_path, render_frames, Frame, FrameRange, FramesControl, FramesRun,
+    DEFAULT_FPS,
 };
-use splitray::render::{RenderError, RenderStats, Shard};
+use splitray::render::{RenderError, RenderOptions, RenderStats, Shard};
+use splitray::scene::AnimatedScene;
 use splitray::vk::Gpu;
 
 use super::super::render_files::{write_stats, RenderFiles};
@@ -73,19 +75,9 @@ pub(super) fn run(args: &RenderArgs, spec: &str) -> anyhow::Result<ExitCode> {
     refuse_single_image_options(args)?;
     let signals = StopSignals::install()?;
     let mut timeline = super::super::timeline::TimelineOutput::start(args.timeline.as_deref())?;
-    let scene_spec = args.scene.as_deref().unwrap_or(DEFAULT_SCENE);
-    let animated = splitray::scene::load_animated(scene_spec)?;
-    let range = FrameRange::parse(spec, args.fps.unwrap_or(DEFAULT_FPS))
-        .map_err(|e| anyhow!("--frames: {e}"))?;
-    let options = render_options(args, &animated.scene, None)?;
-    check_frames(&animated, &options, &range)?;
-    if !animated.is_animated() {
-        eprintln!(
-            "note: nothing moves in scene '{}': every frame is the same image",
-            animated.scene.name
-        );
-    }
-    let base = output_path(args, &animated.scene.name, Shard::WHOLE)?;
+    let job = read_sequence(args, spec)?;
+    let range = job.range;
+    let base = output_path(args, &job.animated.scene.name, Shard::WHOLE)?;
     // The first frame's files (and the stats file) before the GPU: a path that cannot be
     // written fails at once. Each later frame's files are created before its render.
     let files = RenderFiles::create(
@@ -99,21 +91,76 @@ pub(super) fn run(args: &RenderArgs, spec: &str) -> anyhow::Result<ExitCode> {
     }
 
     let RenderFiles { image, stats, .. } = files;
+    let (run, frame_stats) = render_sequence(args, &gpu, &job, &base, image, &signals)?;
+    if let Some(file) = stats {
+        write_stats(file, &serde_json::json!({ "frames": frame_stats }))?;
+    }
+    if let Some(t) = timeline {
+        t.finish(&super::super::timeline::command_line())?;
+    }
+    Ok(report_sequence_end(signals.received(), run, &range, &base))
+}
+
+/// What one sequence makes, read before any output is created.
+struct SequenceJob {
+    animated: AnimatedScene,
+    range: FrameRange,
+    options: RenderOptions,
+}
+
+/// The animated scene, the frames and the options, checked for every frame.
+fn read_sequence(args: &RenderArgs, spec: &str) -> anyhow::Result<SequenceJob> {
+    let scene_spec = args.scene.as_deref().unwrap_or(DEFAULT_SCENE);
+    let animated = splitray::scene::load_animated(scene_spec)?;
+    let range = FrameRange::parse(spec, args.fps.unwrap_or(DEFAULT_FPS))
+        .map_err(|e| anyhow!("--frames: {e}"))?;
+    let options = render_options(args, &animated.scene, None)?;
+    check_frames(&animated, &options, &range)?;
+    if !animated.is_animated() {
+        eprintln!(
+            "note: nothing moves in scene '{}': every frame is the same image",
+            animated.scene.name
+        );
+    }
+    Ok(SequenceJob {
+        animated,
+        range,
+        options,
+    })
+}
+
+/// Renders `job`'s frames behind a progress bar, writing each as it is done (`image` is
+/// the first frame's files; each later frame's are created when the one before is
+/// written); a signal stops it. Returns how the sequence ended and each written frame's
+/// statistics.
+fn render_sequence(
+    args: &RenderArgs,
+    gpu: &Gpu,
+    job: &SequenceJob,
+    base: &Path,
+    image: ImageFiles,
+    signals: &StopSignals,
+) -> Result<(FramesRun, Vec<FrameStats>), RenderError> {
+    let SequenceJob {
+        animated,
+        range,
+        options,
+    } = job;
     let mut next_image = Some(image);
     let mut frame_stats = Vec::new();
     let name = &animated.scene.name;
     let (w, h) = (options.width, options.height);
-    let bar = progress_bar(&options, &format!("{name} {w}x{h}"));
+    let bar = progress_bar(options, &format!("{name} {w}x{h}"));
     let pixels = w as f64 * h as f64;
     let mut frame_done = |frame: Frame| -> Result<(), RenderError> {
         bar.suspend(|| -> Result<(), RenderError> {
             let image = next_image.take().expect("created for each frame");
-            write_frame(&gpu, &frame, image, args.profile)?;
+            write_frame(gpu, &frame, image, args.profile)?;
             if frame.index + 1 < range.end {
                 next_image = Some(ImageFiles::create(frame_path(
-                    &base,
+                    base,
                     frame.index + 1,
-                    &range,
+                    range,
                 ))?);
             }
             Ok(())
@@ -127,10 +174,10 @@ pub(super) fn run(args: &RenderArgs, spec: &str) -> anyhow::Result<ExitCode> {
         Ok(())
     };
     let result = render_frames(
-        &gpu,
-        &animated,
-        &options,
-        &range,
+        gpu,
+        animated,
+        options,
+        range,
         FramesControl {
             progress: &mut |k, p| {
                 let label = format!("{name} {w}x{h} frame {k} ({}..{})", range.first, range.end);
@@ -141,15 +188,19 @@ pub(super) fn run(args: &RenderArgs, spec: &str) -> anyhow::Result<ExitCode> {
         },
     );
     bar.finish_and_clear();
-    let run = result?;
-    if let Some(file) = stats {
-        write_stats(file, &serde_json::json!({ "frames": frame_stats }))?;
-    }
-    if let Some(t) = timeline {
-        t.finish(&super::super::timeline::command_line())?;
-    }
+    Ok((result?, frame_stats))
+}
+
+/// Tells the user which frames were written, or, when `stopped_by` a signal, which
+/// frames are left to render; returns the exit code.
+fn report_sequence_end(
+    stopped_by: Option<i32>,
+    run: FramesRun,
+    range: &FrameRange,
+    base: &Path,
+) -> ExitCode {
     let done = range.first..range.first + run.frames;
-    match signals.received() {
+    match stopped_by {
         Some(signal) => {
             eprintln!(
                 "{}: the sequence stopped after {} frame(s) ({done:?}); `--frames {}..{}` renders the rest",
@@ -158,7 +209,7 @@ pub(super) fn run(args: &RenderArgs, spec: &str) -> anyhow::Result<ExitCode> {
                 done.end,
                 range.end
             );
-            Ok(ExitCode::from(signals::exit_status(signal)))
+            ExitCode::from(signals::exit_status(signal))
         }
         None => {
             println!(
@@ -167,9 +218,9 @@ pub(super) fn run(args: &RenderArgs, spec: &str) -> anyhow::Result<ExitCode> {
                 range.end,
                 run.frames,
                 range.fps,
-                display_pattern(&base, &range)
+                display_pattern(base, range)
             );
-            Ok(ExitCode::SUCCESS)
+            ExitCode::SUCCESS
         }
     }
 }
