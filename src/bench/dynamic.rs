@@ -441,26 +441,12 @@ pub fn run(
     animated: &AnimatedScene,
     opts: &DynamicBenchOptions,
 ) -> BenchResult<DynamicReport> {
-    if !animated.is_animated() {
-        return Err(format!(
-            "scene '{}' does not move: bench dynamic needs an animated scene (waves, swarm, \
-             or a scene file with keyframes or an OBJ sequence)",
-            animated.scene.name
-        )
-        .into());
-    }
-    if opts.frames == 0 {
-        return Err("bench dynamic needs at least one timed frame".into());
-    }
-    if opts.workloads.contains(&Workload::Path) {
-        return Err(PATH_REFUSED.into());
-    }
+    check_options(animated, opts)?;
     let range = FrameRange {
         first: opts.first,
         end: opts.first + opts.frames + 1,
         fps: opts.fps,
     };
-    let mut skipped = Vec::new();
     let mut t = range.time(range.first);
     let mut scene = animated.pose(t);
     let mut triangles: Vec<GpuTriangle> = scene
@@ -468,34 +454,8 @@ pub fn run(
         .iter()
         .map(|t| GpuTriangle::new(t.p))
         .collect();
-    let mut contenders = Vec::new();
-    for &c in &opts.contenders {
-        if c.needs_ray_query() && !gpu.ray_query() {
-            skipped.push((
-                c,
-                crate::trace::ray_query::unsupported_reason(gpu).unwrap_or_default(),
-            ));
-            continue;
-        }
-        contenders.push(Timed {
-            contender: c,
-            tracer: c.create(gpu, &triangles)?,
-            frames: vec![Vec::new(); opts.workloads.len()],
-            verified: 0,
-            mismatches: 0,
-        });
-    }
-
-    // Secondary rays start at primary hits: at most one per pixel (AO: several).
-    let pixels = opts.width as usize * opts.height as usize;
-    let slots: Vec<Slot> = opts
-        .workloads
-        .iter()
-        .map(|w| match w {
-            Workload::Ao => Slot::new(gpu, pixels * workloads::AO_RAYS),
-            _ => Slot::new(gpu, pixels),
-        })
-        .collect::<vk::Result<_>>()?;
+    let (mut contenders, skipped) = create_contenders(gpu, opts, &triangles)?;
+    let slots = workload_slots(gpu, opts)?;
     // Warm-up: the first frame as the tracers were built for it, verified, not timed.
     let batches = frame_batches(&slots, &scene, &triangles, opts)?;
     for c in &mut contenders {
@@ -514,31 +474,21 @@ pub fn run(
         for (i, (_, b)) in batches.iter().enumerate() {
             rays[i] += b.count as usize;
         }
-        let count = contenders.len();
-        for i in 0..count {
-            let c = &mut contenders[(i + n) % count];
-            let (update, traces) =
-                run_frame(gpu, c, &triangles, Some(&changed), (&slots, &batches), k)?;
-            for (w, (ms, (_, b))) in traces.iter().zip(&batches).enumerate() {
-                c.frames[w].push((update, *ms, b.count));
-            }
-        }
+        run_frame_in_turn(
+            gpu,
+            &mut contenders,
+            &triangles,
+            &changed,
+            (&slots, &batches),
+            n,
+            k,
+        )?;
         eprint!(".");
         let _ = std::io::stderr().flush();
     }
     eprintln!();
 
     let frames = opts.frames as f64;
-    let workloads = opts
-        .workloads
-        .iter()
-        .enumerate()
-        .map(|(w, &workload)| WorkloadReport {
-            workload,
-            rays_per_frame: rays[w] as f64 / frames,
-            rows: contenders.iter().map(|c| row(c, &c.frames[w])).collect(),
-        })
-        .collect();
     Ok(DynamicReport {
         scene: animated.scene.name.clone(),
         triangles: triangles.len(),
@@ -548,10 +498,114 @@ pub fn run(
         height: opts.height,
         frames: range.first + 1..range.end,
         fps: opts.fps,
-        workloads,
+        workloads: workload_reports(opts, &contenders, &rays),
         skipped,
         date: super::today(),
     })
+}
+
+/// Refuses a scene that does not move, no timed frame and the path workload.
+fn check_options(animated: &AnimatedScene, opts: &DynamicBenchOptions) -> BenchResult<()> {
+    if !animated.is_animated() {
+        return Err(format!(
+            "scene '{}' does not move: bench dynamic needs an animated scene (waves, swarm, \
+             or a scene file with keyframes or an OBJ sequence)",
+            animated.scene.name
+        )
+        .into());
+    }
+    if opts.frames == 0 {
+        return Err("bench dynamic needs at least one timed frame".into());
+    }
+    if opts.workloads.contains(&Workload::Path) {
+        return Err(PATH_REFUSED.into());
+    }
+    Ok(())
+}
+
+/// Tracers left out, and why.
+type Skipped = Vec<(Contender, String)>;
+
+/// The tracers of `opts` built on `triangles`, and those the device cannot run.
+fn create_contenders(
+    gpu: &Gpu,
+    opts: &DynamicBenchOptions,
+    triangles: &[GpuTriangle],
+) -> vk::Result<(Vec<Timed>, Skipped)> {
+    let mut skipped = Vec::new();
+    let mut contenders = Vec::new();
+    for &c in &opts.contenders {
+        if c.needs_ray_query() && !gpu.ray_query() {
+            skipped.push((
+                c,
+                crate::trace::ray_query::unsupported_reason(gpu).unwrap_or_default(),
+            ));
+            continue;
+        }
+        contenders.push(Timed {
+            contender: c,
+            tracer: c.create(gpu, triangles)?,
+            frames: vec![Vec::new(); opts.workloads.len()],
+            verified: 0,
+            mismatches: 0,
+        });
+    }
+    Ok((contenders, skipped))
+}
+
+/// One slot per workload, large enough for its rays.
+fn workload_slots(gpu: &Gpu, opts: &DynamicBenchOptions) -> vk::Result<Vec<Slot>> {
+    // Secondary rays start at primary hits: at most one per pixel (AO: several).
+    let pixels = opts.width as usize * opts.height as usize;
+    opts.workloads
+        .iter()
+        .map(|w| match w {
+            Workload::Ao => Slot::new(gpu, pixels * workloads::AO_RAYS),
+            _ => Slot::new(gpu, pixels),
+        })
+        .collect()
+}
+
+/// Timed frame `frame`, the `n`th: every tracer in turn, starting with the `n`th (mod
+/// their number) so that the order rotates from frame to frame; records their times.
+fn run_frame_in_turn(
+    gpu: &Gpu,
+    contenders: &mut [Timed],
+    triangles: &[GpuTriangle],
+    changed: &[Range<usize>],
+    (slots, batches): (&[Slot], &[(Workload, Batch)]),
+    n: usize,
+    frame: u32,
+) -> BenchResult<()> {
+    let count = contenders.len();
+    for i in 0..count {
+        let c = &mut contenders[(i + n) % count];
+        let (update, traces) =
+            run_frame(gpu, c, triangles, Some(changed), (slots, batches), frame)?;
+        for (w, (ms, (_, b))) in traces.iter().zip(batches).enumerate() {
+            c.frames[w].push((update, *ms, b.count));
+        }
+    }
+    Ok(())
+}
+
+/// Per workload: its rays per frame (`rays` summed over the timed frames) and every
+/// tracer's row.
+fn workload_reports(
+    opts: &DynamicBenchOptions,
+    contenders: &[Timed],
+    rays: &[usize],
+) -> Vec<WorkloadReport> {
+    let frames = opts.frames as f64;
+    opts.workloads
+        .iter()
+        .enumerate()
+        .map(|(w, &workload)| WorkloadReport {
+            workload,
+            rays_per_frame: rays[w] as f64 / frames,
+            rows: contenders.iter().map(|c| row(c, &c.frames[w])).collect(),
+        })
+        .collect()
 }
 
 fn row(c: &Timed, frames: &[(f64, f64, u32)]) -> DynamicRow {

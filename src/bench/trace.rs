@@ -118,8 +118,9 @@ pub struct TraceReport {
     pub date: String,
 }
 
-impl fmt::Display for TraceReport {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+impl TraceReport {
+    /// The run's scene, workload and device, and the table's column heads.
+    fn write_header(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         writeln!(
             f,
             "bench trace: {} ({} triangles), {}x{} {} workload, {} rays in {} batch(es), on {}",
@@ -136,43 +137,101 @@ impl fmt::Display for TraceReport {
             f,
             "{:<12} {:>11} {:>10} {:>10} {:>10} {:>11} {:>11} {:>9}  vs each",
             "tracer", "frame ms", "min ms", "max ms", "Mrays/s", "peak MiB", "own MiB", "verified"
-        )?;
+        )
+    }
+
+    /// A tracer's row: its times, memory and checks, and how much faster it is than
+    /// each other tracer.
+    fn write_row(&self, f: &mut fmt::Formatter<'_>, r: &TracerRow) -> fmt::Result {
+        let ratios: Vec<String> = self
+            .rows
+            .iter()
+            .filter(|o| o.tracer != r.tracer)
+            .map(|o| format!("{:.2}x {}", o.frame_ms / r.frame_ms, o.tracer))
+            .collect();
+        writeln!(
+            f,
+            "{:<12} {:>11.2} {:>10.2} {:>10.2} {:>10.2} {:>11.1} {:>11.1} {:>9}  faster than: {}{}",
+            r.tracer,
+            r.frame_ms,
+            r.min_ms,
+            r.max_ms,
+            r.mrays_per_s,
+            r.peak_gpu_bytes as f64 / (1 << 20) as f64,
+            r.tracer_peak_bytes as f64 / (1 << 20) as f64,
+            format!("{}/{}", r.verified_rays - r.mismatches, r.verified_rays),
+            ratios.join(", "),
+            if r.subset < 1.0 {
+                format!("  [extrapolated from {:.2}% of the rays]", 100.0 * r.subset)
+            } else {
+                String::new()
+            }
+        )
+    }
+
+    /// PDACRT's share of its row's peak memory: triangles, rays and hits, and its own
+    /// working memory.
+    fn write_pdacrt_memory(&self, f: &mut fmt::Formatter<'_>, r: &TracerRow) -> fmt::Result {
+        let triangles = (self.triangles * size_of::<GpuTriangle>()) as u64;
+        let working = r.tracer_peak_bytes.saturating_sub(triangles);
+        writeln!(
+            f,
+            "{:<12} at the peak: triangles {:.1} MiB, rays and hits {:.1} MiB, PDACRT's working memory {:.1} MiB = {:.1}% of the peak",
+            "",
+            triangles as f64 / (1 << 20) as f64,
+            r.peak_gpu_bytes.saturating_sub(r.tracer_peak_bytes) as f64 / (1 << 20) as f64,
+            working as f64 / (1 << 20) as f64,
+            100.0 * working as f64 / r.peak_gpu_bytes.max(1) as f64
+        )
+    }
+}
+
+/// A CPU tracer's own build and traversal, and what is left of its frame: the transfers.
+fn write_host_work(f: &mut fmt::Formatter<'_>, r: &TracerRow, h: &HostRow) -> fmt::Result {
+    writeln!(
+        f,
+        "{:<12} on the host: build {:.2} ms, trace {:.2} ms = {:.2} Mrays/s on {} threads (frame less build and trace: {:.2} ms of ray and hit transfers)",
+        "",
+        h.build_ms,
+        h.trace_ms,
+        h.trace_mrays_per_s,
+        h.threads,
+        (r.frame_ms - h.build_ms - h.trace_ms).max(0.0)
+    )
+}
+
+/// The PDACRT parameters of the run.
+fn write_pdacrt_params(f: &mut fmt::Formatter<'_>, p: &PdacrtParams) -> fmt::Result {
+    writeln!(
+        f,
+        "{:<12} α {} β {} η {} λ {} N {} T {}, chunks of {} rays, split {}, flush {:?}, triangles {}, {} boxes, level plan in {}",
+        "",
+        p.alpha,
+        p.beta,
+        p.eta,
+        p.lambda,
+        p.intersect_workgroup,
+        p.batch,
+        p.max_rays_per_chunk,
+        match p.split {
+            LevelSplit::PrefixSums =>
+                format!("PrefixSums (tiles per {} invocations)", p.tile_workgroup),
+            split => format!("{split:?}"),
+        },
+        p.flush_reduce,
+        if p.stage_triangles { "staged" } else { "direct" },
+        if p.tight_boxes { "tight" } else { "half" },
+        if p.one_dispatch_plan { "one dispatch" } else { "four dispatches" }
+    )
+}
+
+impl fmt::Display for TraceReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        self.write_header(f)?;
         for r in &self.rows {
-            let ratios: Vec<String> = self
-                .rows
-                .iter()
-                .filter(|o| o.tracer != r.tracer)
-                .map(|o| format!("{:.2}x {}", o.frame_ms / r.frame_ms, o.tracer))
-                .collect();
-            writeln!(
-                f,
-                "{:<12} {:>11.2} {:>10.2} {:>10.2} {:>10.2} {:>11.1} {:>11.1} {:>9}  faster than: {}{}",
-                r.tracer,
-                r.frame_ms,
-                r.min_ms,
-                r.max_ms,
-                r.mrays_per_s,
-                r.peak_gpu_bytes as f64 / (1 << 20) as f64,
-                r.tracer_peak_bytes as f64 / (1 << 20) as f64,
-                format!("{}/{}", r.verified_rays - r.mismatches, r.verified_rays),
-                ratios.join(", "),
-                if r.subset < 1.0 {
-                    format!("  [extrapolated from {:.2}% of the rays]", 100.0 * r.subset)
-                } else {
-                    String::new()
-                }
-            )?;
+            self.write_row(f, r)?;
             if let Some(h) = &r.host {
-                writeln!(
-                    f,
-                    "{:<12} on the host: build {:.2} ms, trace {:.2} ms = {:.2} Mrays/s on {} threads (frame less build and trace: {:.2} ms of ray and hit transfers)",
-                    "",
-                    h.build_ms,
-                    h.trace_ms,
-                    h.trace_mrays_per_s,
-                    h.threads,
-                    (r.frame_ms - h.build_ms - h.trace_ms).max(0.0)
-                )?;
+                write_host_work(f, r, h)?;
             }
             if let (Some(trips), Some(levels)) = (r.host_round_trips, r.levels) {
                 writeln!(
@@ -182,38 +241,8 @@ impl fmt::Display for TraceReport {
                 )?;
             }
             if let (true, Some(p)) = (r.tracer == "pdacrt", &self.pdacrt_params) {
-                writeln!(
-                    f,
-                    "{:<12} α {} β {} η {} λ {} N {} T {}, chunks of {} rays, split {}, flush {:?}, triangles {}, {} boxes, level plan in {}",
-                    "",
-                    p.alpha,
-                    p.beta,
-                    p.eta,
-                    p.lambda,
-                    p.intersect_workgroup,
-                    p.batch,
-                    p.max_rays_per_chunk,
-                    match p.split {
-                        LevelSplit::PrefixSums =>
-                            format!("PrefixSums (tiles per {} invocations)", p.tile_workgroup),
-                        split => format!("{split:?}"),
-                    },
-                    p.flush_reduce,
-                    if p.stage_triangles { "staged" } else { "direct" },
-                    if p.tight_boxes { "tight" } else { "half" },
-                    if p.one_dispatch_plan { "one dispatch" } else { "four dispatches" }
-                )?;
-                let triangles = (self.triangles * size_of::<GpuTriangle>()) as u64;
-                let working = r.tracer_peak_bytes.saturating_sub(triangles);
-                writeln!(
-                    f,
-                    "{:<12} at the peak: triangles {:.1} MiB, rays and hits {:.1} MiB, PDACRT's working memory {:.1} MiB = {:.1}% of the peak",
-                    "",
-                    triangles as f64 / (1 << 20) as f64,
-                    r.peak_gpu_bytes.saturating_sub(r.tracer_peak_bytes) as f64 / (1 << 20) as f64,
-                    working as f64 / (1 << 20) as f64,
-                    100.0 * working as f64 / r.peak_gpu_bytes.max(1) as f64
-                )?;
+                write_pdacrt_params(f, p)?;
+                self.write_pdacrt_memory(f, r)?;
             }
         }
         Ok(())

@@ -164,89 +164,110 @@ pub fn secondary_batches(
     let points = surface_points(primary, primary_hits, triangles, eps);
     match workload {
         Workload::Primary => vec![],
-        Workload::Shadow => {
-            let light = shadow_light(scene);
-            let rays = points
-                .iter()
-                .map(|(_, s)| {
-                    let to = light - s.p;
-                    let dist = to.length();
-                    Ray::new(s.p, to / dist, 0.0, dist * (1.0 - 1e-4))
-                })
-                .collect();
-            vec![RayBatch {
-                label: "shadow".into(),
-                rays,
-                query: Query::Occlusion,
-            }]
-        }
+        Workload::Shadow => one_batch(
+            "shadow",
+            shadow_rays(shadow_light(scene), &points),
+            Query::Occlusion,
+        ),
         Workload::Reflection => {
-            let rays = points
-                .iter()
-                .map(|(_, s)| {
-                    Ray::new(
-                        s.p,
-                        s.incoming - 2.0 * s.incoming.dot(s.n) * s.n,
-                        0.0,
-                        f32::INFINITY,
-                    )
-                })
-                .collect();
-            vec![RayBatch {
-                label: "reflection".into(),
-                rays,
-                query: Query::ClosestHit,
-            }]
+            one_batch("reflection", reflection_rays(&points), Query::ClosestHit)
         }
-        Workload::Ao => {
-            let reach = 0.25 * radius;
-            let rays = points
-                .iter()
-                .flat_map(|(i, s)| {
-                    (0..AO_RAYS).map(move |k| {
-                        let d = cosine_direction(
-                            s.n,
-                            random01(*i as u32, 2 * k as u32, 1),
-                            random01(*i as u32, 2 * k as u32 + 1, 1),
-                        );
-                        Ray::new(s.p, d, 0.0, reach)
-                    })
-                })
-                .collect();
-            vec![RayBatch {
-                label: "ao".into(),
-                rays,
-                query: Query::Occlusion,
-            }]
-        }
-        Workload::Path => {
-            let mut batches = Vec::new();
-            let mut current = points;
-            for bounce in 1..PATH_BOUNCES {
-                let rays: Vec<Ray> = current
-                    .iter()
-                    .map(|(i, s)| {
-                        let d = cosine_direction(
-                            s.n,
-                            random01(*i as u32, bounce as u32, 2),
-                            random01(*i as u32, bounce as u32, 3),
-                        );
-                        Ray::new(s.p, d, 0.0, f32::INFINITY)
-                    })
-                    .collect();
-                if rays.is_empty() {
-                    break;
-                }
-                let hits = trace(&rays);
-                let next = surface_points(&rays, &hits, triangles, eps);
-                batches.push(RayBatch {
-                    label: format!("bounce {bounce}"),
-                    rays,
-                    query: Query::ClosestHit,
-                });
-                current = next;
-            }
-            batches
-        }
+        Workload::Ao => one_batch("ao", ao_rays(0.25 * radius, &points), Query::Occlusion),
+        Workload::Path => path_batches(points, triangles, eps, trace),
     }
+}
+
+/// A workload of one batch.
+fn one_batch(label: &str, rays: Vec<Ray>, query: Query) -> Vec<RayBatch> {
+    vec![RayBatch {
+        label: label.into(),
+        rays,
+        query,
+    }]
+}
+
+/// From each point to the light, stopping just short of it.
+fn shadow_rays(light: Vec3, points: &[(usize, SurfacePoint)]) -> Vec<Ray> {
+    points
+        .iter()
+        .map(|(_, s)| {
+            let to = light - s.p;
+            let dist = to.length();
+            Ray::new(s.p, to / dist, 0.0, dist * (1.0 - 1e-4))
+        })
+        .collect()
+}
+
+/// The perfect mirror's direction at each point.
+fn reflection_rays(points: &[(usize, SurfacePoint)]) -> Vec<Ray> {
+    points
+        .iter()
+        .map(|(_, s)| {
+            Ray::new(
+                s.p,
+                s.incoming - 2.0 * s.incoming.dot(s.n) * s.n,
+                0.0,
+                f32::INFINITY,
+            )
+        })
+        .collect()
+}
+
+/// [`AO_RAYS`] cosine-distributed rays of length `reach` from each point.
+fn ao_rays(reach: f32, points: &[(usize, SurfacePoint)]) -> Vec<Ray> {
+    points
+        .iter()
+        .flat_map(|(i, s)| {
+            (0..AO_RAYS).map(move |k| {
+                let d = cosine_direction(
+                    s.n,
+                    random01(*i as u32, 2 * k as u32, 1),
+                    random01(*i as u32, 2 * k as u32 + 1, 1),
+                );
+                Ray::new(s.p, d, 0.0, reach)
+            })
+        })
+        .collect()
+}
+
+/// The diffuse bounces of the path workload, one batch each, from the primary hits'
+/// `points` until [`PATH_BOUNCES`] or until every path has left the scene.
+fn path_batches(
+    points: Vec<(usize, SurfacePoint)>,
+    triangles: &[GpuTriangle],
+    eps: f32,
+    trace: &mut dyn FnMut(&[Ray]) -> Vec<Hit>,
+) -> Vec<RayBatch> {
+    let mut batches = Vec::new();
+    let mut current = points;
+    for bounce in 1..PATH_BOUNCES {
+        let rays = diffuse_rays(bounce, &current);
+        if rays.is_empty() {
+            break;
+        }
+        let hits = trace(&rays);
+        let next = surface_points(&rays, &hits, triangles, eps);
+        batches.push(RayBatch {
+            label: format!("bounce {bounce}"),
+            rays,
+            query: Query::ClosestHit,
+        });
+        current = next;
+    }
+    batches
+}
+
+/// Bounce `bounce`'s cosine-distributed rays from each point.
+fn diffuse_rays(bounce: usize, points: &[(usize, SurfacePoint)]) -> Vec<Ray> {
+    points
+        .iter()
+        .map(|(i, s)| {
+            let d = cosine_direction(
+                s.n,
+                random01(*i as u32, bounce as u32, 2),
+                random01(*i as u32, bounce as u32, 3),
+            );
+            Ray::new(s.p, d, 0.0, f32::INFINITY)
+        })
+        .collect()
 }

@@ -150,7 +150,7 @@ pub fn trace_camera_paths(
 ) -> vk::Result<CameraPassOutcome> {
     let paths = range.passes * range.pixel_count;
     let _span = tracing::info_span!("lvc camera pass", paths).entered();
-    let (gpu, k, w) = (shared.gpu, shared.kernels, shared.wave);
+    let w = shared.wave;
     let mut push = LvcPush {
         first_pass: range.first_pass,
         path_count: paths,
@@ -158,20 +158,7 @@ pub fn trace_camera_paths(
         pixel_count: range.pixel_count,
         ..Default::default()
     };
-    let mut rec = gpu.recorder(StreamKind::Main)?;
-    rec.dispatch_items(
-        &k.camera_generate,
-        &[
-            shared.constants.into(),
-            (&w.rays[0]).into(),
-            (&w.active[0]).into(),
-            (&w.paths).into(),
-            (&w.radiance).into(),
-        ],
-        &push,
-        paths as u64,
-    )?;
-    let mut ready = rec.submit(&[])?;
+    let mut ready = generate_camera_paths(shared, &push, paths)?;
     let mut outcome = CameraPassOutcome::default();
     let (mut cur, mut n) = (0usize, paths);
     while n > 0 {
@@ -186,40 +173,9 @@ pub fn trace_camera_paths(
         let vertexed = record_vertices(shared, cur, n, &push, &traced)?;
         let shadows = push.base + n * shared.connections;
         let done = record_techniques(shared, streams, cur, n, &push, &vertexed)?;
-        let waits: Vec<&TimelinePoint> = done.iter().collect();
-        let occluded = tracer.trace(
-            &w.shadow_rays,
-            &w.shadow_hits,
-            shadows,
-            Query::Occlusion,
-            &waits,
-        )?;
+        let occluded = trace_shadow_rays(shared, tracer, shadows, &done)?;
         outcome.shadow_rays += shadows as u64;
-        let mut rec = gpu.recorder(StreamKind::Main)?;
-        rec.fill(&w.tally, 0);
-        rec.barrier();
-        rec.dispatch_items(
-            &k.camera_accumulate,
-            &[
-                shared.constants.into(),
-                (&w.active[cur]).into(),
-                (&w.emitted).into(),
-                (&w.shadow_hits).into(),
-                (&w.contributions).into(),
-                (&w.radiance).into(),
-                targets.counters.into(),
-                (&w.tally).into(),
-            ],
-            &push,
-            n as u64,
-        )?;
-        rec.barrier();
-        w.record_compact(&mut rec, n, &w.alive, &w.kept, &w.count_alive)?;
-        w.record_counts_readback(&mut rec);
-        w.record_tally_readback(&mut rec);
-        let counted = rec.submit(&[&occluded])?;
-        gpu.wait(&counted)?;
-        let (survivors, tally) = w.read_camera_counts(n, &counted)?;
+        let (survivors, tally) = accumulate_and_compact(shared, targets, cur, n, &push, &occluded)?;
         outcome.visibility.merge(&tally.into());
         hook(
             shared,
@@ -239,21 +195,108 @@ pub fn trace_camera_paths(
         n = survivors;
     }
     crate::timeline_counter!("lvc", "live camera paths", 0);
-    let mut rec = gpu.recorder(StreamKind::Main)?;
+    finish_pixels(shared, targets, &push, range.pixel_count)?;
+    Ok(outcome)
+}
+
+/// The chunk's `paths` camera paths, started in list 0.
+fn generate_camera_paths(shared: &Shared, push: &LvcPush, paths: u32) -> vk::Result<TimelinePoint> {
+    let w = shared.wave;
+    let mut rec = shared.gpu.recorder(StreamKind::Main)?;
     rec.dispatch_items(
-        &k.finish,
+        &shared.kernels.camera_generate,
         &[
             shared.constants.into(),
+            (&w.rays[0]).into(),
+            (&w.active[0]).into(),
+            (&w.paths).into(),
             (&w.radiance).into(),
+        ],
+        push,
+        paths as u64,
+    )?;
+    rec.submit(&[])
+}
+
+/// Step 4: the `count` shadow rays of direct lighting and connections, traced together
+/// after all three kernels (`done`).
+fn trace_shadow_rays(
+    shared: &Shared,
+    tracer: &mut dyn Tracer,
+    count: u32,
+    done: &[TimelinePoint],
+) -> vk::Result<TimelinePoint> {
+    let w = shared.wave;
+    let waits: Vec<&TimelinePoint> = done.iter().collect();
+    tracer.trace(
+        &w.shadow_rays,
+        &w.shadow_hits,
+        count,
+        Query::Occlusion,
+        &waits,
+    )
+}
+
+/// Step 5 after the shadow rays (`occluded`), waited for: `camera_accumulate`, then the
+/// compaction of the live paths; (survivors, the bounce's shadow-ray tally).
+fn accumulate_and_compact(
+    shared: &Shared,
+    targets: &CameraTargets,
+    cur: usize,
+    n: u32,
+    push: &LvcPush,
+    occluded: &TimelinePoint,
+) -> vk::Result<(u32, VisibilityTally)> {
+    let w = shared.wave;
+    let mut rec = shared.gpu.recorder(StreamKind::Main)?;
+    rec.fill(&w.tally, 0);
+    rec.barrier();
+    rec.dispatch_items(
+        &shared.kernels.camera_accumulate,
+        &[
+            shared.constants.into(),
+            (&w.active[cur]).into(),
+            (&w.emitted).into(),
+            (&w.shadow_hits).into(),
+            (&w.contributions).into(),
+            (&w.radiance).into(),
+            targets.counters.into(),
+            (&w.tally).into(),
+        ],
+        push,
+        n as u64,
+    )?;
+    rec.barrier();
+    w.record_compact(&mut rec, n, &w.alive, &w.kept, &w.count_alive)?;
+    w.record_counts_readback(&mut rec);
+    w.record_tally_readback(&mut rec);
+    let counted = rec.submit(&[occluded])?;
+    shared.gpu.wait(&counted)?;
+    w.read_camera_counts(n, &counted)
+}
+
+/// `finish`: each of the chunk's `pixel_count` pixels' pass estimates added to the film,
+/// waited for.
+fn finish_pixels(
+    shared: &Shared,
+    targets: &CameraTargets,
+    push: &LvcPush,
+    pixel_count: u32,
+) -> vk::Result<()> {
+    let mut rec = shared.gpu.recorder(StreamKind::Main)?;
+    rec.dispatch_items(
+        &shared.kernels.finish,
+        &[
+            shared.constants.into(),
+            (&shared.wave.radiance).into(),
             targets.splat_film.into(),
             targets.accum.into(),
             targets.accum2.into(),
         ],
-        &push,
-        range.pixel_count as u64,
+        push,
+        pixel_count as u64,
     )?;
-    gpu.wait(&rec.submit(&[])?)?;
-    Ok(outcome)
+    shared.gpu.wait(&rec.submit(&[])?)
 }
 
 /// Step 2: sort (optional) and `camera_vertex` on the main stream after the trace.

@@ -41,31 +41,14 @@ pub fn trace_light_paths(
     paths: u32,
 ) -> vk::Result<LightPassOutcome> {
     let _span = tracing::info_span!("lvc light pass", paths).entered();
-    let (gpu, k, s, w) = (shared.gpu, shared.kernels, shared.scene, shared.wave);
+    let w = shared.wave;
     let mut push = LvcPush {
         first_pass,
         path_count: paths,
         capacity: cache.capacity,
         ..Default::default()
     };
-    let mut rec = gpu.recorder(StreamKind::Main)?;
-    rec.fill_range(&cache.vertex_count, paths as u64 * 4, 4, 0)?;
-    rec.barrier();
-    rec.dispatch_items(
-        &k.light_generate,
-        &[
-            shared.constants.into(),
-            (&s.lights).into(),
-            (&s.light_cdf).into(),
-            (&w.rays[0]).into(),
-            (&w.active[0]).into(),
-            (&w.paths).into(),
-            (&cache.vertex_count).into(),
-        ],
-        &push,
-        paths as u64,
-    )?;
-    let mut ready = rec.submit(&[])?;
+    let mut ready = generate_light_paths(shared, cache, &push, paths)?;
     let mut outcome = LightPassOutcome::default();
     let (mut cur, mut n) = (0usize, paths);
     while n > 0 {
@@ -77,47 +60,7 @@ pub fn trace_light_paths(
         push.base = outcome.vertices.min(u32::MAX as u64) as u32;
         let traced = tracer.trace(&w.rays[cur], &w.hits, n, Query::ClosestHit, &[&ready])?;
         outcome.rays += n as u64;
-        let mut rec = gpu.recorder(StreamKind::Main)?;
-        shared.record_sort(&mut rec, n)?;
-        rec.dispatch_items(
-            &k.light_shade,
-            &[
-                shared.constants.into(),
-                (&w.rays[cur]).into(),
-                (&w.hits).into(),
-                (&w.active[cur]).into(),
-                (&w.order).into(),
-                (&w.paths).into(),
-                (&s.triangles).into(),
-                (&s.triangle_material).into(),
-                (&s.materials).into(),
-                (&s.bsdfs).into(),
-                (&s.normals).into(),
-                (&w.vertices).into(),
-                (&w.stored).into(),
-                (&w.alive).into(),
-                (&cache.vertex_count).into(),
-            ],
-            &push,
-            n as u64,
-        )?;
-        rec.barrier();
-        w.record_compact(&mut rec, n, &w.stored, &w.kept_vertices, &w.count_marked)?;
-        rec.dispatch_items(
-            &k.light_store,
-            &[
-                (&w.kept_vertices).into(),
-                (&w.count_marked).into(),
-                (&w.vertices).into(),
-                (&cache.vertices).into(),
-            ],
-            &push,
-            n as u64,
-        )?;
-        w.record_compact(&mut rec, n, &w.alive, &w.kept, &w.count_alive)?;
-        w.record_counts_readback(&mut rec);
-        let counted = rec.submit(&[&traced])?;
-        let (marked, survivors) = w.read_counts(n, &counted)?;
+        let (marked, survivors) = shade_and_store(shared, cache, cur, n, &push, &traced)?;
         outcome.vertices += marked as u64;
         if survivors == 0 {
             break;
@@ -128,12 +71,99 @@ pub fn trace_light_paths(
     }
     crate::timeline_counter!("lvc", "live light paths", 0);
     if outcome.fits(cache) {
-        let mut rec = gpu.recorder(StreamKind::Main)?;
-        rec.barrier();
-        cache.record_index(&mut rec, k, paths, outcome.vertices as u32)?;
-        gpu.wait(&rec.submit(&[])?)?;
+        index_cache(shared, cache, paths, outcome.vertices as u32)?;
     }
     Ok(outcome)
+}
+
+/// Clears the paths' vertex counts and starts `paths` light paths in list 0.
+fn generate_light_paths(
+    shared: &Shared,
+    cache: &LightCache,
+    push: &LvcPush,
+    paths: u32,
+) -> vk::Result<TimelinePoint> {
+    let (s, w) = (shared.scene, shared.wave);
+    let mut rec = shared.gpu.recorder(StreamKind::Main)?;
+    rec.fill_range(&cache.vertex_count, paths as u64 * 4, 4, 0)?;
+    rec.barrier();
+    rec.dispatch_items(
+        &shared.kernels.light_generate,
+        &[
+            shared.constants.into(),
+            (&s.lights).into(),
+            (&s.light_cdf).into(),
+            (&w.rays[0]).into(),
+            (&w.active[0]).into(),
+            (&w.paths).into(),
+            (&cache.vertex_count).into(),
+        ],
+        push,
+        paths as u64,
+    )?;
+    rec.submit(&[])
+}
+
+/// Lines 5–9 after the trace: sort (optional), shade, store the marked vertices in the
+/// cache and compact the live paths; (vertices marked, survivors).
+fn shade_and_store(
+    shared: &Shared,
+    cache: &LightCache,
+    cur: usize,
+    n: u32,
+    push: &LvcPush,
+    traced: &TimelinePoint,
+) -> vk::Result<(u32, u32)> {
+    let (k, s, w) = (shared.kernels, shared.scene, shared.wave);
+    let mut rec = shared.gpu.recorder(StreamKind::Main)?;
+    shared.record_sort(&mut rec, n)?;
+    rec.dispatch_items(
+        &k.light_shade,
+        &[
+            shared.constants.into(),
+            (&w.rays[cur]).into(),
+            (&w.hits).into(),
+            (&w.active[cur]).into(),
+            (&w.order).into(),
+            (&w.paths).into(),
+            (&s.triangles).into(),
+            (&s.triangle_material).into(),
+            (&s.materials).into(),
+            (&s.bsdfs).into(),
+            (&s.normals).into(),
+            (&w.vertices).into(),
+            (&w.stored).into(),
+            (&w.alive).into(),
+            (&cache.vertex_count).into(),
+        ],
+        push,
+        n as u64,
+    )?;
+    rec.barrier();
+    w.record_compact(&mut rec, n, &w.stored, &w.kept_vertices, &w.count_marked)?;
+    rec.dispatch_items(
+        &k.light_store,
+        &[
+            (&w.kept_vertices).into(),
+            (&w.count_marked).into(),
+            (&w.vertices).into(),
+            (&cache.vertices).into(),
+        ],
+        push,
+        n as u64,
+    )?;
+    w.record_compact(&mut rec, n, &w.alive, &w.kept, &w.count_alive)?;
+    w.record_counts_readback(&mut rec);
+    let counted = rec.submit(&[traced])?;
+    w.read_counts(n, &counted)
+}
+
+/// The cache's per-path index over its `vertices` vertices, waited for.
+fn index_cache(shared: &Shared, cache: &LightCache, paths: u32, vertices: u32) -> vk::Result<()> {
+    let mut rec = shared.gpu.recorder(StreamKind::Main)?;
+    rec.barrier();
+    cache.record_index(&mut rec, shared.kernels, paths, vertices)?;
+    shared.gpu.wait(&rec.submit(&[])?)
 }
 
 /// Moves the `survivors` rays and ids of list `cur` (their indices in `kept`) to the
