@@ -161,6 +161,24 @@ impl X {
         ([w as u32, h as u32], rgb)
     }
 
+    /// The window's pixels once something was drawn in it. The title announces a frame
+    /// as soon as it is handed to the window system; the X server shows it a little
+    /// later (lavapipe presents from a thread of its own), longer on a loaded machine.
+    fn capture_first_frame(&self, window: Window) -> ([u32; 2], Vec<[u8; 3]>) {
+        let start = Instant::now();
+        loop {
+            std::thread::sleep(Duration::from_millis(600));
+            let (size, pixels) = self.capture(window);
+            if pixels.iter().any(|p| *p != [0, 0, 0]) {
+                return (size, pixels);
+            }
+            assert!(
+                start.elapsed() < Duration::from_secs(30),
+                "the window stayed black for 30 s after its title announced a frame"
+            );
+        }
+    }
+
     fn press(&self, window: Window, keysym: u32) {
         let setup = self.conn.setup();
         let (min, max) = (setup.min_keycode, setup.max_keycode);
@@ -325,8 +343,7 @@ impl Session {
         x.wait_for_title(window, "eight samples per pixel", |t| {
             title_spp(t).is_some_and(|spp| spp >= 8)
         });
-        std::thread::sleep(Duration::from_millis(600));
-        let (size, colour) = x.capture(window);
+        let (size, colour) = x.capture_first_frame(window);
         assert_eq!(size, splitray::preview::window_size(film));
         assert_cornell_walls(size, film, &colour);
         Self {

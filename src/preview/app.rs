@@ -146,10 +146,6 @@ impl App {
         };
         let snapshot = feed.snapshot();
         let text = title(&self.options.name, &snapshot, &self.state, closing);
-        if text != self.shown_title {
-            window.set_title(&text);
-            self.shown_title = text;
-        }
         match presenter.draw(&snapshot, &self.state) {
             Ok(Some(Presented::OutOfDate)) => {
                 let size = window.inner_size();
@@ -159,6 +155,15 @@ impl App {
             }
             Ok(_) => {}
             Err(e) => self.fail(&e.to_string()),
+        }
+        // The title follows the draw, so that it never announces a frame (its spp, its
+        // view, its exposure) before that frame was handed to the window; the first
+        // draw compiles the tone mapper and can take a while on a CPU device.
+        if let Some(window) = &self.window {
+            if text != self.shown_title {
+                window.set_title(&text);
+                self.shown_title = text;
+            }
         }
     }
 
