@@ -287,11 +287,7 @@ pub fn render_from(
     control: RenderControl<'_>,
 ) -> Result<RenderOutput, RenderError> {
     device_fit::check(gpu, scene, options)?;
-    let triangles: Vec<GpuTriangle> = scene
-        .triangles
-        .iter()
-        .map(|t| GpuTriangle::new(t.p))
-        .collect();
+    let triangles: Vec<GpuTriangle> = scene.gpu_triangles();
     let camera = scene.camera.frame(options.width, options.height);
 
     let start = start_measuring(gpu)?;
@@ -527,11 +523,7 @@ pub fn create_integrator(
     options: &RenderOptions,
 ) -> Result<Box<dyn Integrator>, RenderError> {
     device_fit::check(gpu, scene, options)?;
-    let triangles: Vec<GpuTriangle> = scene
-        .triangles
-        .iter()
-        .map(|t| GpuTriangle::new(t.p))
-        .collect();
+    let triangles: Vec<GpuTriangle> = scene.gpu_triangles();
     let tracer = options.tracer.create(gpu, &triangles)?;
     integrator_on(gpu, scene, options, &triangles, tracer)
 }

@@ -456,11 +456,7 @@ fn a_new_frame_allocates_nothing() {
             let changed = a.advance(&mut posed, t, next);
             t = next;
             assert!(!changed.is_empty());
-            let triangles: Vec<GpuTriangle> = posed
-                .triangles
-                .iter()
-                .map(|t| GpuTriangle::new(t.p))
-                .collect();
+            let triangles: Vec<GpuTriangle> = posed.gpu_triangles();
             it.set_frame(&SceneFrame {
                 scene: &posed,
                 triangles: &triangles,
@@ -503,9 +499,7 @@ fn every_tracer_follows_moving_geometry() {
     let gpu = common::gpu();
     let dir = tempfile::tempdir().unwrap();
     let a = load(dir.path());
-    let gpu_tris = |s: &Scene| -> Vec<GpuTriangle> {
-        s.triangles.iter().map(|t| GpuTriangle::new(t.p)).collect()
-    };
+    let gpu_tris = |s: &Scene| -> Vec<GpuTriangle> { s.gpu_triangles() };
     let mut tracers: Vec<(String, Box<dyn Tracer>)> = TracerKind::ALL
         .iter()
         .filter(|(k, _)| *k != TracerKind::RayQuery || gpu.ray_query())

@@ -30,11 +30,7 @@ fn options(
 }
 
 fn gpu_triangles(scene: &Scene) -> Vec<GpuTriangle> {
-    scene
-        .triangles
-        .iter()
-        .map(|t| GpuTriangle::new(t.p))
-        .collect()
+    scene.gpu_triangles()
 }
 
 /// Primary rays through pixel centres, made on the CPU with the camera convention.

@@ -102,11 +102,7 @@ fn scale_rays(rays: &[Ray], s: f32, offset: Vec3) -> Vec<Ray> {
 }
 
 fn gpu_triangles(scene: &splitray::scene::Scene) -> Vec<GpuTriangle> {
-    scene
-        .triangles
-        .iter()
-        .map(|t| GpuTriangle::new(t.p))
-        .collect()
+    scene.gpu_triangles()
 }
 
 /// Incoherent rays from points on random triangles (nudged off the surface or exactly

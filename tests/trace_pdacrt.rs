@@ -177,11 +177,7 @@ fn empty_segments_leave_at_the_root() {
 }
 
 fn scene_triangles(scene: &scene::Scene) -> Vec<GpuTriangle> {
-    scene
-        .triangles
-        .iter()
-        .map(|t| GpuTriangle::new(t.p))
-        .collect()
+    scene.gpu_triangles()
 }
 
 #[test]

@@ -119,11 +119,7 @@ fn bunny() -> Option<splitray::scene::Scene> {
 }
 
 fn gpu_triangles(scene: &splitray::scene::Scene) -> Vec<GpuTriangle> {
-    scene
-        .triangles
-        .iter()
-        .map(|t| GpuTriangle::new(t.p))
-        .collect()
+    scene.gpu_triangles()
 }
 
 /// A scene whose box is exactly [0, 1]³, so the first splits are the planes x, y, z = ½,

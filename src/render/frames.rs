@@ -241,7 +241,7 @@ impl Sequence {
         let scene = animated.pose(time);
         // Every frame has the first frame's triangle count and film.
         super::device_fit::check(gpu, &scene, options)?;
-        let triangles = gpu_triangles(&scene);
+        let triangles = scene.gpu_triangles();
         let tracer = Rc::new(RefCell::new(Shared {
             tracer: options.tracer.create(gpu, &triangles)?,
             holds: range.first,
@@ -369,14 +369,6 @@ pub fn move_triangles(
         }
     }
     changed.iter().map(|r| r.len()).sum()
-}
-
-fn gpu_triangles(scene: &Scene) -> Vec<GpuTriangle> {
-    scene
-        .triangles
-        .iter()
-        .map(|t| GpuTriangle::new(t.p))
-        .collect()
 }
 
 /// The sequence's one tracer, and which frame's geometry it holds.

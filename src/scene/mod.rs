@@ -371,6 +371,14 @@ pub struct Scene {
 }
 
 impl Scene {
+    /// The triangles as the tracers take them, in the scene's order.
+    pub fn gpu_triangles(&self) -> Vec<crate::trace::GpuTriangle> {
+        self.triangles
+            .iter()
+            .map(|t| crate::trace::GpuTriangle::new(t.p))
+            .collect()
+    }
+
     /// Bounding box of all triangle vertices (empty box for no triangles).
     pub fn bounds(&self) -> Aabb {
         let mut b = Aabb::EMPTY;

@@ -155,11 +155,7 @@ impl PtScene {
         };
         let _ = Vec3::ZERO;
         Self {
-            triangles: scene
-                .triangles
-                .iter()
-                .map(|t| GpuTriangle::new(t.p))
-                .collect(),
+            triangles: scene.gpu_triangles(),
             triangle_material: scene.triangles.iter().map(|t| t.material).collect(),
             materials,
             bsdfs,
