@@ -118,10 +118,6 @@ fn bunny() -> Option<splitray::scene::Scene> {
     Some(splitray::scene::load(BUNNY).expect("bunny loads"))
 }
 
-fn gpu_triangles(scene: &splitray::scene::Scene) -> Vec<GpuTriangle> {
-    scene.gpu_triangles()
-}
-
 /// A scene whose box is exactly [0, 1]³, so the first splits are the planes x, y, z = ½,
 /// then ¼ and ¾: axis-aligned flat triangles lying in those planes, zero-area triangles,
 /// and exact duplicates (equal t: the smaller index must win).
@@ -284,7 +280,7 @@ fn cpu_dacrt_keeps_the_smaller_index_among_equal_hits() {
 #[test]
 fn cpu_dacrt_equals_brute_force_in_the_cornell_box_from_outside_and_inside() {
     let scene = splitray::scene::load("cornell-box").unwrap();
-    let tris = gpu_triangles(&scene);
+    let tris = scene.gpu_triangles();
     let mut rays = common::camera_rays(&scene.camera, 48, 48);
     // Cameras inside the scene box, looking everywhere.
     let b = scene.bounds();
@@ -326,7 +322,7 @@ fn cpu_dacrt_handles_empty_batches_and_single_triangles() {
 #[test]
 fn cpu_dacrt_equals_brute_force_on_the_bunny() {
     let Some(scene) = bunny() else { return };
-    let tris = gpu_triangles(&scene);
+    let tris = scene.gpu_triangles();
     assert_eq!(tris.len(), 69_451);
     // A 64×64 camera subset keeps the brute-force reference affordable.
     let rays = common::camera_rays(&scene.camera, 64, 64);
@@ -392,6 +388,42 @@ fn cpu_dacrt_tracer_reads_rays_after_its_wait_points_and_writes_hits() {
         .trace(&ray_buf, &hit_buf, 0, Query::ClosestHit, &[])
         .unwrap();
     gpu.wait(&done).unwrap();
+    common::assert_clean(&gpu);
+}
+
+#[test]
+fn host_tracers_refuse_more_rays_than_their_buffers_hold() {
+    let gpu = common::gpu();
+    let soup = common::triangle_soup(40, 23);
+    let rays = common::random_rays(17, 24);
+    let ray_buf = gpu.upload("rays", &rays).unwrap();
+    let hit_buf = gpu.zeroed::<Hit>("hits", rays.len()).unwrap();
+    let short_hits = gpu.zeroed::<Hit>("short-hits", rays.len() - 1).unwrap();
+    for kind in [TracerKind::CpuDacrt, TracerKind::CpuBvh] {
+        let mut tracer = kind.create(&gpu, &soup).unwrap();
+        for (count, hits) in [(18, &hit_buf), (17, &short_hits)] {
+            let error = tracer
+                .trace(&ray_buf, hits, count, Query::ClosestHit, &[])
+                .err()
+                .unwrap_or_else(|| panic!("{}: {count} rays into '{}'", kind.name(), hits.name()))
+                .to_string();
+            let want = format!(
+                "{}: {count} rays do not fit buffers 'rays' and '{}'",
+                kind.name(),
+                hits.name()
+            );
+            assert!(error.contains(&want), "{error:?} should say {want:?}");
+        }
+        // The whole batch still traces after the refusals.
+        let done = tracer
+            .trace(&ray_buf, &hit_buf, 17, Query::ClosestHit, &[])
+            .unwrap();
+        gpu.wait(&done).unwrap();
+        assert_eq!(
+            hit_buf.read::<Hit>().unwrap(),
+            cpu::closest_hits(&rays, &soup)
+        );
+    }
     common::assert_clean(&gpu);
 }
 
@@ -480,7 +512,7 @@ fn ray_query_rebuilds_for_a_moving_scene() {
 fn ray_query_matches_brute_force_in_the_cornell_box() {
     let Some(gpu) = ray_query_gpu() else { return };
     let scene = splitray::scene::load("cornell-box").unwrap();
-    let tris = gpu_triangles(&scene);
+    let tris = scene.gpu_triangles();
     let rays = common::camera_rays(&scene.camera, 96, 96);
     let mut tracer = RayQueryTracer::new(&gpu, &tris).unwrap();
     let hits = common::trace_hits(&gpu, &mut tracer, &rays, Query::ClosestHit);
@@ -500,7 +532,7 @@ fn ray_query_matches_brute_force_in_the_cornell_box() {
 #[test]
 fn bunny_512_throughput_and_agreement() {
     let Some(scene) = bunny() else { return };
-    let tris = gpu_triangles(&scene);
+    let tris = scene.gpu_triangles();
     let rays = common::camera_rays(&scene.camera, 512, 512);
     let n = rays.len() as f64;
 
@@ -594,7 +626,7 @@ fn bunny_512_throughput_and_agreement() {
 #[ignore]
 fn bunny_dacrt_threshold_sweep() {
     let Some(scene) = bunny() else { return };
-    let tris = gpu_triangles(&scene);
+    let tris = scene.gpu_triangles();
     let rays = common::camera_rays(&scene.camera, 512, 512);
     for alpha in [2u32, 4, 8, 16, 32, 64, 256] {
         for beta in [2u32, 4, 8, 16, 32, 256] {

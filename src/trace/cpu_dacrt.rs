@@ -50,12 +50,12 @@
 //! fraction of the scene size, segments by a relative margin): extra rays in a node cost
 //! time, never correctness.
 
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use glam::Vec3;
 
-use super::{cpu, GpuTriangle, Hit, Query, Ray, Tracer, MISS};
-use crate::vk::{self, Buffer, Gpu, StreamKind, TimelinePoint};
+use super::{cpu, trace_on_host, GpuTriangle, Hit, Query, Ray, Tracer, MISS};
+use crate::vk::{self, Buffer, Gpu, TimelinePoint};
 
 /// Thresholds of the recursion (Algorithm 2, line 3).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -414,31 +414,23 @@ impl Tracer for CpuDacrtTracer {
         query: Query,
         after: &[&TimelinePoint],
     ) -> vk::Result<TimelinePoint> {
-        let n = ray_count as usize;
-        if rays.element_count::<Ray>() < n || hits.element_count::<Hit>() < n {
-            return Err(vk::VkError::Usage(format!(
-                "cpu-dacrt: {n} rays do not fit buffers '{}' and '{}'",
-                rays.name(),
-                hits.name()
-            )));
-        }
-        // The rays are written by work the caller orders before `after`.
-        for p in after {
-            self.gpu.wait(p)?;
-        }
-        if n > 0 {
-            let mut host_rays = rays.read::<Ray>()?;
-            host_rays.truncate(n);
-            let start = Instant::now();
-            let span = tracing::info_span!("cpu-dacrt trace", rays = n as u64).entered();
-            let (host_hits, stats) = trace(&host_rays, &self.triangles, query, &self.params);
-            drop(span);
-            self.last_time = start.elapsed();
+        let (triangles, params) = (&self.triangles, &self.params);
+        let (point, traced) = trace_on_host(
+            &self.gpu,
+            "cpu-dacrt",
+            (rays, hits),
+            ray_count,
+            after,
+            |host_rays| {
+                let _span =
+                    tracing::info_span!("cpu-dacrt trace", rays = host_rays.len() as u64).entered();
+                trace(host_rays, triangles, query, params)
+            },
+        )?;
+        if let Some((time, stats)) = traced {
+            self.last_time = time;
             self.last_stats = stats;
-            // `read` drained the main stream and `after` is reached: nothing on the GPU
-            // still uses `hits` by the caller's ordering.
-            hits.write(&host_hits)?;
         }
-        self.gpu.recorder(StreamKind::Main)?.submit(after)
+        Ok(point)
     }
 }

@@ -171,3 +171,42 @@ impl FromStr for TracerKind {
             })
     }
 }
+
+/// The part every tracer that runs on the host shares: check that `ray_count` rays fit
+/// both buffers, wait for `after` (the work that wrote the rays), read the rays, run
+/// `trace` on them (timed: the duration comes back with what `trace` returns) and write
+/// its hits; the returned point is on the main stream after `after`. No rays, no trace.
+pub(crate) fn trace_on_host<S>(
+    gpu: &Gpu,
+    tracer: &str,
+    (rays, hits): (&Buffer, &Buffer),
+    ray_count: u32,
+    after: &[&TimelinePoint],
+    trace: impl FnOnce(&[Ray]) -> (Vec<Hit>, S),
+) -> vk::Result<(TimelinePoint, Option<(std::time::Duration, S)>)> {
+    let n = ray_count as usize;
+    if rays.element_count::<Ray>() < n || hits.element_count::<Hit>() < n {
+        return Err(vk::VkError::Usage(format!(
+            "{tracer}: {n} rays do not fit buffers '{}' and '{}'",
+            rays.name(),
+            hits.name()
+        )));
+    }
+    // The rays are written by work the caller orders before `after`.
+    for p in after {
+        gpu.wait(p)?;
+    }
+    let mut traced = None;
+    if n > 0 {
+        let mut host_rays = rays.read::<Ray>()?;
+        host_rays.truncate(n);
+        let start = std::time::Instant::now();
+        let (host_hits, extra) = trace(&host_rays);
+        traced = Some((start.elapsed(), extra));
+        // `read` drained the main stream and `after` is reached: nothing on the GPU
+        // still uses `hits` by the caller's ordering.
+        hits.write(&host_hits)?;
+    }
+    let point = gpu.recorder(vk::StreamKind::Main)?.submit(after)?;
+    Ok((point, traced))
+}

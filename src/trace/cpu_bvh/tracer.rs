@@ -4,8 +4,8 @@
 use std::time::Instant;
 
 use super::CpuBvh;
-use crate::trace::{GpuTriangle, Hit, HostTiming, Query, Ray, Tracer};
-use crate::vk::{self, Buffer, Gpu, StreamKind, TimelinePoint};
+use crate::trace::{trace_on_host, GpuTriangle, HostTiming, Query, Tracer};
+use crate::vk::{self, Buffer, Gpu, TimelinePoint};
 
 pub struct CpuBvhTracer {
     gpu: Gpu,
@@ -63,34 +63,27 @@ impl Tracer for CpuBvhTracer {
         query: Query,
         after: &[&TimelinePoint],
     ) -> vk::Result<TimelinePoint> {
-        let n = ray_count as usize;
-        if rays.element_count::<Ray>() < n || hits.element_count::<Hit>() < n {
-            return Err(vk::VkError::Usage(format!(
-                "cpu-bvh: {n} rays do not fit buffers '{}' and '{}'",
-                rays.name(),
-                hits.name()
-            )));
+        let bvh = &self.bvh;
+        let (point, traced) = trace_on_host(
+            &self.gpu,
+            "cpu-bvh",
+            (rays, hits),
+            ray_count,
+            after,
+            |host_rays| {
+                let _span =
+                    tracing::info_span!("cpu-bvh trace", rays = host_rays.len() as u64).entered();
+                let hits = match query {
+                    Query::ClosestHit => bvh.closest_hits(host_rays),
+                    Query::Occlusion => bvh.any_hits(host_rays),
+                };
+                (hits, ())
+            },
+        )?;
+        if let Some((time, ())) = traced {
+            self.timing.trace += time;
+            self.timing.rays += ray_count as u64;
         }
-        // The rays are written by work the caller orders before `after`.
-        for p in after {
-            self.gpu.wait(p)?;
-        }
-        if n > 0 {
-            let mut host_rays = rays.read::<Ray>()?;
-            host_rays.truncate(n);
-            let start = Instant::now();
-            let span = tracing::info_span!("cpu-bvh trace", rays = n as u64).entered();
-            let host_hits = match query {
-                Query::ClosestHit => self.bvh.closest_hits(&host_rays),
-                Query::Occlusion => self.bvh.any_hits(&host_rays),
-            };
-            drop(span);
-            self.timing.trace += start.elapsed();
-            self.timing.rays += n as u64;
-            // `read` drained the main stream and `after` is reached: nothing on the GPU
-            // still uses `hits` by the caller's ordering.
-            hits.write(&host_hits)?;
-        }
-        self.gpu.recorder(StreamKind::Main)?.submit(after)
+        Ok(point)
     }
 }
