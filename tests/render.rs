@@ -29,10 +29,6 @@ fn options(
     .unwrap()
 }
 
-fn gpu_triangles(scene: &Scene) -> Vec<GpuTriangle> {
-    scene.gpu_triangles()
-}
-
 /// Primary rays through pixel centres, made on the CPU with the camera convention.
 fn pixel_centre_rays(scene: &Scene, width: u32, height: u32) -> Vec<Ray> {
     let frame = scene.camera.frame(width, height);
@@ -53,7 +49,7 @@ fn pixel_centre_rays(scene: &Scene, width: u32, height: u32) -> Vec<Ray> {
 fn brute_force_matches_cpu_on_the_cornell_box() {
     let gpu = common::gpu();
     let scene = scene::load("cornell-box").unwrap();
-    let triangles = gpu_triangles(&scene);
+    let triangles = scene.gpu_triangles();
     let rays = pixel_centre_rays(&scene, 256, 256);
     let mut tracer = BruteForceTracer::new(&gpu, &triangles).unwrap();
     let ray_buf = gpu.upload("rays", &rays).unwrap();
@@ -97,7 +93,7 @@ fn rendered_triangle_ids_and_depth_match_cpu_camera_rays() {
         &mut |_| {},
     )
     .unwrap();
-    let expected = cpu::closest_hits(&pixel_centre_rays(&scene, w, h), &gpu_triangles(&scene));
+    let expected = cpu::closest_hits(&pixel_centre_rays(&scene, w, h), &scene.gpu_triangles());
     let ids = out.film.triangle_id.as_ref().unwrap();
     let depth = out.film.depth.as_ref().unwrap();
     // The GPU builds the same rays in its own kernel; rounding of the direction may
@@ -241,7 +237,7 @@ fn a_scene_past_one_storage_binding_renders() {
     )
     .unwrap();
     let ids = out.film.triangle_id.as_ref().unwrap();
-    let expected = cpu::closest_hits(&pixel_centre_rays(&scene, w, h), &gpu_triangles(&scene));
+    let expected = cpu::closest_hits(&pixel_centre_rays(&scene, w, h), &scene.gpu_triangles());
     let past = expected
         .iter()
         .filter(|e| e.triangle as usize >= filler)
@@ -417,7 +413,7 @@ fn reflection_integrator_shows_what_the_cpu_sees_in_the_mirror() {
         &mut |_| {},
     )
     .unwrap();
-    let tris = gpu_triangles(&scene);
+    let tris = scene.gpu_triangles();
     let primary = pixel_centre_rays(&scene, w, h);
     let hits = cpu::closest_hits(&primary, &tris);
     let eps = 1e-4 * scene.bounds().radius();

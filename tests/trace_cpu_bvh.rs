@@ -101,10 +101,6 @@ fn scale_rays(rays: &[Ray], s: f32, offset: Vec3) -> Vec<Ray> {
         .collect()
 }
 
-fn gpu_triangles(scene: &splitray::scene::Scene) -> Vec<GpuTriangle> {
-    scene.gpu_triangles()
-}
-
 /// Incoherent rays from points on random triangles (nudged off the surface or exactly
 /// on it) in random directions: what a path tracer's bounces look like.
 fn surface_rays(tris: &[GpuTriangle], n: usize, seed: u64, nudge: f32) -> Vec<Ray> {
@@ -234,7 +230,7 @@ fn equals_brute_force_on_axis_aligned_geometry_with_axis_parallel_and_in_plane_r
 #[test]
 fn equals_brute_force_in_the_cornell_box_from_outside_and_inside() {
     let scene = splitray::scene::load("cornell-box").unwrap();
-    let tris = gpu_triangles(&scene);
+    let tris = scene.gpu_triangles();
     let mut rays = common::camera_rays(&scene.camera, 48, 48);
     let b = scene.bounds();
     let u = common::uniforms(6 * 3000, 7);
@@ -260,7 +256,7 @@ fn equals_brute_force_on_the_bunny() {
         return;
     }
     let scene = splitray::scene::load(BUNNY).expect("bunny loads");
-    let tris = gpu_triangles(&scene);
+    let tris = scene.gpu_triangles();
     let bvh = CpuBvh::new(&tris);
     assert_eq!(bvh.triangle_count(), tris.len());
     // A 32×32 camera and 512 rays leaving the surface keep brute force affordable.
