@@ -520,38 +520,16 @@ fn bench_scan(
     scan_n: usize,
     runs: usize,
 ) -> BenchResult<(Vec<BenchRow>, Option<TargetCheck>)> {
-    let scan_n32 = u32::try_from(scan_n)?;
-    let scan = Scan::new(gpu, tuning)?;
-    let data: Vec<u32> = random_u32s(scan_n, 2).iter().map(|x| x & 0xFF).collect();
-    let input = gpu.upload("bench-scan-in", &data)?;
-    let output = device_buffer(gpu, "bench-scan-out", scan_n as u64 * 4)?;
-    let scan_scratch = device_buffer(gpu, "bench-scan-scratch", scan.scratch_bytes(scan_n32))?;
-    let record_scan = |rec: &mut Recorder| {
-        scan.record(
-            rec,
-            scan_n32,
-            (&input).into(),
-            (&output).into(),
-            ScanKind::Exclusive,
-            &scan_scratch,
-        )
-    };
-    let mut rec = gpu.recorder(StreamKind::Main)?;
-    record_scan(&mut rec)?;
-    gpu.wait(&rec.submit(&[])?)?;
-    check(
-        "exclusive scan",
-        &output.read::<u32>()?,
-        &cpu::exclusive_scan(&data),
-    )?;
+    let scan = VerifiedScan::new(gpu, tuning, scan_n, "bench-scan", "exclusive scan")?;
+    let record_scan = |rec: &mut Recorder| scan.record(rec);
     let scan_cpu = time_cpu(runs, || {
         let t = Instant::now();
-        std::hint::black_box(cpu::exclusive_scan(&data));
+        std::hint::black_box(cpu::exclusive_scan(&scan.data));
         t.elapsed().as_secs_f64() * 1e3
     });
     // The copy and the scan alternate run by run (see time_against).
     let copy_once = |rec: &mut Recorder| {
-        rec.copy(&input, 0, &output, 0, scan_n as u64 * 4);
+        rec.copy(&scan.input, 0, &scan.output, 0, scan_n as u64 * 4);
         Ok(())
     };
     gpu_once(gpu, &no_prepare, &copy_once, false)?;
@@ -872,31 +850,59 @@ fn expected_sort(keys: &[u32], values: &[u32]) -> (Arc<Vec<u32>>, Arc<Vec<u32>>)
 /// Minimum GPU ms over `runs` of an exclusive scan of `n` u32 with `tuning` (verified
 /// first).
 pub fn time_scan(gpu: &Gpu, tuning: &Tuning, n: usize, runs: usize) -> BenchResult<f64> {
-    let n32 = u32::try_from(n)?;
-    let scan = Scan::new(gpu, tuning)?;
-    let data: Vec<u32> = random_u32s(n, 2).iter().map(|x| x & 0xFF).collect();
-    let input = gpu.upload("sweep-scan-in", &data)?;
-    let output = device_buffer(gpu, "sweep-scan-out", n as u64 * 4)?;
-    let scratch = device_buffer(gpu, "sweep-scan-scratch", scan.scratch_bytes(n32))?;
-    let record = |rec: &mut Recorder| {
-        scan.record(
+    let scan = VerifiedScan::new(gpu, tuning, n, "sweep-scan", "sweep scan")?;
+    time_gpu_min(gpu, runs, no_prepare, |rec: &mut Recorder| scan.record(rec))
+}
+
+/// An exclusive scan of `n` values below 256 with its buffers (named `prefix`-in, -out
+/// and -scratch), run once and checked against the CPU scan (as `what`) before anything
+/// times it.
+struct VerifiedScan {
+    scan: Scan,
+    n: u32,
+    data: Vec<u32>,
+    input: Buffer,
+    output: Buffer,
+    scratch: Buffer,
+}
+
+impl VerifiedScan {
+    fn new(gpu: &Gpu, tuning: &Tuning, n: usize, prefix: &str, what: &str) -> BenchResult<Self> {
+        let n32 = u32::try_from(n)?;
+        let scan = Scan::new(gpu, tuning)?;
+        let data: Vec<u32> = random_u32s(n, 2).iter().map(|x| x & 0xFF).collect();
+        let input = gpu.upload(&format!("{prefix}-in"), &data)?;
+        let output = device_buffer(gpu, &format!("{prefix}-out"), n as u64 * 4)?;
+        let scratch = device_buffer(gpu, &format!("{prefix}-scratch"), scan.scratch_bytes(n32))?;
+        let verified = Self {
+            scan,
+            n: n32,
+            data,
+            input,
+            output,
+            scratch,
+        };
+        let mut rec = gpu.recorder(StreamKind::Main)?;
+        verified.record(&mut rec)?;
+        gpu.wait(&rec.submit(&[])?)?;
+        check(
+            what,
+            &verified.output.read::<u32>()?,
+            &cpu::exclusive_scan(&verified.data),
+        )?;
+        Ok(verified)
+    }
+
+    fn record(&self, rec: &mut Recorder) -> crate::vk::Result<()> {
+        self.scan.record(
             rec,
-            n32,
-            (&input).into(),
-            (&output).into(),
+            self.n,
+            (&self.input).into(),
+            (&self.output).into(),
             ScanKind::Exclusive,
-            &scratch,
+            &self.scratch,
         )
-    };
-    let mut rec = gpu.recorder(StreamKind::Main)?;
-    record(&mut rec)?;
-    gpu.wait(&rec.submit(&[])?)?;
-    check(
-        "sweep scan",
-        &output.read::<u32>()?,
-        &cpu::exclusive_scan(&data),
-    )?;
-    time_gpu_min(gpu, runs, no_prepare, record)
+    }
 }
 
 /// Minimum GPU ms over `runs` of a `vkCmdCopyBuffer` of `n` u32: the yardstick of the
