@@ -287,7 +287,7 @@ pub fn render_from(
     control: RenderControl<'_>,
 ) -> Result<RenderOutput, RenderError> {
     device_fit::check(gpu, scene, options)?;
-    let triangles: Vec<GpuTriangle> = scene.gpu_triangles();
+    let triangles = scene.gpu_triangles();
     let camera = scene.camera.frame(options.width, options.height);
 
     let start = start_measuring(gpu)?;
@@ -523,7 +523,7 @@ pub fn create_integrator(
     options: &RenderOptions,
 ) -> Result<Box<dyn Integrator>, RenderError> {
     device_fit::check(gpu, scene, options)?;
-    let triangles: Vec<GpuTriangle> = scene.gpu_triangles();
+    let triangles = scene.gpu_triangles();
     let tracer = options.tracer.create(gpu, &triangles)?;
     integrator_on(gpu, scene, options, &triangles, tracer)
 }

@@ -456,7 +456,7 @@ fn a_new_frame_allocates_nothing() {
             let changed = a.advance(&mut posed, t, next);
             t = next;
             assert!(!changed.is_empty());
-            let triangles: Vec<GpuTriangle> = posed.gpu_triangles();
+            let triangles = posed.gpu_triangles();
             it.set_frame(&SceneFrame {
                 scene: &posed,
                 triangles: &triangles,

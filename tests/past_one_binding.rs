@@ -135,7 +135,7 @@ fn render_film_past_one_binding(width: u32, height: u32) {
 fn check_pixels_against_the_cpu(scene: &Scene, film: &Film) {
     let (w, h) = (film.width(), film.height());
     let frame = scene.camera.frame(w, h);
-    let triangles: Vec<GpuTriangle> = scene.gpu_triangles();
+    let triangles = scene.gpu_triangles();
     let last_row = (h - 1) * w..h * w;
     let pixels: Vec<u32> = (0..w * h).step_by(997).chain(last_row).collect();
     let rays: Vec<Ray> = pixels

@@ -449,7 +449,7 @@ pub fn run(
     };
     let mut t = range.time(range.first);
     let mut scene = animated.pose(t);
-    let mut triangles: Vec<GpuTriangle> = scene.gpu_triangles();
+    let mut triangles = scene.gpu_triangles();
     let (mut contenders, skipped) = create_contenders(gpu, opts, &triangles)?;
     let slots = workload_slots(gpu, opts)?;
     // Warm-up: the first frame as the tracers were built for it, verified, not timed.

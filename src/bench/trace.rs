@@ -364,7 +364,7 @@ pub fn run(
     opts: &TraceBenchOptions,
     dump_hits: Option<&Path>,
 ) -> BenchResult<TraceReport> {
-    let triangles: Vec<GpuTriangle> = scene.gpu_triangles();
+    let triangles = scene.gpu_triangles();
     let batches = workload_batches(gpu, scene, opts, &triangles, dump_hits)?;
     let bench = Bench::upload(gpu, opts, triangles, batches)?;
     let samples = bench.oracle_samples()?;
