@@ -363,6 +363,15 @@ fn bad_input_gives_a_clear_error_and_no_output() {
     // clap's own usage errors exit with 2; an unknown integrator is one of them.
     let out = splitray(&["render", "--integrator", "bogus"], d);
     assert!(!out.status.success() && text(&out).contains("bogus"));
+    // Mitsuba's max_depth is -1 (unbounded) or 0 and up; -5 is not "unbounded".
+    for command in [&["render"][..], &["bench", "bdpt"]] {
+        let mut args = command.to_vec();
+        args.extend(["--max-depth", "-5"]);
+        let out = splitray(&args, d);
+        let t = text(&out);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {t}");
+        assert!(t.contains("--max-depth") && t.contains("-5"), "{t}");
+    }
 }
 
 #[test]

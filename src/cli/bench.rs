@@ -64,7 +64,7 @@ enum BenchCommand {
         #[arg(long, default_value_t = 16)]
         spp: u32,
         /// Mitsuba's max_depth (-1 = unbounded, Russian roulette from depth 5).
-        #[arg(long, default_value_t = -1, allow_hyphen_values = true)]
+        #[arg(long, default_value_t = -1, allow_hyphen_values = true, value_parser = super::max_depth_parser())]
         max_depth: i32,
         #[arg(long, default_value = "pdacrt")]
         tracer: TracerKind,
@@ -98,7 +98,7 @@ enum BenchCommand {
         #[arg(long, default_value_t = 10)]
         rounds: u32,
         /// Mitsuba's max_depth (-1 = unbounded, Russian roulette from depth 5).
-        #[arg(long, default_value_t = -1, allow_hyphen_values = true)]
+        #[arg(long, default_value_t = -1, allow_hyphen_values = true, value_parser = super::max_depth_parser())]
         max_depth: i32,
         #[arg(long, default_value_t = 0)]
         seed: u64,
@@ -157,7 +157,7 @@ enum BenchCommand {
         #[arg(long, default_value_t = 30.0)]
         time: f64,
         /// Mitsuba's max_depth (-1 = unbounded, Russian roulette from depth 5).
-        #[arg(long, default_value_t = -1, allow_hyphen_values = true)]
+        #[arg(long, default_value_t = -1, allow_hyphen_values = true, value_parser = super::max_depth_parser())]
         max_depth: i32,
         #[arg(long, default_value_t = 0)]
         seed: u64,

@@ -73,3 +73,9 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
     }
     .map(|()| ExitCode::SUCCESS)
 }
+
+/// `--max-depth` as Mitsuba takes it: -1 (unbounded) or a depth of 0 or more. Anything
+/// below -1 is refused rather than read as "unbounded".
+fn max_depth_parser() -> clap::builder::RangedI64ValueParser<i32> {
+    clap::value_parser!(i32).range(-1..)
+}

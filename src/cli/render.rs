@@ -70,7 +70,7 @@ pub struct RenderArgs {
     time: Option<f64>,
     /// pt, bpt, light, lvc-bdpt, cis-lbdpt: maximum path depth as in Mitsuba (1 = emitters seen directly, 2 = direct
     /// light, -1 = unbounded; default: the scene's, else -1).
-    #[arg(long, allow_hyphen_values = true)]
+    #[arg(long, allow_hyphen_values = true, value_parser = super::max_depth_parser())]
     max_depth: Option<i32>,
     /// pt, bpt, light, lvc-bdpt, cis-lbdpt: Russian roulette from this depth on (default: Mitsuba's 5).
     #[arg(long)]
