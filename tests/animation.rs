@@ -149,6 +149,36 @@ fn the_scene_file_animates_meshes_sequence_and_camera() {
     assert_eq!(a.camera_at(0.5).fov_y, 39.3077);
 }
 
+/// `[camera]` is optional where every key gives the whole camera: the keys' headers alone
+/// make the table (an implicit one, which has no span of its own in the file).
+#[test]
+fn a_camera_given_only_by_its_keys_moves_as_with_a_camera_table() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = write_scene(dir.path());
+    let with_table = scene::load_animated(path.to_str().unwrap()).unwrap();
+    let text = std::fs::read_to_string(&path).unwrap();
+    let table = "[camera]\nlook_at = [278.0, 273.0, 0.0]\nfov_y = 39.3077\n";
+    assert!(text.contains(table));
+    let keys_only = text
+        .replacen(table, "", 1)
+        .replacen(
+            "time = 0.0\nposition = [278.0, 273.0, -800.0]\n",
+            "time = 0.0\nposition = [278.0, 273.0, -800.0]\nlook_at = [278.0, 273.0, 0.0]\nfov_y = 39.3077\n",
+            1,
+        )
+        .replacen(
+            "look_at = [270.0, 260.0, 10.0]\n",
+            "look_at = [270.0, 260.0, 10.0]\nfov_y = 39.3077\n",
+            1,
+        );
+    std::fs::write(&path, keys_only).unwrap();
+    let without = scene::load_animated(path.to_str().unwrap()).unwrap();
+    for t in [0.0, 0.3, 1.0, 2.0] {
+        assert_eq!(without.camera_at(t), with_table.camera_at(t), "at {t} s");
+    }
+    assert_ne!(without.camera_at(0.0), without.camera_at(1.0));
+}
+
 /// The shipped example turns the tall block a quarter turn about its own axis.
 #[test]
 fn the_shipped_animated_cornell_box_turns_its_tall_block_in_place() {

@@ -59,7 +59,7 @@ intensity = [10, 10, 10]
 spp = 16
 seed = 7
 integrator = "path"
-tracer = "gpu"
+tracer = "pdacrt"
 max_depth = 5
 "#;
 
@@ -100,7 +100,7 @@ fn good_toml_loads_with_relative_paths() {
     assert_eq!(s.settings.spp, Some(16));
     assert_eq!(s.settings.seed, Some(7));
     assert_eq!(s.settings.integrator.as_deref(), Some("path"));
-    assert_eq!(s.settings.tracer.as_deref(), Some("gpu"));
+    assert_eq!(s.settings.tracer.as_deref(), Some("pdacrt"));
     assert_eq!(s.settings.max_depth, Some(5));
 }
 
@@ -177,6 +177,43 @@ fn toml_errors_have_line_and_column() {
         &load_err(&p),
         &["nanlight.toml", "point light 0 position is not finite"],
     );
+
+    let p = write(
+        dir.path(),
+        "darklight.toml",
+        "[[mesh]]\npath = \"meshes/tri.obj\"\n[[point_light]]\nposition = [0, 0, 1]\nintensity = [1, -2, 1]\n",
+    );
+    assert_has(
+        &load_err(&p),
+        &[
+            "darklight.toml",
+            "point light 0 intensity [1, -2, 1] is negative",
+        ],
+    );
+
+    // A mesh loaded twice brings its materials twice; the list of known names has each once.
+    let p = write(
+        dir.path(),
+        "twice.toml",
+        "[[mesh]]\npath = \"meshes/tri.obj\"\n[[mesh]]\npath = \"meshes/tri.obj\"\nmaterial = \"gold\"\n",
+    );
+    assert_has(&load_err(&p), &["twice.toml:5:", "(known: red, lamp)"]);
+
+    // [render] is checked when the file is read, even where the command line would
+    // override it: each bad value is reported at its line.
+    for (i, (line, expect)) in [
+        ("spp = 0", "spp must be at least 1"),
+        ("integrator = \"gpu\"", "unknown integrator 'gpu'"),
+        ("tracer = \"gpu\"", "unknown tracer 'gpu'"),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let name = format!("render{i}.toml");
+        let text = format!("[[mesh]]\npath = \"meshes/tri.obj\"\n[render]\n{line}\n");
+        let p = write(dir.path(), &name, &text);
+        assert_has(&load_err(&p), &[&format!("{name}:4:"), expect]);
+    }
 }
 
 #[test]

@@ -94,7 +94,7 @@
 //! spp = 64
 //! seed = 1
 //! integrator = "path"
-//! tracer = "gpu"
+//! tracer = "pdacrt"
 //! max_depth = 8
 //! ```
 
@@ -112,13 +112,15 @@ use super::{
     MaterialLayer, MicrofacetModel, PointLight, RenderSettings, Scene, SceneError, Triangle,
 };
 use crate::bsdf::MAX_LAYERS;
+use crate::integrator::IntegratorKind;
+use crate::trace::TracerKind;
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct SceneFile {
     name: Option<String>,
-    camera: Option<Spanned<CameraToml>>,
-    film: Option<Spanned<FilmToml>>,
+    camera: Option<CameraToml>,
+    film: Option<FilmToml>,
     #[serde(default)]
     mesh: Vec<MeshToml>,
     #[serde(default)]
@@ -131,8 +133,9 @@ struct SceneFile {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct FilmToml {
-    width: u32,
-    height: u32,
+    // Spans on the fields, not the table: see `CameraToml`.
+    width: Spanned<u32>,
+    height: Spanned<u32>,
 }
 
 #[derive(Deserialize)]
@@ -406,10 +409,10 @@ struct PointLightToml {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RenderToml {
-    spp: Option<u32>,
+    spp: Option<Spanned<u32>>,
     seed: Option<u64>,
-    integrator: Option<String>,
-    tracer: Option<String>,
+    integrator: Option<Spanned<String>>,
+    tracer: Option<Spanned<String>>,
     max_depth: Option<u32>,
 }
 
@@ -486,7 +489,10 @@ pub fn parse_toml_animated(
                 intensity: l.intensity.into(),
             })
             .collect(),
-        settings: doc.render.map(render_settings).unwrap_or_default(),
+        settings: match doc.render {
+            Some(r) => render_settings(r, &at_span)?,
+            None => RenderSettings::default(),
+        },
     };
 
     let whole = Location::file(file);
@@ -503,18 +509,23 @@ pub fn parse_toml_animated(
     if let Some(f) = &doc.film {
         scene.film = film_size(f, &at_span)?;
     }
-    animation.camera = place_camera(doc.camera.as_ref(), &mut scene, &at_span)?;
+    animation.camera = place_camera(doc.camera.as_ref(), &mut scene, (&at_span, &whole))?;
     validate::validate_scene(&scene, &whole)?;
     Ok(AnimatedScene { scene, animation })
 }
 
 /// The `[film]` size, validated.
-fn film_size(film: &Spanned<FilmToml>, at: &Loc) -> Result<FilmSize, SceneError> {
+fn film_size(film: &FilmToml, at: &Loc) -> Result<FilmSize, SceneError> {
     let size = FilmSize {
-        width: film.get_ref().width,
-        height: film.get_ref().height,
+        width: *film.width.get_ref(),
+        height: *film.height.get_ref(),
     };
-    validate::validate_film(&size, &at(film.span()))?;
+    // At whichever of the two comes first in the file.
+    let first = [film.width.span(), film.height.span()]
+        .into_iter()
+        .min_by_key(|span| span.start)
+        .unwrap_or_default();
+    validate::validate_film(&size, &at(first))?;
     Ok(size)
 }
 
@@ -522,13 +533,13 @@ fn film_size(film: &Spanned<FilmToml>, at: &Loc) -> Result<FilmSize, SceneError>
 /// its bounds are finite; `validate_scene` reports them where not). Returns the camera's
 /// keyframes.
 fn place_camera(
-    camera: Option<&Spanned<CameraToml>>,
+    camera: Option<&CameraToml>,
     scene: &mut Scene,
-    at: &Loc,
+    (at, file): (&Loc, &Location),
 ) -> Result<Option<Keyframes<Camera>>, SceneError> {
     match camera {
         Some(c) => {
-            let (camera, keys) = c.get_ref().resolve(c.span(), at)?;
+            let (camera, keys) = c.resolve(at, file)?;
             scene.camera = camera;
             Ok(keys)
         }
@@ -617,8 +628,14 @@ fn apply_mesh_materials(
 ) -> Result<(), SceneError> {
     for &(start, end, name) in overrides {
         let Some(index) = materials.iter().position(|m| &m.name == name.get_ref()) else {
-            let mut names: Vec<&str> = materials.iter().map(|m| m.name.as_str()).collect();
-            names.dedup();
+            // Each name once, in the order first loaded (a mesh loaded twice brings its
+            // materials twice).
+            let mut names: Vec<&str> = Vec::new();
+            for m in materials {
+                if !names.contains(&m.name.as_str()) {
+                    names.push(&m.name);
+                }
+            }
             return Err(SceneError::Unknown {
                 at: at(name.span()),
                 what: "material",
@@ -633,12 +650,31 @@ fn apply_mesh_materials(
     Ok(())
 }
 
-fn render_settings(r: RenderToml) -> RenderSettings {
-    RenderSettings {
-        spp: r.spp,
-        seed: r.seed,
-        integrator: r.integrator,
-        tracer: r.tracer,
-        max_depth: r.max_depth,
+/// The `[render]` table, checked here so that a bad value is reported with its line even
+/// when the command line overrides it.
+fn render_settings(r: RenderToml, at: &Loc) -> Result<RenderSettings, SceneError> {
+    let invalid = |span: std::ops::Range<usize>, message: String| SceneError::Invalid {
+        at: at(span),
+        message,
+    };
+    if let Some(spp) = r.spp.as_ref().filter(|s| *s.get_ref() == 0) {
+        return Err(invalid(spp.span(), "spp must be at least 1".into()));
     }
+    if let Some(name) = &r.integrator {
+        name.get_ref()
+            .parse::<IntegratorKind>()
+            .map_err(|e| invalid(name.span(), e))?;
+    }
+    if let Some(name) = &r.tracer {
+        name.get_ref()
+            .parse::<TracerKind>()
+            .map_err(|e| invalid(name.span(), e))?;
+    }
+    Ok(RenderSettings {
+        spp: r.spp.map(Spanned::into_inner),
+        seed: r.seed,
+        integrator: r.integrator.map(Spanned::into_inner),
+        tracer: r.tracer.map(Spanned::into_inner),
+        max_depth: r.max_depth,
+    })
 }

@@ -77,6 +77,22 @@ fn check_finite(v: Vec3, at: &Location, what: impl FnOnce() -> String) -> Result
     }
 }
 
+/// Radiance, reflectances and intensities are never negative: a negative channel would
+/// make the integrators' pdfs and weights meaningless rather than just dim the image.
+fn check_non_negative(
+    v: Vec3,
+    at: &Location,
+    what: impl FnOnce() -> String,
+) -> Result<(), SceneError> {
+    if v.min_element() < 0.0 {
+        return Err(SceneError::Invalid {
+            at: at.clone(),
+            message: format!("{} {v} is negative", what()),
+        });
+    }
+    Ok(())
+}
+
 /// Full check of a scene loaded from `at`: camera, film, non-empty geometry, finite
 /// vertices / normals / material and light parameters, material indices in range.
 /// Degenerate triangles are allowed (counted and logged as a warning) unless every
@@ -117,12 +133,7 @@ pub fn validate_scene(scene: &Scene, at: &Location) -> Result<SceneStats, SceneE
             ("emission", m.emission),
         ] {
             check_finite(v, at, || format!("material '{}' {what}", m.name))?;
-            if v.min_element() < 0.0 {
-                return Err(SceneError::Invalid {
-                    at: at.clone(),
-                    message: format!("material '{}' {what} {v} is negative", m.name),
-                });
-            }
+            check_non_negative(v, at, || format!("material '{}' {what}", m.name))?;
         }
         for (what, v) in [
             ("shininess", m.shininess),
@@ -141,6 +152,7 @@ pub fn validate_scene(scene: &Scene, at: &Location) -> Result<SceneStats, SceneE
     for (i, l) in scene.point_lights.iter().enumerate() {
         check_finite(l.position, at, || format!("point light {i} position"))?;
         check_finite(l.intensity, at, || format!("point light {i} intensity"))?;
+        check_non_negative(l.intensity, at, || format!("point light {i} intensity"))?;
     }
     let stats = scene.stats();
     if stats.degenerate_triangles == stats.triangles {

@@ -70,11 +70,14 @@ struct SequenceToml {
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
+// The fields carry the spans, not the table: a `[camera]` made only by its
+// `[[camera.keyframe]]` headers is an implicit table, and toml has no span for it
+// (a `Spanned` table then fails to deserialize).
 pub struct CameraToml {
-    position: Option<[f32; 3]>,
-    look_at: Option<[f32; 3]>,
-    up: Option<[f32; 3]>,
-    fov_y: Option<f32>,
+    position: Option<Spanned<[f32; 3]>>,
+    look_at: Option<Spanned<[f32; 3]>>,
+    up: Option<Spanned<[f32; 3]>>,
+    fov_y: Option<Spanned<f32>>,
     #[serde(default)]
     keyframe: Vec<Spanned<CameraKeyToml>>,
 }
@@ -297,13 +300,27 @@ impl MeshToml {
 impl CameraToml {
     /// The camera at time 0 and its keyframe track, if it has keys. `[camera]`'s own
     /// fields are the defaults of every key; without keys it must give position, look_at
-    /// and fov_y (up defaults to +y). Every key's camera is validated.
+    /// and fov_y (up defaults to +y). Every key's camera is validated. `[camera]`'s own
+    /// errors are placed at its first field, or at `file` where it has none.
     pub fn resolve(
         &self,
-        span: Range<usize>,
         at: &At,
+        file: &Location,
     ) -> Result<(Camera, Option<Keyframes<Camera>>), SceneError> {
-        let camera_at = at(span);
+        let first_field = [
+            self.position.as_ref().map(Spanned::span),
+            self.look_at.as_ref().map(Spanned::span),
+            self.up.as_ref().map(Spanned::span),
+            self.fov_y.as_ref().map(Spanned::span),
+        ]
+        .into_iter()
+        .flatten()
+        .min_by_key(|span| span.start);
+        let camera_at = first_field.map_or_else(|| file.clone(), at);
+        let position = self.position.as_ref().map(|v| *v.get_ref());
+        let look_at = self.look_at.as_ref().map(|v| *v.get_ref());
+        let up = self.up.as_ref().map(|v| *v.get_ref());
+        let fov_y = self.fov_y.as_ref().map(|v| *v.get_ref());
         let err = |at: Location, message: String| SceneError::Camera { at, message };
         let complete = |position: Option<[f32; 3]>,
                         look_at: Option<[f32; 3]>,
@@ -334,24 +351,17 @@ impl CameraToml {
             Ok(camera)
         };
         if self.keyframe.is_empty() {
-            let camera = complete(
-                self.position,
-                self.look_at,
-                self.up,
-                self.fov_y,
-                &camera_at,
-                "[camera]",
-            )?;
+            let camera = complete(position, look_at, up, fov_y, &camera_at, "[camera]")?;
             return Ok((camera, None));
         }
         let mut keys = Vec::with_capacity(self.keyframe.len());
         for (i, k) in self.keyframe.iter().enumerate() {
             let key = k.get_ref();
             let camera = complete(
-                key.position.or(self.position),
-                key.look_at.or(self.look_at),
-                key.up.or(self.up),
-                key.fov_y.or(self.fov_y),
+                key.position.or(position),
+                key.look_at.or(look_at),
+                key.up.or(up),
+                key.fov_y.or(fov_y),
                 &at(k.span()),
                 &format!("camera keyframe {i}"),
             )?;
