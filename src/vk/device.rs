@@ -212,7 +212,10 @@ impl Gpu {
     ) -> Result<Self> {
         let mapping = StreamMapping::plan(&info, placement);
         let raw = create_logical_device(&instance, &info, &mapping, present)?;
-        let allocator = create_allocator(&instance, &raw, &info)?;
+        let allocator = match create_allocator(&instance, &raw, &info) {
+            Ok(allocator) => allocator,
+            Err(e) => return Err(destroy_unowned_device(&raw, e)),
+        };
         let queue_slots = distinct_queue_slots(&mapping);
         let queues = queue_slots
             .iter()
@@ -220,7 +223,14 @@ impl Gpu {
             // create_logical_device.
             .map(|s| Mutex::new(unsafe { raw.get_device_queue(s.family, s.index) }))
             .collect();
-        let streams = create_streams(&raw, &info, &mapping, &queue_slots)?;
+        let streams = match create_streams(&raw, &info, &mapping, &queue_slots) {
+            Ok(streams) => streams,
+            Err(e) => {
+                // The allocator frees its memory through the device: it goes first.
+                drop(allocator);
+                return Err(destroy_unowned_device(&raw, e));
+            }
+        };
         let push_descriptor = khr::push_descriptor::Device::new(&instance.raw, &raw);
         let accel = info
             .capabilities
@@ -590,10 +600,19 @@ fn create_streams(
     mapping: &StreamMapping,
     queue_slots: &[QueueSlot],
 ) -> Result<Vec<StreamState>> {
-    let mut streams = Vec::new();
+    let mut streams: Vec<StreamState> = Vec::new();
     for kind in StreamKind::ALL {
         let slot = mapping.slot(kind);
-        let sem = create_timeline_semaphore(raw)?;
+        let sem = match create_timeline_semaphore(raw) {
+            Ok(sem) => sem,
+            Err(e) => {
+                for s in &streams {
+                    // SAFETY: created above on `raw`, never used.
+                    unsafe { raw.destroy_semaphore(s.timeline.raw, None) };
+                }
+                return Err(e);
+            }
+        };
         let bits = info.queue_families[slot.family as usize].timestamp_valid_bits;
         streams.push(StreamState {
             kind,
@@ -605,6 +624,15 @@ fn create_streams(
         });
     }
     Ok(streams)
+}
+
+/// Destroys a device that `Gpu::open` created but could not finish (no `GpuInner` owns
+/// it yet, so nothing else will), and hands back the error that stopped it.
+fn destroy_unowned_device(raw: &ash::Device, error: VkError) -> VkError {
+    // SAFETY: nothing was submitted to the device and every child object made on it has
+    // been destroyed by the caller.
+    unsafe { raw.destroy_device(None) };
+    error
 }
 
 fn create_timeline_semaphore(raw: &ash::Device) -> Result<vk::Semaphore> {

@@ -93,45 +93,9 @@ impl Instance {
         } else {
             vec![]
         };
-        // SAFETY: global query.
-        let available_ext = unsafe { entry.enumerate_instance_extension_properties(None) }
-            .call("vkEnumerateInstanceExtensionProperties")?;
-        let has_debug_utils = available_ext.iter().any(|e| {
-            e.extension_name_as_c_str()
-                .is_ok_and(|n| n == ext::debug_utils::NAME)
-        });
-        let mut extensions = Vec::new();
-        if has_debug_utils {
-            extensions.push(ext::debug_utils::NAME.as_ptr());
-        }
-        for name in required {
-            let offered = available_ext
-                .iter()
-                .any(|e| e.extension_name_as_c_str().is_ok_and(|n| n == *name));
-            if !offered {
-                return Err(VkError::Usage(format!(
-                    "the Vulkan loader offers no {}: this system's Vulkan cannot present \
-                     to its window system",
-                    name.to_string_lossy()
-                )));
-            }
-            extensions.push(name.as_ptr());
-        }
-
+        let (extensions, has_debug_utils) = instance_extensions(&entry, required)?;
         let log = Box::new(ValidationLog::default());
-        let mut messenger_info = vk::DebugUtilsMessengerCreateInfoEXT::default()
-            .message_severity(
-                vk::DebugUtilsMessageSeverityFlagsEXT::ERROR
-                    | vk::DebugUtilsMessageSeverityFlagsEXT::WARNING
-                    | vk::DebugUtilsMessageSeverityFlagsEXT::INFO,
-            )
-            .message_type(
-                vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
-                    | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
-                    | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
-            )
-            .pfn_user_callback(Some(debug_callback))
-            .user_data(&*log as *const ValidationLog as *mut std::ffi::c_void);
+        let mut messenger_info = messenger_info(&log);
         let enabled_features = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
         let mut validation_features =
             vk::ValidationFeaturesEXT::default().enabled_validation_features(&enabled_features);
@@ -154,8 +118,15 @@ impl Instance {
             let loader = ext::debug_utils::Instance::new(&entry, &raw);
             // SAFETY: valid instance; the log outlives the messenger (destroyed in Drop).
             let messenger = unsafe { loader.create_debug_utils_messenger(&messenger_info, None) }
-                .call("vkCreateDebugUtilsMessengerEXT")?;
-            Some((loader, messenger))
+                .call("vkCreateDebugUtilsMessengerEXT");
+            match messenger {
+                Ok(messenger) => Some((loader, messenger)),
+                Err(e) => {
+                    // SAFETY: nothing was made on the instance; no `Instance` owns it yet.
+                    unsafe { raw.destroy_instance(None) };
+                    return Err(e);
+                }
+            }
         } else {
             None
         };
@@ -181,6 +152,56 @@ impl Instance {
     pub fn validation_enabled(&self) -> bool {
         self.validation
     }
+}
+
+/// The instance extensions to enable: debug utils where the loader offers it (whether it
+/// does comes back too), and every one of `required`, which the loader must offer.
+fn instance_extensions(
+    entry: &ash::Entry,
+    required: &[&CStr],
+) -> Result<(Vec<*const std::ffi::c_char>, bool)> {
+    // SAFETY: global query.
+    let available = unsafe { entry.enumerate_instance_extension_properties(None) }
+        .call("vkEnumerateInstanceExtensionProperties")?;
+    let offered = |name: &CStr| {
+        available
+            .iter()
+            .any(|e| e.extension_name_as_c_str().is_ok_and(|n| n == name))
+    };
+    let has_debug_utils = offered(ext::debug_utils::NAME);
+    let mut extensions = Vec::new();
+    if has_debug_utils {
+        extensions.push(ext::debug_utils::NAME.as_ptr());
+    }
+    for name in required {
+        if !offered(name) {
+            return Err(VkError::Usage(format!(
+                "the Vulkan loader offers no {}: this system's Vulkan cannot present \
+                 to its window system",
+                name.to_string_lossy()
+            )));
+        }
+        extensions.push(name.as_ptr());
+    }
+    Ok((extensions, has_debug_utils))
+}
+
+/// The validation messenger's settings: errors, warnings and infos of every type, to
+/// `debug_callback` with `log` as its user data (`log` must outlive the messenger).
+fn messenger_info(log: &ValidationLog) -> vk::DebugUtilsMessengerCreateInfoEXT<'static> {
+    vk::DebugUtilsMessengerCreateInfoEXT::default()
+        .message_severity(
+            vk::DebugUtilsMessageSeverityFlagsEXT::ERROR
+                | vk::DebugUtilsMessageSeverityFlagsEXT::WARNING
+                | vk::DebugUtilsMessageSeverityFlagsEXT::INFO,
+        )
+        .message_type(
+            vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
+                | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
+                | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
+        )
+        .pfn_user_callback(Some(debug_callback))
+        .user_data(log as *const ValidationLog as *mut std::ffi::c_void)
 }
 
 impl Drop for Instance {
