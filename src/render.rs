@@ -67,10 +67,11 @@ pub struct RenderOptions {
     pub integrator: IntegratorKind,
     pub tracer: TracerKind,
     pub ao_rays: u32,
-    /// `pt`, `bpt`, `light`: Mitsuba's max_depth (1 = emitters seen directly, 2 = direct
+    /// Every integrator that follows paths (`pt`, `bpt`, `light`, `lvc-bdpt`,
+    /// `cis-lbdpt`, `cbpt`): Mitsuba's max_depth (1 = emitters seen directly, 2 = direct
     /// light; < 0 unbounded). From the scene's `[render] max_depth`, else unbounded.
     pub max_depth: i32,
-    /// `pt`, `bpt`, `light`: Russian roulette from this depth on (Mitsuba's default 5).
+    /// The same integrators: Russian roulette from this depth on (Mitsuba's default 5).
     pub rr_depth: u32,
     /// `pt`: sort paths by material key before shading; `None`: where it pays on the
     /// device (`pt::sort_pays`). The cache integrators' setting is `lvc.sort`.

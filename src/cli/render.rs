@@ -68,11 +68,13 @@ pub struct RenderArgs {
     /// ran out; with --spp, at most that many passes).
     #[arg(long, value_name = "SECONDS")]
     time: Option<f64>,
-    /// pt, bpt, light, lvc-bdpt, cis-lbdpt: maximum path depth as in Mitsuba (1 = emitters seen directly, 2 = direct
-    /// light, -1 = unbounded; default: the scene's, else -1).
+    /// pt, bpt, light, lvc-bdpt, cis-lbdpt, cbpt: maximum path depth as in Mitsuba (1 =
+    /// emitters seen directly, 2 = direct light, -1 = unbounded; default: the scene's,
+    /// else -1).
     #[arg(long, allow_hyphen_values = true, value_parser = super::max_depth_parser())]
     max_depth: Option<i32>,
-    /// pt, bpt, light, lvc-bdpt, cis-lbdpt: Russian roulette from this depth on (default: Mitsuba's 5).
+    /// pt, bpt, light, lvc-bdpt, cis-lbdpt, cbpt: Russian roulette from this depth on
+    /// (default: Mitsuba's 5).
     #[arg(long)]
     rr_depth: Option<u32>,
     /// pt, lvc-bdpt, cis-lbdpt: do not sort paths by material before shading (same image,
