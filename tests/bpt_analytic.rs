@@ -22,6 +22,8 @@
 //! heuristic takes that tail away in `bpt` itself.
 mod common;
 
+use common::analytic::assert_agrees;
+
 use glam::Vec3;
 use splitray::bidir::TechniqueCounts;
 use splitray::integrator::bpt::{BidirMode, BptIntegrator, BptOptions};
@@ -102,19 +104,7 @@ fn image_mean(scene: &Scene, mode: BidirMode, options: BptOptions, passes: u32) 
         prev = now;
     }
     assert_eq!(bpt.counters().non_finite, 0);
-    let n = means.len() as f64;
-    let m = means.iter().sum::<f64>() / n;
-    let var = means.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0);
-    (m, (var / n).sqrt())
-}
-
-fn check(what: &str, (m, se): (f64, f64), expected: f64) {
-    eprintln!("{what}: {m:.5} ± {se:.5}, expected {expected:.5}");
-    assert!(
-        (m - expected).abs() < 4.0 * se + 1e-4 * expected,
-        "{what}: {m} vs {expected} (se {se})"
-    );
-    assert!(se < 0.02 * expected, "{what}: too noisy to say ({se})");
+    common::analytic::mean_and_standard_error(&means)
 }
 
 /// Le Σ_{k=lo}^{hi} ρ^(k−1).
@@ -140,9 +130,9 @@ fn furnace_converges_to_le_over_one_minus_albedo() {
         let scene = sphere(material);
         let expected = 1.0 / (1.0 - rho);
         let got = image_mean(&scene, BidirMode::Bpt, options(-1, None), 48);
-        check(&format!("bpt {what}, unbounded"), got, expected);
+        assert_agrees(&format!("bpt {what}, unbounded"), got, expected);
         let got = image_mean(&scene, BidirMode::Bpt, options(3, None), 32);
-        check(
+        assert_agrees(
             &format!("bpt {what}, max_depth 3"),
             got,
             lengths(1.0, rho, 1, 3),
@@ -150,7 +140,7 @@ fn furnace_converges_to_le_over_one_minus_albedo() {
     }
     let scene = sphere(lambert(0.5, 1.0));
     let got = image_mean(&scene, BidirMode::Light, options(-1, None), 48);
-    check("light, unbounded", got, 2.0);
+    assert_agrees("light, unbounded", got, 2.0);
 }
 
 #[test]
@@ -211,8 +201,8 @@ fn each_technique_family_alone_sums_the_path_lengths_it_samples() {
         // Light tracing splats a pass's light paths on few pixels: twice the passes.
         let passes = if counts.light_trace > 0.0 { 64 } else { 32 };
         let got = image_mean(&scene, BidirMode::Bpt, options(depth, Some(counts)), passes);
-        check(what, got, lengths(le, rho, shortest, depth as u32));
+        assert_agrees(what, got, lengths(le, rho, shortest, depth as u32));
     }
     let got = image_mean(&scene, BidirMode::Bpt, options(depth, None), 32);
-    check("all, weighted", got, lengths(le, rho, 1, depth as u32));
+    assert_agrees("all, weighted", got, lengths(le, rho, 1, depth as u32));
 }

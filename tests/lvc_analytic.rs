@@ -20,6 +20,8 @@
 //! and the splats).
 mod common;
 
+use common::analytic::assert_agrees;
+
 use glam::Vec3;
 use splitray::integrator::lvc::{Families, LvcIntegrator, LvcOptions, Variant};
 use splitray::integrator::pt::PtScene;
@@ -149,19 +151,7 @@ fn image_mean(gpu: &Gpu, scene: &Scene, options: &LvcOptions, g: Groups) -> (f64
         prev = now;
     }
     assert_eq!(lvc.kernel_counters().unwrap(), [0, 0]);
-    let n = means.len() as f64;
-    let m = means.iter().sum::<f64>() / n;
-    let var = means.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0);
-    (m, (var / n).sqrt())
-}
-
-fn check(what: &str, (m, se): (f64, f64), expected: f64) {
-    eprintln!("{what}: {m:.5} ± {se:.5}, expected {expected:.5}");
-    assert!(
-        (m - expected).abs() < 4.0 * se + 1e-4 * expected,
-        "{what}: {m} vs {expected} (se {se})"
-    );
-    assert!(se < 0.02 * expected, "{what}: too noisy to say ({se})");
+    common::analytic::mean_and_standard_error(&means)
 }
 
 /// Le Σ_{k=lo}^{hi} ρ^(k−1).
@@ -189,14 +179,14 @@ fn furnace_converges_to_le_over_one_minus_albedo() {
     let scene = enclosure(lambert(0.5));
     for variant in [Variant::LvcBdpt, Variant::CisLbdpt] {
         let got = image_mean(&gpu, &scene, &options(variant, -1, all), WEIGHTED);
-        check(&format!("{variant:?} lambert, unbounded"), got, 2.0);
+        assert_agrees(&format!("{variant:?} lambert, unbounded"), got, 2.0);
     }
     // Delta vertices inside the paths, at a depth that keeps the test short.
     let scene = enclosure(mixed());
     for variant in [Variant::LvcBdpt, Variant::CisLbdpt] {
         let got = image_mean(&gpu, &scene, &options(variant, 6, all), WEIGHTED);
         let what = format!("{variant:?} lambert + mirror, max_depth 6");
-        check(&what, got, lengths(0.65, 1, 6));
+        assert_agrees(&what, got, lengths(0.65, 1, 6));
     }
     common::assert_clean(&gpu);
 }
@@ -261,7 +251,7 @@ fn each_technique_family_alone_sums_the_path_lengths_it_samples() {
     ];
     for (what, variant, f, shortest) in families {
         let got = image_mean(&gpu, &scene, &options(variant, depth, f), ALONE);
-        check(what, got, lengths(rho, shortest, depth as u32));
+        assert_agrees(what, got, lengths(rho, shortest, depth as u32));
     }
     common::assert_clean(&gpu);
 }

@@ -5,6 +5,7 @@
 mod common;
 
 use glam::Vec3;
+use splitray::bench::workloads::primary_rays;
 use splitray::integrator::IntegratorKind;
 use splitray::render::{render, RenderOptions};
 use splitray::scene::{self, Scene, Triangle};
@@ -29,28 +30,12 @@ fn options(
     .unwrap()
 }
 
-/// Primary rays through pixel centres, made on the CPU with the camera convention.
-fn pixel_centre_rays(scene: &Scene, width: u32, height: u32) -> Vec<Ray> {
-    let frame = scene.camera.frame(width, height);
-    (0..height)
-        .flat_map(|y| (0..width).map(move |x| (x, y)))
-        .map(|(x, y)| {
-            Ray::new(
-                frame.origin,
-                frame.pixel_center_direction(x, y),
-                0.0,
-                f32::INFINITY,
-            )
-        })
-        .collect()
-}
-
 #[test]
 fn brute_force_matches_cpu_on_the_cornell_box() {
     let gpu = common::gpu();
     let scene = scene::load("cornell-box").unwrap();
     let triangles = scene.gpu_triangles();
-    let rays = pixel_centre_rays(&scene, 256, 256);
+    let rays = primary_rays(&scene, 256, 256);
     let mut tracer = BruteForceTracer::new(&gpu, &triangles).unwrap();
     let ray_buf = gpu.upload("rays", &rays).unwrap();
     let hit_buf = gpu.zeroed::<Hit>("hits", rays.len()).unwrap();
@@ -93,7 +78,7 @@ fn rendered_triangle_ids_and_depth_match_cpu_camera_rays() {
         &mut |_| {},
     )
     .unwrap();
-    let expected = cpu::closest_hits(&pixel_centre_rays(&scene, w, h), &scene.gpu_triangles());
+    let expected = cpu::closest_hits(&primary_rays(&scene, w, h), &scene.gpu_triangles());
     let ids = out.film.triangle_id.as_ref().unwrap();
     let depth = out.film.depth.as_ref().unwrap();
     // The GPU builds the same rays in its own kernel; rounding of the direction may
@@ -237,7 +222,7 @@ fn a_scene_past_one_storage_binding_renders() {
     )
     .unwrap();
     let ids = out.film.triangle_id.as_ref().unwrap();
-    let expected = cpu::closest_hits(&pixel_centre_rays(&scene, w, h), &scene.gpu_triangles());
+    let expected = cpu::closest_hits(&primary_rays(&scene, w, h), &scene.gpu_triangles());
     let past = expected
         .iter()
         .filter(|e| e.triangle as usize >= filler)
@@ -414,7 +399,7 @@ fn reflection_integrator_shows_what_the_cpu_sees_in_the_mirror() {
     )
     .unwrap();
     let tris = scene.gpu_triangles();
-    let primary = pixel_centre_rays(&scene, w, h);
+    let primary = primary_rays(&scene, w, h);
     let hits = cpu::closest_hits(&primary, &tris);
     let eps = 1e-4 * scene.bounds().radius();
     let mut agree = 0;

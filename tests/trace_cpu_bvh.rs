@@ -11,7 +11,6 @@ mod common;
 use glam::Vec3;
 use splitray::trace::cpu_bvh::is_hittable;
 use splitray::trace::{cpu, CpuBvh, GpuTriangle, Hit, Query, Ray, TracerKind};
-use splitray::vk::{MemoryKind, StreamKind};
 
 const BUNNY: &str = "../shared/meshes/bunny/bunny.obj";
 
@@ -535,26 +534,7 @@ fn tracer_equals_brute_force_through_gpu_buffers() {
     let mut tracer = TracerKind::CpuBvh.create(&gpu, &soup).unwrap();
     assert_eq!(tracer.name(), "cpu-bvh");
     assert_eq!("cpu-bvh".parse::<TracerKind>(), Ok(TracerKind::CpuBvh));
-    // The rays reach their buffer through a copy on another stream; the tracer must wait
-    // for it (the `after` point) before reading them.
-    let staging = gpu.upload("rays-staging", &rays).unwrap();
-    let ray_buf = gpu
-        .create_buffer("rays", staging.size(), MemoryKind::Device)
-        .unwrap();
-    let hit_buf = gpu.zeroed::<Hit>("hits", rays.len()).unwrap();
-    let mut rec = gpu.recorder(StreamKind::Aux0).unwrap();
-    rec.copy(&staging, 0, &ray_buf, 0, staging.size());
-    let copied = rec.submit(&[]).unwrap();
-    let done = tracer
-        .trace(
-            &ray_buf,
-            &hit_buf,
-            rays.len() as u32,
-            Query::ClosestHit,
-            &[&copied],
-        )
-        .unwrap();
-    gpu.wait(&done).unwrap();
+    let (ray_buf, hit_buf) = common::trace_after_a_copy(&gpu, tracer.as_mut(), &rays);
     let reference = hittable_only(&soup);
     assert_eq!(
         hit_buf.read::<Hit>().unwrap(),

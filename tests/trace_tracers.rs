@@ -14,7 +14,6 @@ use splitray::trace::cpu_dacrt::{self, DacrtParams};
 use splitray::trace::{
     cpu, CpuDacrtTracer, GpuTriangle, Hit, Query, Ray, RayQueryTracer, Tracer, TracerKind,
 };
-use splitray::vk::{MemoryKind, StreamKind};
 
 const BUNNY: &str = "../shared/meshes/bunny/bunny.obj";
 
@@ -355,26 +354,7 @@ fn cpu_dacrt_tracer_reads_rays_after_its_wait_points_and_writes_hits() {
     let rays = common::random_rays(3000, 22);
     let mut tracer = TracerKind::CpuDacrt.create(&gpu, &soup).unwrap();
     assert_eq!(tracer.name(), "cpu-dacrt");
-    // The rays reach their buffer through a copy on another stream; the tracer must wait
-    // for it (the `after` point) before reading them.
-    let staging = gpu.upload("rays-staging", &rays).unwrap();
-    let ray_buf = gpu
-        .create_buffer("rays", staging.size(), MemoryKind::Device)
-        .unwrap();
-    let hit_buf = gpu.zeroed::<Hit>("hits", rays.len()).unwrap();
-    let mut rec = gpu.recorder(StreamKind::Aux0).unwrap();
-    rec.copy(&staging, 0, &ray_buf, 0, staging.size());
-    let copied = rec.submit(&[]).unwrap();
-    let done = tracer
-        .trace(
-            &ray_buf,
-            &hit_buf,
-            rays.len() as u32,
-            Query::ClosestHit,
-            &[&copied],
-        )
-        .unwrap();
-    gpu.wait(&done).unwrap();
+    let (ray_buf, hit_buf) = common::trace_after_a_copy(&gpu, tracer.as_mut(), &rays);
     assert_eq!(
         hit_buf.read::<Hit>().unwrap(),
         cpu::closest_hits(&rays, &soup)

@@ -202,6 +202,21 @@ impl Film {
         Ok(())
     }
 
+    /// Refuses to write a film with no pixels to `path` (an image file needs one).
+    pub(crate) fn refuse_empty(&self, path: &std::path::Path) -> Result<(), FilmError> {
+        if self.pixel_count() == 0 {
+            return Err(FilmError::invalid(
+                path,
+                format!(
+                    "cannot write an empty {}x{} film",
+                    self.width(),
+                    self.height()
+                ),
+            ));
+        }
+        Ok(())
+    }
+
     /// Checks that every present AOV has one element per pixel.
     pub fn validate_aovs(&self) -> Result<(), FilmError> {
         if let Some(s) = &self.stderr {

@@ -155,16 +155,7 @@ pub(crate) fn encode_exr<W: Write + Seek>(
     out: W,
     path: &Path,
 ) -> Result<(), FilmError> {
-    if film.pixel_count() == 0 {
-        return Err(FilmError::invalid(
-            path,
-            format!(
-                "cannot write an empty {}x{} film",
-                film.width(),
-                film.height()
-            ),
-        ));
-    }
+    film.refuse_empty(path)?;
     film.validate_aovs()?;
 
     let rgb = film.mean_rgb_buffer();

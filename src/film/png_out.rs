@@ -125,16 +125,7 @@ pub(crate) fn encode_png<W: Write>(
     out: W,
     path: &Path,
 ) -> Result<(), FilmError> {
-    if film.pixel_count() == 0 {
-        return Err(FilmError::invalid(
-            path,
-            format!(
-                "cannot write an empty {}x{} film",
-                film.width(),
-                film.height()
-            ),
-        ));
-    }
+    film.refuse_empty(path)?;
     let png_err = |error| FilmError::Png {
         path: path.to_path_buf(),
         error,

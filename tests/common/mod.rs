@@ -2,6 +2,7 @@
 //! validation error or warning fails it.
 #![allow(dead_code)]
 
+pub mod analytic;
 pub mod cli;
 pub mod lvc_dump;
 pub mod reference;
@@ -219,6 +220,38 @@ pub fn trace_hits(
         .unwrap();
     gpu.wait(&done).unwrap();
     hit_buf.read().unwrap()
+}
+
+/// Traces `rays` (closest hits) the way a renderer hands them over: they reach their
+/// buffer through a copy on another stream, which the tracer must wait for (its `after`
+/// point) before reading them. Returns the ray and hit buffers, the hits written.
+pub fn trace_after_a_copy(
+    gpu: &splitray::vk::Gpu,
+    tracer: &mut dyn splitray::trace::Tracer,
+    rays: &[splitray::trace::Ray],
+) -> (splitray::vk::Buffer, splitray::vk::Buffer) {
+    use splitray::vk::{MemoryKind, StreamKind};
+    let staging = gpu.upload("rays-staging", rays).unwrap();
+    let ray_buf = gpu
+        .create_buffer("rays", staging.size(), MemoryKind::Device)
+        .unwrap();
+    let hit_buf = gpu
+        .zeroed::<splitray::trace::Hit>("hits", rays.len())
+        .unwrap();
+    let mut rec = gpu.recorder(StreamKind::Aux0).unwrap();
+    rec.copy(&staging, 0, &ray_buf, 0, staging.size());
+    let copied = rec.submit(&[]).unwrap();
+    let done = tracer
+        .trace(
+            &ray_buf,
+            &hit_buf,
+            rays.len() as u32,
+            splitray::trace::Query::ClosestHit,
+            &[&copied],
+        )
+        .unwrap();
+    gpu.wait(&done).unwrap();
+    (ray_buf, hit_buf)
 }
 
 /// Asserts every hit equals the reference (same triangle, t within 1e-5 relative).
