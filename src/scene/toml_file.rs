@@ -521,10 +521,12 @@ fn film_size(film: &FilmToml, at: &Loc) -> Result<FilmSize, SceneError> {
         height: *film.height.get_ref(),
     };
     // At whichever of the two comes first in the file.
-    let first = [film.width.span(), film.height.span()]
-        .into_iter()
-        .min_by_key(|span| span.start)
-        .unwrap_or_default();
+    let (width, height) = (film.width.span(), film.height.span());
+    let first = if width.start <= height.start {
+        width
+    } else {
+        height
+    };
     validate::validate_film(&size, &at(first))?;
     Ok(size)
 }
