@@ -374,6 +374,51 @@ fn bad_input_gives_a_clear_error_and_no_output() {
     }
 }
 
+/// Every benchmark refuses a film side of 0 or past 16384, and counts that would
+/// measure nothing, with clap's usage error (exit 2) naming the option, before it opens
+/// a device (two of them used to panic on a width of 0).
+#[test]
+fn benches_refuse_empty_films_and_zero_counts() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases: &[(&[&str], &str)] = &[
+        (&["bench", "pt", "cornell-box", "--width", "0"], "--width"),
+        (&["bench", "pt", "cornell-box", "--spp", "0"], "--spp"),
+        (&["bench", "cbpt", "cornell-box", "--width", "0"], "--width"),
+        (&["bench", "cbpt", "cornell-box", "--steps", "0"], "--steps"),
+        (
+            &["bench", "cbpt", "cornell-box", "--rounds", "0"],
+            "--rounds",
+        ),
+        (
+            &["bench", "trace", "cornell-box", "--height", "0"],
+            "--height",
+        ),
+        (
+            &["bench", "trace", "cornell-box", "--width", "16385"],
+            "--width",
+        ),
+        (&["bench", "dynamic", "waves", "--height", "0"], "--height"),
+        (&["bench", "bdpt", "cornell-box", "--width", "0"], "--width"),
+        (
+            &["bench", "bdpt", "cornell-box", "--rounds", "0"],
+            "--rounds",
+        ),
+        (
+            &["bench", "bdpt", "cornell-box", "--spp-rounds", "0"],
+            "--spp-rounds",
+        ),
+    ];
+    for (args, option) in cases {
+        let out = splitray(args, dir.path());
+        let t = text(&out);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {t}");
+        assert!(
+            t.contains(option) && !t.contains("panicked"),
+            "{args:?}: {t}"
+        );
+    }
+}
+
 #[test]
 fn bench_trace_verifies_and_compares_tracers() {
     let dir = tempfile::tempdir().unwrap();

@@ -57,11 +57,11 @@ enum BenchCommand {
     Pt {
         /// A built-in scene, a scene .toml or an .obj.
         scene: String,
-        #[arg(long, default_value_t = 256)]
+        #[arg(long, default_value_t = 256, value_parser = super::film_side_parser())]
         width: u32,
-        #[arg(long, default_value_t = 256)]
+        #[arg(long, default_value_t = 256, value_parser = super::film_side_parser())]
         height: u32,
-        #[arg(long, default_value_t = 16)]
+        #[arg(long, default_value_t = 16, value_parser = super::at_least_one())]
         spp: u32,
         /// Mitsuba's max_depth (-1 = unbounded, Russian roulette from depth 5).
         #[arg(long, default_value_t = -1, allow_hyphen_values = true, value_parser = super::max_depth_parser())]
@@ -80,9 +80,9 @@ enum BenchCommand {
         /// Built-in scenes, scene .toml or .obj files, each benchmarked in turn.
         #[arg(required = true, num_args = 1..)]
         scenes: Vec<String>,
-        #[arg(long, default_value_t = 160)]
+        #[arg(long, default_value_t = 160, value_parser = super::film_side_parser())]
         width: u32,
-        #[arg(long, default_value_t = 120)]
+        #[arg(long, default_value_t = 120, value_parser = super::film_side_parser())]
         height: u32,
         /// Comma-separated integrators to compare.
         #[arg(
@@ -95,7 +95,7 @@ enum BenchCommand {
         #[arg(long, default_value_t = 30.0)]
         time: f64,
         /// Slices each integrator's time is cut into (taken in turns).
-        #[arg(long, default_value_t = 10)]
+        #[arg(long, default_value_t = 10, value_parser = super::at_least_one())]
         rounds: u32,
         /// Mitsuba's max_depth (-1 = unbounded, Russian roulette from depth 5).
         #[arg(long, default_value_t = -1, allow_hyphen_values = true, value_parser = super::max_depth_parser())]
@@ -112,7 +112,7 @@ enum BenchCommand {
         #[arg(long, default_value_t = 4)]
         spp: u32,
         /// Rounds of the equal-spp comparison (the median is reported).
-        #[arg(long, default_value_t = 3)]
+        #[arg(long, default_value_t = 3, value_parser = super::at_least_one())]
         spp_rounds: u32,
         /// Stream counts of the equal-spp comparison (each 1 or 3).
         #[arg(long, value_delimiter = ',', default_value = "1,3")]
@@ -132,19 +132,19 @@ enum BenchCommand {
     Cbpt {
         /// A built-in scene, a scene .toml or an .obj.
         scene: String,
-        #[arg(long, default_value_t = 160)]
+        #[arg(long, default_value_t = 160, value_parser = super::film_side_parser())]
         width: u32,
-        #[arg(long, default_value_t = 120)]
+        #[arg(long, default_value_t = 120, value_parser = super::film_side_parser())]
         height: u32,
         /// Comma-separated tracers whose visibility throughput is measured; the first
         /// serves every other measurement.
         #[arg(long, value_delimiter = ',', default_value = "pdacrt,cpu-bvh")]
         tracers: Vec<TracerKind>,
         /// Steps per measured block.
-        #[arg(long, default_value_t = 6)]
+        #[arg(long, default_value_t = 6, value_parser = super::at_least_one())]
         steps: u32,
         /// Alternating blocks (runs) per comparison.
-        #[arg(long, default_value_t = 3)]
+        #[arg(long, default_value_t = 3, value_parser = super::at_least_one())]
         rounds: u32,
         /// Comma-separated batch sizes (segments, multiples of 32) of the sweep.
         #[arg(
@@ -172,9 +172,9 @@ enum BenchCommand {
     Trace {
         /// A built-in scene, a scene .toml or an .obj.
         scene: String,
-        #[arg(long, default_value_t = 1024)]
+        #[arg(long, default_value_t = 1024, value_parser = super::film_side_parser())]
         width: u32,
-        #[arg(long, default_value_t = 1024)]
+        #[arg(long, default_value_t = 1024, value_parser = super::film_side_parser())]
         height: u32,
         /// primary, shadow (one point light), reflection (one mirror bounce), ao (8 rays
         /// per hit) or path (7 diffuse bounces).
@@ -269,9 +269,9 @@ enum BenchCommand {
         /// The warm-up frame; frames first+1 ..= first+frames are timed.
         #[arg(long, default_value_t = 0)]
         first: u32,
-        #[arg(long, default_value_t = 512)]
+        #[arg(long, default_value_t = 512, value_parser = super::film_side_parser())]
         width: u32,
-        #[arg(long, default_value_t = 512)]
+        #[arg(long, default_value_t = 512, value_parser = super::film_side_parser())]
         height: u32,
         /// Comma-separated workloads: primary, shadow (also reflection, ao).
         #[arg(long, value_delimiter = ',', default_value = "primary,shadow")]

@@ -79,3 +79,13 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
 fn max_depth_parser() -> clap::builder::RangedI64ValueParser<i32> {
     clap::value_parser!(i32).range(-1..)
 }
+
+/// A film's width or height in pixels: 1 to 16384, as `render` takes it.
+fn film_side_parser() -> clap::builder::RangedI64ValueParser<u32> {
+    clap::value_parser!(u32).range(1..=16384)
+}
+
+/// A count of rounds, steps or samples that means nothing at 0.
+fn at_least_one() -> clap::builder::RangedI64ValueParser<u32> {
+    clap::value_parser!(u32).range(1..)
+}
