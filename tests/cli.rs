@@ -256,6 +256,79 @@ fn default_output_goes_to_out_folder() {
     assert!(dir.path().join("out/cornell-box.png").is_file());
 }
 
+/// Outputs that would overwrite one another or an input, or a folder, are refused before
+/// the render, and the files already there are left as they were.
+#[test]
+fn outputs_that_would_replace_another_file_of_the_render_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let small = ["--width", "8", "--height", "8", "--integrator", "ao"];
+    let render = |extra: &[&str]| splitray(&[&["render"][..], &small, extra].concat(), d);
+    let out = render(&["--spp", "2", "-o", "ref.exr", "--checkpoint", "run.ckpt"]);
+    assert!(out.status.success(), "{}", text(&out));
+    std::fs::create_dir(d.join("folder.exr")).unwrap();
+    let before: Vec<_> = ["ref.exr", "ref.png", "run.ckpt"]
+        .map(|f| std::fs::read(d.join(f)).unwrap())
+        .into();
+    let cases: &[(&[&str], &[&str])] = &[
+        (
+            &["-o", "a.exr", "--stats", "a.exr"],
+            &["the image and --stats"],
+        ),
+        (
+            &["-o", "a.exr", "--stats", "./a.png"],
+            &["its PNG preview and --stats"],
+        ),
+        (
+            &["-o", "a.exr", "--stats", "s.json", "--timeline", "s.json"],
+            &["--stats and --timeline"],
+        ),
+        (
+            &["-o", "ref.exr", "--reference", "ref.exr"],
+            &["the image and --reference"],
+        ),
+        (
+            &["-o", "a.exr", "--stats", "run.ckpt", "--resume", "run.ckpt"],
+            &["--stats and --resume"],
+        ),
+        (&["-o", "folder.exr"], &["folder.exr", "is a folder"]),
+    ];
+    for (args, expect) in cases {
+        let out = render(args);
+        let t = text(&out);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {t}");
+        for e in *expect {
+            assert!(t.contains(e), "{args:?}: expected {e:?} in:\n{t}");
+        }
+    }
+    let after: Vec<_> = ["ref.exr", "ref.png", "run.ckpt"]
+        .map(|f| std::fs::read(d.join(f)).unwrap())
+        .into();
+    assert!(before == after, "a refused render changed an existing file");
+    let mut names: Vec<_> = std::fs::read_dir(d)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(names, ["folder.exr", "ref.exr", "ref.png", "run.ckpt"]);
+    // A resumed render saves its checkpoint over the one it resumed.
+    let out = splitray(
+        &[
+            "render",
+            "--resume",
+            "run.ckpt",
+            "--checkpoint",
+            "run.ckpt",
+            "--spp",
+            "4",
+            "-o",
+            "b.exr",
+        ],
+        d,
+    );
+    assert!(out.status.success(), "{}", text(&out));
+}
+
 /// Runs a render expected to fail; checks the message and that no file was written.
 fn assert_fails(dir: &Path, args: &[&str], expect: &[&str]) {
     let out = splitray(args, dir);

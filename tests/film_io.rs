@@ -3,7 +3,7 @@
 use std::path::Path;
 
 use splitray::film::{
-    read_exr, write_exr, write_outputs, write_png_preview, Film, FilmError, ImageFiles,
+    read_exr, write_exr, write_outputs, write_png_preview, AtomicFile, Film, FilmError, ImageFiles,
     RenderMetadata,
 };
 
@@ -371,14 +371,30 @@ fn read_errors_name_the_path() {
 }
 
 #[test]
-fn failing_rename_removes_temp() {
-    // The target is an existing directory: encoding succeeds, the final rename fails.
-    // (Works as root too, unlike the permission test.)
+fn a_folder_in_the_way_is_refused_before_writing() {
     let dir = tempfile::tempdir().unwrap();
     let target = dir.path().join("taken.exr");
     std::fs::create_dir(&target).unwrap();
     std::fs::write(target.join("keep"), b"k").unwrap();
     let err = write_exr(&target, &test_film(3, 2, true), &meta()).unwrap_err();
+    assert!(matches!(err, FilmError::Invalid { .. }), "{err}");
+    assert!(err.to_string().contains("taken.exr"), "{err}");
+    assert!(err.to_string().contains("is a folder"), "{err}");
+    assert!(target.join("keep").exists());
+    assert_eq!(dir_entries(dir.path()), ["taken.exr"]);
+}
+
+#[test]
+fn failing_rename_removes_temp() {
+    // A folder takes the target's name while the file is written: the final rename
+    // fails. (Works as root too, unlike the permission test.)
+    let dir = tempfile::tempdir().unwrap();
+    let target = dir.path().join("taken.exr");
+    let mut file = AtomicFile::create(&target).unwrap();
+    std::io::Write::write_all(file.writer(), b"contents").unwrap();
+    std::fs::create_dir(&target).unwrap();
+    std::fs::write(target.join("keep"), b"k").unwrap();
+    let err = file.commit().unwrap_err();
     assert!(matches!(err, FilmError::Io { .. }), "{err}");
     assert!(err.to_string().contains("taken.exr"), "{err}");
     assert!(target.join("keep").exists());

@@ -20,7 +20,7 @@ use splitray::scene::Scene;
 use splitray::trace::TracerKind;
 use splitray::vk::{Gpu, GpuDesc, InstanceDesc};
 
-use super::render_files::{write_stats, CheckpointFile, RenderFiles};
+use super::render_files::{refuse_clashing_paths, write_stats, CheckpointFile, RenderFiles, Role};
 use super::signals::{self, StopSignals};
 use options::{parse_shard, render_options};
 
@@ -245,6 +245,40 @@ fn output_path(args: &RenderArgs, scene_name: &str, shard: Shard) -> anyhow::Res
     Ok(path)
 }
 
+/// Refuses outputs that would overwrite one another or an input ([`refuse_clashing_paths`]):
+/// `exr` (a frame's, for a sequence), its PNG, the stats, checkpoint and timeline; the
+/// reference and the checkpoint resumed.
+fn refuse_clashes(args: &RenderArgs, exr: &Path) -> anyhow::Result<()> {
+    let png = exr.with_extension("png");
+    fn role<'a>(what: &'a str, path: &'a Option<PathBuf>) -> Option<Role<'a>> {
+        path.as_deref().map(|path| Role { what, path })
+    }
+    let outputs: Vec<Role> = [
+        Some(Role {
+            what: "the image",
+            path: exr,
+        }),
+        Some(Role {
+            what: "its PNG preview",
+            path: &png,
+        }),
+        role("--stats", &args.stats),
+        role("--checkpoint", &args.checkpoint),
+        role("--timeline", &args.timeline),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
+    let inputs: Vec<Role> = [
+        role("--reference", &args.reference),
+        role("--resume", &args.resume),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
+    refuse_clashing_paths(&outputs, &inputs)
+}
+
 pub fn run(args: &RenderArgs) -> anyhow::Result<ExitCode> {
     if let Some(spec) = &args.frames {
         return frames::run(args, spec);
@@ -253,6 +287,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<ExitCode> {
     let mut timeline = super::timeline::TimelineOutput::start(args.timeline.as_deref())?;
     let job = read_job(args)?;
     let output = output_path(args, &job.scene.name, job.shard)?;
+    refuse_clashes(args, &output)?;
     let mut files =
         RenderFiles::create(&output, args.stats.as_deref(), args.checkpoint.as_deref())?;
     let mut watching = watch::Watching::open(

@@ -36,6 +36,49 @@ impl RenderFiles {
     }
 }
 
+/// One file a render reads or writes, named as the command line names it.
+pub struct Role<'a> {
+    pub what: &'a str,
+    pub path: &'a Path,
+}
+
+/// Refuses a render whose outputs would overwrite one another, or overwrite one of its
+/// inputs (a reference image, the checkpoint it resumes): the later write would replace
+/// the earlier one after the render, losing it. Saving the checkpoint over the one the
+/// render resumes is allowed: that is how a resumed render keeps going.
+pub fn refuse_clashing_paths(outputs: &[Role], inputs: &[Role]) -> anyhow::Result<()> {
+    for (i, a) in outputs.iter().enumerate() {
+        for b in outputs[i + 1..].iter().chain(inputs) {
+            let resumes_its_checkpoint = a.what == "--checkpoint" && b.what == "--resume";
+            if !resumes_its_checkpoint && same_file(a.path, b.path) {
+                anyhow::bail!(
+                    "{}: {} and {} name the same file: the render would be lost",
+                    a.path.display(),
+                    a.what,
+                    b.what
+                );
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Whether two paths name one file: their folders resolved (where they exist), then
+/// their file names compared.
+fn same_file(a: &Path, b: &Path) -> bool {
+    fn resolved(path: &Path) -> PathBuf {
+        let folder = match path.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p,
+            _ => Path::new("."),
+        };
+        match (folder.canonicalize(), path.file_name()) {
+            (Ok(folder), Some(name)) => folder.join(name),
+            _ => path.to_path_buf(),
+        }
+    }
+    resolved(a) == resolved(b)
+}
+
 /// Writes `stats` as JSON into `file`, then renames it into place.
 pub fn write_stats(mut file: AtomicFile, stats: &impl serde::Serialize) -> anyhow::Result<()> {
     let json = serde_json::to_vec_pretty(stats).context("cannot encode the stats")?;

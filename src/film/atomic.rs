@@ -88,6 +88,10 @@ impl AtomicFile {
         if !dir.is_dir() {
             return Err(FilmError::MissingDirectory { path: dir });
         }
+        // Renaming over a folder fails only at the end, after the work.
+        if target.is_dir() {
+            return Err(FilmError::invalid(&target, "is a folder, not a file"));
+        }
         let mut temp_name = std::ffi::OsString::from(".");
         temp_name.push(file_name);
         temp_name.push(format!(

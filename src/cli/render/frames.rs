@@ -80,6 +80,7 @@ pub(super) fn run(args: &RenderArgs, spec: &str) -> anyhow::Result<ExitCode> {
     let base = output_path(args, &job.animated.scene.name, Shard::WHOLE)?;
     // The first frame's files (and the stats file) before the GPU: a path that cannot be
     // written fails at once. Each later frame's files are created before its render.
+    super::refuse_clashes(args, &frame_path(&base, range.first, &range))?;
     let files = RenderFiles::create(
         &frame_path(&base, range.first, &range),
         args.stats.as_deref(),
