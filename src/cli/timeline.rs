@@ -107,8 +107,8 @@ pub struct TimelineArgs {
     /// The chart: .svg or .png.
     #[arg(short, long)]
     output: PathBuf,
-    /// Width in pixels.
-    #[arg(long, default_value_t = 1600)]
+    /// Width in pixels (520 to 32768).
+    #[arg(long, default_value_t = 1600, value_parser = width_parser())]
     width: u32,
     /// Draw from this time on (ms from the trace's start).
     #[arg(long, value_name = "MS")]
@@ -139,4 +139,10 @@ pub fn run(args: &TimelineArgs) -> anyhow::Result<()> {
     print!("{}", trace.summary());
     println!("wrote {}", args.output.display());
     Ok(())
+}
+
+/// `--width` within the widths the chart can be drawn at.
+fn width_parser() -> clap::builder::RangedI64ValueParser<u32> {
+    let range = timeline::draw::WIDTH_RANGE;
+    clap::value_parser!(u32).range(i64::from(*range.start())..=i64::from(*range.end()))
 }

@@ -15,7 +15,7 @@ use super::TimelineError;
 /// Chart size and time window.
 #[derive(Clone, Debug)]
 pub struct DrawOptions {
-    /// Width in pixels (the height follows from the tracks).
+    /// Width in pixels, [`WIDTH_RANGE`] (the height follows from the tracks).
     pub width: u32,
     /// The window to draw, in milliseconds from the trace's time origin; the whole
     /// trace where `None`.
@@ -34,6 +34,9 @@ impl Default for DrawOptions {
 }
 
 const LABEL_WIDTH: u32 = 300;
+/// The chart widths drawn: the labels and a plot of 200 pixels at the least; at most as
+/// wide as a PNG of every track stays a reasonable size.
+pub const WIDTH_RANGE: std::ops::RangeInclusive<u32> = (LABEL_WIDTH + 220)..=32768;
 const ROW_PX: u32 = 16;
 const COUNTER_ROWS: u32 = 3;
 const TOP_PX: u32 = 36;
@@ -136,6 +139,14 @@ type Chart<'a, 'b> = ChartContext<'a, SVGBackend<'b>, Cartesian2d<RangedCoordf64
 
 /// The window to draw, in ms: the options' bounds, else the trace's extent.
 fn time_window(trace: &Trace, options: &DrawOptions) -> Result<(f64, f64), TimelineError> {
+    if !WIDTH_RANGE.contains(&options.width) {
+        return Err(TimelineError::Draw(format!(
+            "a width of {} pixels is outside {}..={}",
+            options.width,
+            WIDTH_RANGE.start(),
+            WIDTH_RANGE.end()
+        )));
+    }
     let (t0, t1) = trace
         .extent_ns()
         .ok_or_else(|| TimelineError::Draw("the trace has no slices and no counters".into()))?;
@@ -351,7 +362,7 @@ fn draw_counters(
 /// The chart as an SVG document.
 pub fn svg(trace: &Trace, options: &DrawOptions) -> Result<String, TimelineError> {
     let window = time_window(trace, options)?;
-    let plot_px = options.width.max(LABEL_WIDTH + 200) - LABEL_WIDTH - 20;
+    let plot_px = options.width - LABEL_WIDTH - 20;
     let ms_per_px = (window.1 - window.0) / plot_px as f64;
     let layout = layout(trace, window, ms_per_px);
     let height = TOP_PX + layout.rows * ROW_PX + AXIS_PX;
@@ -505,5 +516,24 @@ mod tests {
             .unwrap_err()
             .to_string()
             .contains("window"));
+    }
+
+    #[test]
+    fn widths_outside_the_range_are_refused_and_its_ends_drawn() {
+        let at = |width| {
+            let options = DrawOptions {
+                width,
+                ..Default::default()
+            };
+            svg(&trace(), &options)
+        };
+        for width in [0, 1, WIDTH_RANGE.start() - 1, WIDTH_RANGE.end() + 1] {
+            let err = at(width).unwrap_err().to_string();
+            assert!(err.contains(&format!("width of {width} pixels")), "{err}");
+        }
+        for width in [*WIDTH_RANGE.start(), *WIDTH_RANGE.end()] {
+            let svg = at(width).unwrap();
+            assert!(svg.contains(&format!("width=\"{width}\"")), "{width}");
+        }
     }
 }
