@@ -595,6 +595,10 @@ fn render_writes_a_timeline_that_timeline_draws_and_bad_input_is_refused() {
         ),
         (&["timeline", "t.json", "-o", "bad.pdf"][..], ".svg or .png"),
         (
+            &["timeline", "t.json", "-o", "bad.svg", "--width", "0"][..],
+            "520..=32768",
+        ),
+        (
             &["timeline", "t.json", "-o", "nowhere/bad.svg"][..],
             "nowhere",
         ),
