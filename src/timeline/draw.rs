@@ -139,14 +139,6 @@ type Chart<'a, 'b> = ChartContext<'a, SVGBackend<'b>, Cartesian2d<RangedCoordf64
 
 /// The window to draw, in ms: the options' bounds, else the trace's extent.
 fn time_window(trace: &Trace, options: &DrawOptions) -> Result<(f64, f64), TimelineError> {
-    if !WIDTH_RANGE.contains(&options.width) {
-        return Err(TimelineError::Draw(format!(
-            "a width of {} pixels is outside {}..={}",
-            options.width,
-            WIDTH_RANGE.start(),
-            WIDTH_RANGE.end()
-        )));
-    }
     let (t0, t1) = trace
         .extent_ns()
         .ok_or_else(|| TimelineError::Draw("the trace has no slices and no counters".into()))?;
@@ -361,6 +353,14 @@ fn draw_counters(
 
 /// The chart as an SVG document.
 pub fn svg(trace: &Trace, options: &DrawOptions) -> Result<String, TimelineError> {
+    if !WIDTH_RANGE.contains(&options.width) {
+        return Err(TimelineError::Draw(format!(
+            "a width of {} pixels is outside {}..={}",
+            options.width,
+            WIDTH_RANGE.start(),
+            WIDTH_RANGE.end()
+        )));
+    }
     let window = time_window(trace, options)?;
     let plot_px = options.width - LABEL_WIDTH - 20;
     let ms_per_px = (window.1 - window.0) / plot_px as f64;
