@@ -47,6 +47,16 @@ fn info_lists_devices_streams_and_validation() {
     assert_eq!(devices.iter().filter(|d| d["selected"] == true).count(), 1);
     assert!(devices[0]["streams"]["slots"].as_array().unwrap().len() == 4);
     assert!(devices[0]["driver_info"].is_string());
+
+    // A device named that does not exist is an error, as it is for `render`, not a
+    // listing with nothing marked.
+    let out = splitray(&["info", "--json", "--device", "no-such-gpu"], dir.path());
+    assert_eq!(out.status.code(), Some(1), "{}", text(&out));
+    assert!(text(&out).contains("--device no-such-gpu: no such device"));
+    let out = splitray(&["info", "--json", "--device", "0"], dir.path());
+    assert!(out.status.success(), "{}", text(&out));
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(json["devices"][0]["selected"], true);
 }
 
 #[test]

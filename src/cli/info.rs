@@ -37,7 +37,12 @@ struct InfoReport {
 /// `render` would use.
 fn report(instance: &Instance, device: Option<&str>) -> anyhow::Result<InfoReport> {
     let devices = vk::enumerate(instance)?;
-    let selected = vk::select(&devices, device).ok().map(|d| d.index);
+    // Without a device named, none may be usable and the list is still wanted; a device
+    // named that `render` would refuse is an error, as it would be there.
+    let selected = match device {
+        Some(_) => Some(vk::select(&devices, device)?.index),
+        None => vk::select(&devices, None).ok().map(|d| d.index),
+    };
     Ok(InfoReport {
         validation_layer_available: vk::validation_layer_available(),
         devices: devices
