@@ -443,6 +443,20 @@ fn bad_input_gives_a_clear_error_and_no_output() {
         &["render", "--bdpt-techniques", ".", "-o", "a.exr"],
         &["--bdpt-techniques", "bpt, light, lvc-bdpt or cis-lbdpt"],
     );
+    // A population this large ran the host out of memory before it was bounded.
+    assert_fails(
+        d,
+        &[
+            "render",
+            "--integrator",
+            "cbpt",
+            "--cbpt-nt",
+            "4000000000",
+            "-o",
+            "a.exr",
+        ],
+        &["--cbpt-nt 4000000000", "1048576 paths per step"],
+    );
     // clap's own usage errors exit with 2; an unknown integrator is one of them.
     let out = splitray(&["render", "--integrator", "bogus"], d);
     assert!(!out.status.success() && text(&out).contains("bogus"));

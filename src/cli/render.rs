@@ -184,7 +184,8 @@ pub struct RenderArgs {
     #[arg(long, value_name = "HOST:PORT")]
     display_server: Option<String>,
     /// cbpt: N_C, the most camera paths per step, or `auto` to choose it (and N_L) by
-    /// Equation 4 of the CBPT paper from measured BPT and CBPT times (default 2000).
+    /// Equation 4 of the CBPT paper from measured BPT and CBPT times (default 2000; at
+    /// most 1048576, as N_L and N_T).
     #[arg(long, value_name = "N|auto")]
     cbpt_nc: Option<splitray::integrator::cbpt::CameraPaths>,
     /// cbpt: N_L, light paths per step, each linked to every camera path (default 15).

@@ -9,6 +9,8 @@
 //! leaves N_L < 1, "the machine on which CBPT is running is not fast enough to bring any
 //! advantage over standard BPT for the chosen P": N_L is then 1 and the choice says so.
 
+use super::options::MAX_POPULATION;
+
 /// The outcome of Equation 4.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Equation4 {
@@ -28,15 +30,20 @@ pub struct Equation4 {
 impl Equation4 {
     pub fn solve(pair_seconds: f64, step_seconds: f64, pairs: u64) -> Self {
         let ratio = step_seconds / pair_seconds.max(1e-12);
-        let camera_paths = (ratio.floor() + 1.0).clamp(1.0, u32::MAX as f64) as u32;
+        // Both stay within the populations CBPT takes (MAX_POPULATION): a slow step
+        // against a fast BPT pair would otherwise ask for more camera paths than memory
+        // holds.
+        let needed = ratio.floor() + 1.0;
+        let camera_paths = needed.clamp(1.0, f64::from(MAX_POPULATION)) as u32;
         let per_camera = pairs / camera_paths as u64;
         Self {
             pair_seconds,
             step_seconds,
             pairs,
             camera_paths,
-            light_paths: per_camera.clamp(1, u32::MAX as u64) as u32,
-            advantage: per_camera >= 1,
+            light_paths: per_camera.clamp(1, u64::from(MAX_POPULATION)) as u32,
+            // Against the N_C Equation 4 asks for, not the one kept.
+            advantage: pairs as f64 >= needed,
         }
     }
 }
@@ -77,5 +84,10 @@ mod tests {
         let e = Equation4::solve(2f64.powi(-16), 2f64.powi(-6), 30_000);
         assert_eq!((e.camera_paths, e.light_paths), (1025, 29));
         assert!(e.advantage && e.camera_paths as f64 > e.step_seconds / e.pair_seconds);
+        // A step ten billion times a pair: N_C stops at the populations' bound, and the
+        // machine is still reported too slow.
+        let e = Equation4::solve(1e-9, 10.0, 30_000);
+        assert_eq!((e.camera_paths, e.light_paths), (MAX_POPULATION, 1));
+        assert!(!e.advantage);
     }
 }

@@ -16,6 +16,10 @@ pub const DEFAULT_LIGHT_TRACED: u32 = 1500;
 pub const DEFAULT_BATCH: u32 = 1 << 17;
 /// The largest batch: its rays, hits and results stay well inside a 128 MiB binding.
 pub const MAX_BATCH: u32 = 1 << 22;
+/// The most paths of each population of a step (N_C, N_L, N_T): far past the paper's
+/// 2000, 15 and 1500. A million light-traced paths take about 0.2 GB of host memory
+/// (measured on the Cornell box); without a bound, N_T = 4·10⁹ ran the host out of memory.
+pub const MAX_POPULATION: u32 = 1 << 20;
 
 /// N_C: camera paths per step, given or from Equation 4.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -25,6 +29,16 @@ pub enum CameraPaths {
     /// Chosen by Equation 4 from the measured times of a BPT pair and of a CBPT step
     /// of [`DEFAULT_CAMERA_PATHS`] × N_L pairs (see `calibrate`).
     Equation4,
+}
+
+impl CameraPaths {
+    /// The number given, if one was (not `auto`).
+    pub fn fixed(self) -> Option<u32> {
+        match self {
+            Self::Fixed(n) => Some(n),
+            Self::Equation4 => None,
+        }
+    }
 }
 
 impl Default for CameraPaths {
@@ -135,6 +149,18 @@ impl CbptSettings {
         if self.light_paths == 0 {
             return Err("--cbpt-nl must be at least 1".into());
         }
+        let populations = [
+            ("--cbpt-nc", self.camera_paths.fixed().unwrap_or(0)),
+            ("--cbpt-nl", self.light_paths),
+            ("--cbpt-nt", self.light_traced),
+        ];
+        for (option, paths) in populations {
+            if paths > MAX_POPULATION {
+                return Err(format!(
+                    "{option} {paths} is more than {MAX_POPULATION} paths per step"
+                ));
+            }
+        }
         if self.batch < 32 || self.batch > MAX_BATCH || self.batch % 32 != 0 {
             return Err(format!(
                 "--cbpt-batch {} must be a multiple of 32 between 32 and {MAX_BATCH}",
@@ -203,8 +229,28 @@ mod tests {
                 batch: MAX_BATCH * 2,
                 ..ok
             },
+            CbptSettings {
+                camera_paths: CameraPaths::Fixed(MAX_POPULATION + 1),
+                ..ok
+            },
+            CbptSettings {
+                light_paths: MAX_POPULATION + 1,
+                ..ok
+            },
+            CbptSettings {
+                light_traced: u32::MAX,
+                ..ok
+            },
         ] {
             assert!(bad.check().is_err(), "{bad:?}");
         }
+        // The bound itself is taken.
+        let most = CbptSettings {
+            camera_paths: CameraPaths::Fixed(MAX_POPULATION),
+            light_paths: MAX_POPULATION,
+            light_traced: MAX_POPULATION,
+            ..ok
+        };
+        assert!(most.check().is_ok());
     }
 }
