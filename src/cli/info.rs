@@ -127,7 +127,7 @@ fn print_calibrated_timestamps(time_domains: &[String]) {
 
 fn print_features(c: &CapabilityInfo) {
     println!(
-        "    features: timeline semaphores {}, synchronization2 {}, maintenance4 {}, push descriptors {}, buffer device address {}, ray query {}, subgroup arithmetic {}, subgroup ballot+shuffle {}, full subgroups {}, 64-bit buffer atomics {}",
+        "    features: timeline semaphores {}, synchronization2 {}, maintenance4 {}, push descriptors {}, buffer device address {}, ray query {}, subgroup arithmetic {}, subgroup ballot+shuffle {}, full subgroups {}, 64-bit buffer atomics {}, host query reset {}",
         c.timeline_semaphore,
         c.synchronization2,
         c.maintenance4,
@@ -137,7 +137,8 @@ fn print_features(c: &CapabilityInfo) {
         c.subgroup_arithmetic,
         c.subgroup_ballot_shuffle,
         c.compute_full_subgroups,
-        c.buffer_int64_atomics
+        c.buffer_int64_atomics,
+        c.host_query_reset
     );
 }
 

@@ -391,6 +391,7 @@ mod tests {
                 compute_full_subgroups: ballots,
                 shader_int64: true,
                 buffer_int64_atomics: true,
+                host_query_reset: true,
             },
         )
     }

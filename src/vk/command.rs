@@ -145,15 +145,11 @@ impl Recorder {
                         .call("vkCreateQueryPool")?
                 }
             };
-            // SAFETY: recording; the reset precedes every write to the pool below.
-            unsafe {
-                self.device()
-                    .cmd_reset_query_pool(self.slot.cmd, pool, 0, QUERIES_PER_POOL)
-            };
+            self.reset_query_pool(pool);
             self.queries.pools.push(pool);
         }
         let pool = self.queries.pools[pool_index];
-        // SAFETY: recording; the query was reset in this command buffer.
+        // SAFETY: recording; the query was reset before this command buffer's submission.
         unsafe {
             self.device().cmd_write_timestamp2(
                 self.slot.cmd,
@@ -164,6 +160,23 @@ impl Recorder {
         };
         self.queries.next += 1;
         Ok(Some(index))
+    }
+
+    /// Resets every query of `pool` before this command buffer writes any: from the host
+    /// where the device allows it (the pool is new, or came back from a command buffer
+    /// that completed or never ran, so the GPU is not using it), else recorded here.
+    fn reset_query_pool(&self, pool: vk::QueryPool) {
+        if self.gpu.info().capabilities.host_query_reset {
+            // SAFETY: hostQueryReset is enabled; no pending submission uses `pool`.
+            unsafe { self.device().reset_query_pool(pool, 0, QUERIES_PER_POOL) };
+        } else {
+            // SAFETY: recording on a graphics or compute family (others write no
+            // timestamps without host resets); the reset precedes every write to the pool.
+            unsafe {
+                self.device()
+                    .cmd_reset_query_pool(self.slot.cmd, pool, 0, QUERIES_PER_POOL)
+            };
+        }
     }
 
     fn label_begin(&self, name: &str) {

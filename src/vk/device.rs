@@ -14,7 +14,7 @@ use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 use super::clock::Calibrator;
 use super::error::{CallContext, Result, VkError};
 use super::instance::{Instance, InstanceDesc};
-use super::physical::{self, PhysicalDeviceInfo};
+use super::physical::{self, PhysicalDeviceInfo, QueueFamilyInfo};
 use super::pipeline::BufferAccess;
 use super::profiler::{GpuBatch, ProfileLog, QueryBatch};
 use super::stream::{
@@ -515,7 +515,8 @@ fn create_logical_device(
     let mut f12 = vk::PhysicalDeviceVulkan12Features::default()
         .timeline_semaphore(true)
         .buffer_device_address(true)
-        .shader_buffer_int64_atomics(int64_atomics);
+        .shader_buffer_int64_atomics(int64_atomics)
+        .host_query_reset(info.capabilities.host_query_reset);
     let f10 = vk::PhysicalDeviceFeatures::default().shader_int64(info.capabilities.shader_int64);
     let full_subgroups = info.capabilities.compute_full_subgroups;
     let mut f13 = vk::PhysicalDeviceVulkan13Features::default()
@@ -613,7 +614,8 @@ fn create_streams(
                 return Err(e);
             }
         };
-        let bits = info.queue_families[slot.family as usize].timestamp_valid_bits;
+        let family = &info.queue_families[slot.family as usize];
+        let bits = timestamp_bits(family, info.capabilities.host_query_reset);
         streams.push(StreamState {
             kind,
             family: slot.family,
@@ -644,6 +646,18 @@ fn create_timeline_semaphore(raw: &ash::Device) -> Result<vk::Semaphore> {
     unsafe { raw.create_semaphore(&sem_info, None) }.call("vkCreateSemaphore")
 }
 
+/// The timestamp bits a stream on `family` gets. A query must be reset before it is
+/// written: from the host where the device can (`host_query_reset`), else in the command
+/// buffer, which a family without graphics or compute cannot record
+/// (VUID-vkCmdResetQueryPool-commandBuffer-cmdpool), so such a stream goes untimed.
+fn timestamp_bits(family: &QueueFamilyInfo, host_query_reset: bool) -> u32 {
+    if host_query_reset || family.graphics || family.compute {
+        family.timestamp_valid_bits
+    } else {
+        0
+    }
+}
+
 /// The bits of a timestamp that a queue family writes (`timestamp_valid_bits`) as a mask.
 fn timestamp_mask(bits: u32) -> u64 {
     match bits {
@@ -665,5 +679,37 @@ fn buffer_access_for(desc: &GpuDesc, info: &PhysicalDeviceInfo) -> Result<Buffer
                 "SPLITRAY_BUFFER_ACCESS={s}: expected `descriptors` or `addresses`"
             ))
         }),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn family(graphics: bool, compute: bool, bits: u32) -> QueueFamilyInfo {
+        QueueFamilyInfo {
+            index: 0,
+            count: 1,
+            graphics,
+            compute,
+            transfer: true,
+            timestamp_valid_bits: bits,
+        }
+    }
+
+    #[test]
+    fn transfer_only_families_are_timed_only_with_host_resets() {
+        let transfer_only = family(false, false, 64);
+        assert_eq!(timestamp_bits(&transfer_only, true), 64);
+        assert_eq!(timestamp_bits(&transfer_only, false), 0);
+        for (graphics, compute) in [(true, true), (false, true), (true, false)] {
+            let f = family(graphics, compute, 36);
+            assert_eq!(timestamp_bits(&f, false), 36);
+            assert_eq!(timestamp_bits(&f, true), 36);
+        }
+        assert_eq!(timestamp_bits(&family(true, true, 0), true), 0);
+        assert_eq!(timestamp_mask(timestamp_bits(&transfer_only, false)), 0);
+        assert_eq!(timestamp_mask(36), (1 << 36) - 1);
+        assert_eq!(timestamp_mask(64), u64::MAX);
     }
 }

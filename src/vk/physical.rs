@@ -64,6 +64,10 @@ pub struct CapabilityInfo {
     /// shaderInt64 with shaderBufferInt64Atomics (64-bit atomicMin on storage buffers);
     /// enabled on the device when present (PDACRT's atomic flush uses it).
     pub buffer_int64_atomics: bool,
+    /// The hostQueryReset feature (Vulkan 1.2): timestamp query pools are reset from the
+    /// host, so a queue family without graphics or compute (a transfer-only one, where
+    /// vkCmdResetQueryPool is not allowed) still times its commands. Enabled when present.
+    pub host_query_reset: bool,
 }
 
 /// Everything `splitray info` says about a device.
@@ -419,6 +423,7 @@ fn capability_info(
         shader_int64: f10.shader_int64 == vk::TRUE,
         buffer_int64_atomics: f10.shader_int64 == vk::TRUE
             && f12.shader_buffer_int64_atomics == vk::TRUE,
+        host_query_reset: f12.host_query_reset == vk::TRUE,
     }
 }
 
