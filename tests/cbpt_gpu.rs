@@ -91,31 +91,66 @@ fn adversarial_tables(scene: &CpuScene, cameras: usize, lights: usize, surface: 
     }
 }
 
+/// Which end of a segment a shading table belongs to.
+#[derive(Clone, Copy)]
+enum End {
+    /// `camera_shading.comp`: camera-vertex major.
+    Camera,
+    /// `light_shading.comp`: light-vertex major.
+    Light,
+}
+
+/// Whether segment `s` of `end`'s table runs within float rounding of its endpoint's
+/// tangent plane (shading or geometric normal). There the hemisphere tests that zero a
+/// BSDF may fall either way on two processors (a GPU's fused multiply-adds and
+/// approximate square roots against the CPU's), and either answer is right: f·|cos θ|
+/// is zero to within the comparison's absolute tolerance, so the pdfs, which are all
+/// that differ, weigh a contribution of nothing.
+fn grazing(tables: &Tables, end: End, s: usize) -> bool {
+    let (vertex, other) = match end {
+        End::Camera => {
+            let v_l = tables.light.len();
+            (&tables.camera[s / v_l], tables.light[s % v_l].p)
+        }
+        End::Light => {
+            let v_c = tables.camera.len();
+            (&tables.light[s / v_c], tables.camera[s % v_c].p)
+        }
+    };
+    let dir = (Vec3::from(other) - Vec3::from(vertex.p)).normalize_or_zero();
+    let edge = |n: [f32; 3]| dir.dot(Vec3::from(n)).abs() < 1e-5;
+    edge(vertex.ns) || edge(vertex.ng)
+}
+
 /// Shading tuples agree: each value within 1e-4 relative (1e-6 absolute) of the twin's,
 /// or, for the few segments where the two BSDF evaluations straddle a lobe's edge or a
-/// very peaked lobe, the whole tuple within 1e-2; at most 1 in 10 000 of those.
-fn assert_shading_close(gpu: &Shading, cpu: &Shading, what: &str) {
+/// very peaked lobe, the whole tuple within 1e-2; at most 1 in 10 000 of those. A
+/// segment along its endpoint's tangent plane ([`grazing`]) must agree on f alone.
+fn assert_shading_close(gpu: &Shading, cpu: &Shading, tables: &Tables, end: End, what: &str) {
     assert_eq!(gpu.segments, cpu.segments, "{what}");
     let n = gpu.segments;
     let close = |a: f32, b: f32, rel: f32| (a - b).abs() <= 1e-6 + rel * a.abs().max(b.abs());
-    let mut loose = 0;
+    let (mut loose, mut tangent) = (0, 0);
     for s in 0..n {
         let (g, c) = (gpu.get(s), cpu.get(s));
-        let pairs = [
-            (g.f.x, c.f.x),
-            (g.f.y, c.f.y),
-            (g.f.z, c.f.z),
-            (g.pdf_fwd, c.pdf_fwd),
-            (g.pdf_rev, c.pdf_rev),
-        ];
-        if pairs.iter().all(|&(a, b)| close(a, b, 1e-4)) {
+        let f = [(g.f.x, c.f.x), (g.f.y, c.f.y), (g.f.z, c.f.z)];
+        let pdfs = [(g.pdf_fwd, c.pdf_fwd), (g.pdf_rev, c.pdf_rev)];
+        let f_close = |rel| f.iter().all(|&(a, b)| close(a, b, rel));
+        if f_close(1e-4) && pdfs.iter().all(|&(a, b)| close(a, b, 1e-4)) {
+            continue;
+        }
+        if f_close(1e-4) && grazing(tables, end, s) {
+            tangent += 1;
             continue;
         }
         assert!(
-            pairs.iter().all(|&(a, b)| close(a, b, 1e-2)),
+            f_close(1e-2) && pdfs.iter().all(|&(a, b)| close(a, b, 1e-2)),
             "{what}: segment {s} of {n}: GPU {g:?} vs CPU {c:?}"
         );
         loose += 1;
+    }
+    if tangent > 0 {
+        eprintln!("{what}: {tangent} of {n} segments along a tangent plane agree on f alone");
     }
     assert!(
         loose * 10_000 <= n.max(10_000),
@@ -123,7 +158,7 @@ fn assert_shading_close(gpu: &Shading, cpu: &Shading, what: &str) {
     );
 }
 
-fn assert_data_equal(gpu: &CombinationData, cpu: &CombinationData, what: &str) {
+fn assert_data_equal(gpu: &CombinationData, cpu: &CombinationData, tables: &Tables, what: &str) {
     let differ = gpu
         .visibility
         .iter()
@@ -132,8 +167,10 @@ fn assert_data_equal(gpu: &CombinationData, cpu: &CombinationData, what: &str) {
         .sum::<u32>();
     assert_eq!(gpu.visibility.len(), cpu.visibility.len(), "{what}");
     assert_eq!(differ, 0, "{what}: {differ} visibility bits differ");
-    assert_shading_close(&gpu.camera, &cpu.camera, &format!("{what}, camera shading"));
-    assert_shading_close(&gpu.light, &cpu.light, &format!("{what}, light shading"));
+    let camera = format!("{what}, camera shading");
+    assert_shading_close(&gpu.camera, &cpu.camera, tables, End::Camera, &camera);
+    let light = format!("{what}, light shading");
+    assert_shading_close(&gpu.light, &cpu.light, tables, End::Light, &light);
 }
 
 fn combiner(gpu: &Gpu, scene: &CpuScene, tracer: TracerKind, batch: u32) -> GpuCombiner {
@@ -276,7 +313,12 @@ fn the_gpu_combination_equals_the_cpu_on_populations() {
     ] {
         let mut c = combiner(&gpu, &cpu_scene, tracer, batch);
         let got = gpu_data(&mut c, &tables);
-        assert_data_equal(&got, &want, &format!("{tracer} batches of {batch}"));
+        assert_data_equal(
+            &got,
+            &want,
+            &tables,
+            &format!("{tracer} batches of {batch}"),
+        );
     }
     common::assert_clean(&gpu);
 }
@@ -310,7 +352,7 @@ fn edge_sizes_and_adversarial_vertices_equal_the_cpu() {
         let want = evaluate(&scene, &tables, Kinds::ALL);
         let got = gpu_data(c, &tables);
         let what = format!("{cameras} x {lights} ({surface} on surfaces)");
-        assert_data_equal(&got, &want, &what);
+        assert_data_equal(&got, &want, &tables, &what);
         if tables.segments() > 1000 {
             let visible = want.visibility.iter().map(|w| w.count_ones()).sum::<u32>();
             assert!(
@@ -343,8 +385,8 @@ fn two_steps_in_flight_keep_their_own_data() {
             evaluate(&cpu_scene, &a, Kinds::ALL),
             evaluate(&cpu_scene, &b, Kinds::ALL),
         );
-        assert_data_equal(&da, &wa, &format!("round {round}, first"));
-        assert_data_equal(&db, &wb, &format!("round {round}, second"));
+        assert_data_equal(&da, &wa, &a, &format!("round {round}, first"));
+        assert_data_equal(&db, &wb, &b, &format!("round {round}, second"));
         assert_eq!(dc, da, "round {round}: the same step twice");
     }
     common::assert_clean(&gpu);
