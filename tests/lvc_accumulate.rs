@@ -14,7 +14,7 @@ use splitray::integrator::lvc::gpu::{
 };
 use splitray::integrator::lvc::kernels::{AccumulateTally, Kernels};
 use splitray::integrator::lvc::twin::{accumulate, BounceRecords};
-use splitray::integrator::lvc::Variant;
+use splitray::integrator::lvc::{LvcOptions, Variant};
 use splitray::trace::{Hit, MISS};
 use splitray::vk::{Gpu, StreamKind};
 
@@ -190,7 +190,8 @@ fn accumulation_and_tally_match_the_twin() {
         builds.push(AccumulateTally::Subgroup);
     }
     for &tally in &builds {
-        let kernels = Kernels::with_tally(&gpu, Variant::LvcBdpt, tally).unwrap();
+        let kernels =
+            Kernels::with_tally(&gpu, &LvcOptions::new(Variant::LvcBdpt, false), tally).unwrap();
         for (k, &paths) in [0usize, 1, 7, 63, 64, 65, 1000, 100_003].iter().enumerate() {
             for connections in [1, 5, 16] {
                 check(

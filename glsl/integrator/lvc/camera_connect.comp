@@ -50,11 +50,15 @@ layout(std430, set = 0, binding = 10) writeonly buffer Contributions { Contribut
 #include "lvc_random.glsl"
 
 #ifdef LVC_RESAMPLE
-// Most candidates (M) per camera vertex (src/integrator/lvc/options.rs).
-const uint MAX_CANDIDATES = 16u;
-shared uint candidate_slot[WORKGROUP_SIZE * MAX_CANDIDATES];
-shared vec4 candidate_value[WORKGROUP_SIZE * MAX_CANDIDATES];   // g, MIS weight
-shared float candidate_target[WORKGROUP_SIZE * MAX_CANDIDATES];
+// Candidates (M) per camera vertex the pipeline holds: the run's M, at most 16
+// (MAX_CANDIDATES in src/integrator/lvc/options.rs), set when the pipeline is made
+// (src/integrator/lvc/kernels.rs). Sized to the run's M rather than to 16 because the
+// shared memory of an invocation (24 bytes a candidate) bounds how many invocations a
+// GPU keeps resident to hide the candidates' random reads of the cache.
+layout(constant_id = 1) const uint CANDIDATE_CAPACITY = 16u;
+shared uint candidate_slot[WORKGROUP_SIZE * CANDIDATE_CAPACITY];
+shared vec4 candidate_value[WORKGROUP_SIZE * CANDIDATE_CAPACITY];   // g, MIS weight
+shared float candidate_target[WORKGROUP_SIZE * CANDIDATE_CAPACITY];
 #endif
 
 // The unoccluded, MIS-weighted contribution of connecting camera vertex z (index j) to
@@ -142,10 +146,10 @@ void main() {
         emit(first + k, z, z_ng, slot, g, weight, scale);
     }
 #else
-    // The candidates live in shared memory, each invocation its own MAX_CANDIDATES
+    // The candidates live in shared memory, each invocation its own CANDIDATE_CAPACITY
     // entries (function-local arrays indexed in loops blow up some drivers' compilers).
-    uint m_count = min(C.candidates, MAX_CANDIDATES);
-    uint own = gl_LocalInvocationIndex * MAX_CANDIDATES;
+    uint m_count = min(C.candidates, CANDIDATE_CAPACITY);
+    uint own = gl_LocalInvocationIndex * CANDIDATE_CAPACITY;
     float total = 0.0;
     for (uint m = 0u; m < m_count; ++m) {
         uint pick = uniform_index_below(pixel, pass, select_dim(j, m), C.seed, size, threshold);
@@ -160,7 +164,7 @@ void main() {
     }
     if (!(total > 0.0)) return;
     float scale = float(size) / (float(m_count) * float(n) * float(C.light_paths));
-    // The N draws' candidates, four bits each (m < MAX_CANDIDATES = 16, k < 16).
+    // The N draws' candidates, four bits each (m < CANDIDATE_CAPACITY <= 16, k < 16).
     uvec2 picks = uvec2(0u);
     for (uint k = 0u; k < n; ++k) {
         // The first candidate whose running sum exceeds u * total (the last one with a

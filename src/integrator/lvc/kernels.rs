@@ -2,7 +2,7 @@
 //! material-key and gather kernels (which take `pt`'s push constants).
 
 use super::gpu::LvcPush;
-use super::options::Variant;
+use super::options::{LvcOptions, Variant, MAX_CANDIDATES};
 use crate::integrator::pt::gpu::PtParams;
 use crate::shaders::{self, Kernel};
 use crate::vk::{self, ComputePipeline, Gpu};
@@ -33,13 +33,15 @@ pub struct Kernels {
 }
 
 impl Kernels {
-    pub fn new(gpu: &Gpu, variant: Variant) -> vk::Result<Self> {
-        Self::with_tally(gpu, variant, AccumulateTally::for_device(gpu))
+    /// The kernels of `options`' variant; CIS-LBDPT's connection kernel holds exactly
+    /// `options.candidates` candidates per camera vertex.
+    pub fn new(gpu: &Gpu, options: &LvcOptions) -> vk::Result<Self> {
+        Self::with_tally(gpu, options, AccumulateTally::for_device(gpu))
     }
 
     /// [`Kernels::new`] with the accumulation's tally made as `tally` says (tests build
     /// both).
-    pub fn with_tally(gpu: &Gpu, variant: Variant, tally: AccumulateTally) -> vk::Result<Self> {
+    pub fn with_tally(gpu: &Gpu, options: &LvcOptions, tally: AccumulateTally) -> vk::Result<Self> {
         let lvc = |kernel: Kernel, bindings| {
             vk::compute_pipeline(
                 gpu,
@@ -68,15 +70,37 @@ impl Kernels {
             camera_generate: lvc(shaders::INTEGRATOR_LVC_CAMERA_GENERATE, 5)?,
             camera_vertex: lvc(shaders::INTEGRATOR_LVC_CAMERA_VERTEX, 13)?,
             camera_direct: lvc(shaders::INTEGRATOR_LVC_CAMERA_DIRECT, 10)?,
-            camera_connect: match variant {
-                Variant::LvcBdpt => lvc(shaders::INTEGRATOR_LVC_CAMERA_CONNECT, 11)?,
-                Variant::CisLbdpt => lvc(shaders::INTEGRATOR_LVC_CAMERA_CONNECT__RESAMPLED, 11)?,
-            },
+            camera_connect: camera_connect(gpu, options)?,
             camera_bounce: lvc(shaders::INTEGRATOR_LVC_CAMERA_BOUNCE, 9)?,
             camera_accumulate: lvc(tally.kernel(), 8)?,
             finish: lvc(shaders::INTEGRATOR_LVC_FINISH, 5)?,
             gather: pt(shaders::INTEGRATOR_PT_GATHER, 5)?,
         })
+    }
+}
+
+/// The variant's connection kernel: uniform, or resampled with shared memory for the
+/// run's M candidates per invocation (specialization constant 1, `CANDIDATE_CAPACITY`).
+fn camera_connect(gpu: &Gpu, options: &LvcOptions) -> vk::Result<ComputePipeline> {
+    let push = size_of::<LvcPush>() as u32;
+    match options.variant {
+        Variant::LvcBdpt => vk::compute_pipeline(
+            gpu,
+            shaders::INTEGRATOR_LVC_CAMERA_CONNECT,
+            11,
+            push,
+            &[WORKGROUP],
+        ),
+        Variant::CisLbdpt => {
+            let capacity = options.candidates.clamp(1, MAX_CANDIDATES);
+            vk::compute_pipeline(
+                gpu,
+                shaders::INTEGRATOR_LVC_CAMERA_CONNECT__RESAMPLED,
+                11,
+                push,
+                &[WORKGROUP, capacity],
+            )
+        }
     }
 }
 

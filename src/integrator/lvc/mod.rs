@@ -245,7 +245,7 @@ impl<'t> LvcIntegrator<'t> {
             gpu: gpu.clone(),
             tracer,
             options: *options,
-            kernels: Kernels::new(gpu, options.variant)?,
+            kernels: Kernels::new(gpu, options)?,
             scene: SceneBuffers::new(gpu, scene)?,
             light_table: scene.lights.clone(),
             constants_buffer: gpu.upload("lvc-constants", &[constants])?,

@@ -48,7 +48,9 @@ impl Default for Families {
     }
 }
 
-/// The most candidates (M) per camera vertex (`MAX_CANDIDATES` in camera_connect.comp).
+/// The most candidates (M) per camera vertex: `camera_connect.comp` packs a draw's
+/// candidate into four bits, and keeps M candidates of 24 bytes per invocation in shared
+/// memory (24 KiB a workgroup at 16).
 pub const MAX_CANDIDATES: u32 = 16;
 /// The most connections (N) per camera vertex (each is a shadow ray per path).
 pub const MAX_CONNECTIONS: u32 = 16;
