@@ -89,13 +89,63 @@ pub fn closest_hits(rays: &[Ray], triangles: &[GpuTriangle]) -> Vec<Hit> {
         .collect()
 }
 
+/// Below this distance [`same_hit`] compares t in absolute terms (`rel_tol` times it).
+/// A hit that close to the ray's origin has t made of the difference of two nearly equal
+/// positions (origin and vertex), so its error is the positions' rounding, absolute in
+/// scene units, rather than a fraction of t; devices that fuse multiply-adds round it
+/// differently from the CPU (an NVIDIA H200: t of 2.6e-5 … 1.3e-3 apart by 4e-10 …
+/// 1.7e-8 on a unit-sized triangle soup).
+pub const SAME_HIT_NEAR: f32 = 1e-2;
+
 /// `true` when two hit records agree: both miss, or both hit with t equal within
-/// `rel_tol` (relative) and the same triangle — unless `allow_ties`, which also accepts
-/// a different triangle at the same t (two triangles meeting exactly where the ray hits).
+/// `rel_tol` (relative; absolute `rel_tol` × [`SAME_HIT_NEAR`] nearer than that) and the
+/// same triangle — unless `allow_ties`, which also accepts a different triangle at the
+/// same t (two triangles meeting exactly where the ray hits).
 pub fn same_hit(a: &Hit, b: &Hit, rel_tol: f32, allow_ties: bool) -> bool {
     if a.triangle == MISS || b.triangle == MISS {
         return a.triangle == b.triangle;
     }
-    let close = (a.t - b.t).abs() <= rel_tol * a.t.abs().max(b.t.abs());
+    let scale = a.t.abs().max(b.t.abs()).max(SAME_HIT_NEAR);
+    let close = (a.t - b.t).abs() <= rel_tol * scale;
     close && (allow_ties || a.triangle == b.triangle)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn hit(t: f32, triangle: u32) -> Hit {
+        Hit {
+            t,
+            triangle,
+            u: 0.0,
+            v: 0.0,
+        }
+    }
+
+    #[test]
+    fn hits_compare_relatively_far_and_absolutely_near() {
+        // Far: within rel_tol of t.
+        assert!(same_hit(&hit(100.0, 3), &hit(100.0009, 3), 1e-5, false));
+        assert!(!same_hit(&hit(100.0, 3), &hit(100.002, 3), 1e-5, false));
+        // Near: within rel_tol × SAME_HIT_NEAR = 1e-7, the H200's worst pair included.
+        assert!(same_hit(
+            &hit(1.2819296e-3, 3),
+            &hit(1.2819468e-3, 3),
+            1e-5,
+            false
+        ));
+        assert!(same_hit(
+            &hit(1.3628605e-4, 3),
+            &hit(1.3628286e-4, 3),
+            1e-5,
+            false
+        ));
+        assert!(!same_hit(&hit(1e-4, 3), &hit(1.003e-4, 3), 1e-5, false));
+        // The triangle, ties and misses as before.
+        assert!(!same_hit(&hit(1.0, 3), &hit(1.0, 4), 1e-5, false));
+        assert!(same_hit(&hit(1.0, 3), &hit(1.0, 4), 1e-5, true));
+        assert!(same_hit(&Hit::NONE, &Hit::NONE, 1e-5, false));
+        assert!(!same_hit(&Hit::NONE, &hit(1.0, 3), 1e-5, true));
+    }
 }

@@ -254,7 +254,8 @@ pub fn trace_after_a_copy(
     (ray_buf, hit_buf)
 }
 
-/// Asserts every hit equals the reference (same triangle, t within 1e-5 relative).
+/// Asserts every hit equals the reference (same triangle, t within 1e-5 relative, or
+/// 1e-7 absolute nearer than `SAME_HIT_NEAR`: `splitray::trace::cpu::same_hit`).
 pub fn assert_same_hits(got: &[splitray::trace::Hit], want: &[splitray::trace::Hit], what: &str) {
     assert_eq!(got.len(), want.len(), "{what}");
     let bad: Vec<_> = got
