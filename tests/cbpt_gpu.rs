@@ -11,6 +11,7 @@ use std::sync::Arc;
 
 use glam::Vec3;
 use splitray::bidir::{Counters, CpuScene};
+use splitray::integrator::cbpt::compare::{compare_shading, visibility_differences, End};
 use splitray::integrator::cbpt::cpu_kernels::{self, evaluate};
 use splitray::integrator::cbpt::gpu::CbptPush;
 use splitray::integrator::cbpt::layout::{CombinationData, GpuVertex, Kinds, Shading, Tables};
@@ -91,80 +92,35 @@ fn adversarial_tables(scene: &CpuScene, cameras: usize, lights: usize, surface: 
     }
 }
 
-/// Which end of a segment a shading table belongs to.
-#[derive(Clone, Copy)]
-enum End {
-    /// `camera_shading.comp`: camera-vertex major.
-    Camera,
-    /// `light_shading.comp`: light-vertex major.
-    Light,
-}
-
-/// Whether segment `s` of `end`'s table runs within float rounding of its endpoint's
-/// tangent plane (shading or geometric normal). There the hemisphere tests that zero a
-/// BSDF may fall either way on two processors (a GPU's fused multiply-adds and
-/// approximate square roots against the CPU's), and either answer is right: f·|cos θ|
-/// is zero to within the comparison's absolute tolerance, so the pdfs, which are all
-/// that differ, weigh a contribution of nothing.
-fn grazing(tables: &Tables, end: End, s: usize) -> bool {
-    let (vertex, other) = match end {
-        End::Camera => {
-            let v_l = tables.light.len();
-            (&tables.camera[s / v_l], tables.light[s % v_l].p)
-        }
-        End::Light => {
-            let v_c = tables.camera.len();
-            (&tables.light[s / v_c], tables.camera[s % v_c].p)
-        }
-    };
-    let dir = (Vec3::from(other) - Vec3::from(vertex.p)).normalize_or_zero();
-    let edge = |n: [f32; 3]| dir.dot(Vec3::from(n)).abs() < 1e-5;
-    edge(vertex.ns) || edge(vertex.ng)
-}
-
-/// Shading tuples agree: each value within 1e-4 relative (1e-6 absolute) of the twin's,
-/// or, for the few segments where the two BSDF evaluations straddle a lobe's edge or a
-/// very peaked lobe, the whole tuple within 1e-2; at most 1 in 10 000 of those. A
-/// segment along its endpoint's tangent plane ([`grazing`]) must agree on f alone.
+/// `end`'s shading agrees with the twin's by the rules `bench cbpt` checks too
+/// (`splitray::integrator::cbpt::compare`): each value within 1e-4, a segment along its
+/// endpoint's tangent plane on f alone, at most 1 in 10 000 only within 1e-2.
 fn assert_shading_close(gpu: &Shading, cpu: &Shading, tables: &Tables, end: End, what: &str) {
     assert_eq!(gpu.segments, cpu.segments, "{what}");
     let n = gpu.segments;
-    let close = |a: f32, b: f32, rel: f32| (a - b).abs() <= 1e-6 + rel * a.abs().max(b.abs());
-    let (mut loose, mut tangent) = (0, 0);
-    for s in 0..n {
-        let (g, c) = (gpu.get(s), cpu.get(s));
-        let f = [(g.f.x, c.f.x), (g.f.y, c.f.y), (g.f.z, c.f.z)];
-        let pdfs = [(g.pdf_fwd, c.pdf_fwd), (g.pdf_rev, c.pdf_rev)];
-        let f_close = |rel| f.iter().all(|&(a, b)| close(a, b, rel));
-        if f_close(1e-4) && pdfs.iter().all(|&(a, b)| close(a, b, 1e-4)) {
-            continue;
-        }
-        if f_close(1e-4) && grazing(tables, end, s) {
-            tangent += 1;
-            continue;
-        }
-        assert!(
-            f_close(1e-2) && pdfs.iter().all(|&(a, b)| close(a, b, 1e-2)),
-            "{what}: segment {s} of {n}: GPU {g:?} vs CPU {c:?}"
+    let c = compare_shading(gpu, cpu, tables, end);
+    if let Some(s) = c.first_beyond {
+        panic!(
+            "{what}: segment {s} of {n}: GPU {:?} vs CPU {:?}",
+            gpu.get(s),
+            cpu.get(s)
         );
-        loose += 1;
     }
-    if tangent > 0 {
-        eprintln!("{what}: {tangent} of {n} segments along a tangent plane agree on f alone");
+    if c.tangent > 0 {
+        eprintln!(
+            "{what}: {} of {n} segments along a tangent plane agree on f alone",
+            c.tangent
+        );
     }
     assert!(
-        loose * 10_000 <= n.max(10_000),
-        "{what}: {loose} of {n} segments only within 1e-2"
+        !c.too_many_loose(),
+        "{what}: {} of {n} segments only within 1e-2",
+        c.loose
     );
 }
 
 fn assert_data_equal(gpu: &CombinationData, cpu: &CombinationData, tables: &Tables, what: &str) {
-    let differ = gpu
-        .visibility
-        .iter()
-        .zip(&cpu.visibility)
-        .map(|(a, b)| (a ^ b).count_ones())
-        .sum::<u32>();
+    let differ = visibility_differences(gpu, cpu);
     assert_eq!(gpu.visibility.len(), cpu.visibility.len(), "{what}");
     assert_eq!(differ, 0, "{what}: {differ} visibility bits differ");
     let camera = format!("{what}, camera shading");

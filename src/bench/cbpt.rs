@@ -33,6 +33,7 @@ use super::{median, EvenMedian};
 use crate::bidir::{Counters, CpuScene};
 use crate::film::Reference;
 use crate::integrator::bpt::{BidirMode, BptIntegrator, BptOptions};
+use crate::integrator::cbpt::compare;
 use crate::integrator::cbpt::cpu_kernels::evaluate;
 use crate::integrator::cbpt::layout::{CombinationData, Kinds, Tables};
 use crate::integrator::cbpt::pipeline::{Evaluator, StepTimes};
@@ -145,10 +146,12 @@ pub struct CbptBenchReport {
     pub height: u32,
     pub tracer: String,
     pub population: String,
-    /// GPU data equal to the CPU's (visibility bits that differ; shading tuples off by
-    /// more than 1e-3 relative).
+    /// GPU data equal to the CPU's (`integrator::cbpt::compare`): visibility bits that
+    /// differ, shading tuples that do not agree, and tuples along an endpoint's tangent
+    /// plane that agree on f alone (not mismatches).
     pub visibility_mismatches: u64,
     pub shading_mismatches: u64,
+    pub shading_tangent: u64,
     pub throughput: Vec<ThroughputRow>,
     pub batches: Vec<BatchRow>,
     pub contributions: Vec<ContributionRow>,
@@ -230,21 +233,37 @@ fn sample_tables(scene: &Scene, options: &CbptBenchOptions) -> Result<Tables, Re
     Ok(Tables::new(&population))
 }
 
-/// Visibility bits that differ, and shading tuples beyond 1e-3 relative.
-fn mismatches(gpu: &CombinationData, cpu: &CombinationData) -> (u64, u64) {
-    let bits = gpu
-        .visibility
-        .iter()
-        .zip(&cpu.visibility)
-        .map(|(a, b)| (a ^ b).count_ones() as u64)
-        .sum();
-    let close = |a: f32, b: f32| (a - b).abs() <= 1e-6 + 1e-3 * a.abs().max(b.abs());
-    let shading = [(&gpu.camera, &cpu.camera), (&gpu.light, &cpu.light)]
-        .iter()
-        .flat_map(|(g, c)| g.values.iter().zip(&c.values))
-        .filter(|(a, b)| !close(**a, **b))
-        .count() as u64;
-    (bits, shading)
+/// The GPU's combination data against the CPU's, by the rules the tests use
+/// ([`compare`]), summed over the tracers checked.
+#[derive(Clone, Copy, Debug, Default)]
+struct Check {
+    visibility_bits: u64,
+    shading_mismatches: u64,
+    /// Tuples along a tangent plane that agree on f alone (not mismatches).
+    shading_tangent: u64,
+}
+
+impl Check {
+    fn of(gpu: &CombinationData, cpu: &CombinationData, tables: &Tables) -> Self {
+        let shading = [
+            (&gpu.camera, &cpu.camera, compare::End::Camera),
+            (&gpu.light, &cpu.light, compare::End::Light),
+        ]
+        .map(|(g, c, end)| compare::compare_shading(g, c, tables, end));
+        Self {
+            visibility_bits: compare::visibility_differences(gpu, cpu),
+            shading_mismatches: shading.iter().map(|c| c.mismatches() as u64).sum(),
+            shading_tangent: shading.iter().map(|c| c.tangent as u64).sum(),
+        }
+    }
+
+    fn add(self, other: Check) -> Check {
+        Check {
+            visibility_bits: self.visibility_bits + other.visibility_bits,
+            shading_mismatches: self.shading_mismatches + other.shading_mismatches,
+            shading_tangent: self.shading_tangent + other.shading_tangent,
+        }
+    }
 }
 
 fn kinds_of(kind: usize) -> Kinds {
@@ -272,7 +291,7 @@ fn throughput(
     tracer: TracerKind,
     shading: bool,
     rounds: u32,
-) -> Result<(Vec<ThroughputRow>, (u64, u64)), RenderError> {
+) -> Result<(Vec<ThroughputRow>, Check), RenderError> {
     let t = tracer.create(gpu, &cpu_scene.tables.triangles)?;
     let mut c = GpuCombiner::new(
         gpu,
@@ -283,7 +302,7 @@ fn throughput(
     // Warm-up (lavapipe compiles each kernel at its first dispatch) and the check.
     let pending = c.start(tables.clone())?;
     let data = c.finish(pending)?;
-    let checked = mismatches(&data, &evaluate(cpu_scene, tables, Kinds::ALL));
+    let checked = Check::of(&data, &evaluate(cpu_scene, tables, Kinds::ALL), tables);
     let mut rows = Vec::new();
     for kind in 0..if shading { 3 } else { 1 } {
         let (mut g, mut p) = (Vec::new(), Vec::new());
@@ -547,11 +566,11 @@ pub fn run(
     let tables = Arc::new(sample_tables(scene, options)?);
     let cpu_scene = CpuScene::new(scene);
     let mut throughput_rows = Vec::new();
-    let mut checked = (0, 0);
+    let mut checked = Check::default();
     for (k, &tracer) in options.tracers.iter().enumerate() {
         let (rows, c) = throughput(gpu, &cpu_scene, &tables, tracer, k == 0, options.rounds)?;
         throughput_rows.extend(rows);
-        checked = (checked.0 + c.0, checked.1 + c.1);
+        checked = checked.add(c);
     }
     let batches = batch_sweep(gpu, &cpu_scene, &tables, options)?;
     let contributions = contributions(gpu, scene, options)?;
@@ -596,8 +615,9 @@ pub fn run(
             tables.light_surface,
             tables.segments()
         ),
-        visibility_mismatches: checked.0,
-        shading_mismatches: checked.1,
+        visibility_mismatches: checked.visibility_bits,
+        shading_mismatches: checked.shading_mismatches,
+        shading_tangent: checked.shading_tangent,
         throughput: throughput_rows,
         batches,
         contributions,
@@ -625,8 +645,8 @@ impl CbptBenchReport {
         writeln!(
             f,
             "check: GPU against CPU combination data: {} visibility bits and {} shading \
-             values differ",
-            self.visibility_mismatches, self.shading_mismatches
+             tuples differ ({} along a tangent plane agree on f alone)",
+            self.visibility_mismatches, self.shading_mismatches, self.shading_tangent
         )
     }
 

@@ -21,6 +21,7 @@
 
 pub mod calibrate;
 pub mod combine;
+pub mod compare;
 pub mod cpu_kernels;
 pub mod gpu;
 pub mod layout;
