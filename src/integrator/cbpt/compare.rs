@@ -116,3 +116,113 @@ pub fn grazing(tables: &Tables, end: End, s: usize) -> bool {
     let edge = |n: [f32; 3]| dir.dot(Vec3::from(n)).abs() < 1e-5;
     edge(vertex.ns) || edge(vertex.ng)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::layout::GpuVertex;
+    use super::*;
+
+    fn vertex(p: [f32; 3]) -> GpuVertex {
+        GpuVertex {
+            p,
+            ng: [0.0, 1.0, 0.0],
+            ns: [0.0, 1.0, 0.0],
+            ..Default::default()
+        }
+    }
+
+    /// One camera vertex on the plane y = 0 (normal +y) and two light vertices: one in
+    /// that plane (segment 0, grazing), one above it (segment 1).
+    fn tables() -> Tables {
+        Tables {
+            camera: vec![vertex([0.0; 3])],
+            light: vec![vertex([1.0, 0.0, 0.0]), vertex([0.0, 1.0, 0.0])],
+            light_surface: 2,
+            ..Default::default()
+        }
+    }
+
+    /// Two segments of camera shading, each f = 0.5, densities 0.25 and 0.75.
+    fn shading() -> Shading {
+        let mut s = Shading::zeroed(2);
+        for (plane, value) in [0.5, 0.5, 0.5, 0.25, 0.75].into_iter().enumerate() {
+            s.values[plane * 2..plane * 2 + 2].fill(value);
+        }
+        s
+    }
+
+    /// `shading()` with `value` in plane `plane` of segment `segment`.
+    fn with(plane: usize, segment: usize, value: f32) -> Shading {
+        let mut s = shading();
+        s.values[plane * 2 + segment] = value;
+        s
+    }
+
+    fn compare(gpu: &Shading) -> ShadingComparison {
+        compare_shading(gpu, &shading(), &tables(), End::Camera)
+    }
+
+    #[test]
+    fn equal_tables_agree() {
+        let c = compare(&shading());
+        assert_eq!(
+            c,
+            ShadingComparison {
+                segments: 2,
+                ..Default::default()
+            }
+        );
+        assert_eq!(c.mismatches(), 0);
+        let near = with(3, 1, 0.25 * (1.0 + 5e-5));
+        assert_eq!(compare(&near).mismatches(), 0);
+    }
+
+    #[test]
+    fn only_a_grazing_segment_may_differ_in_its_densities() {
+        let t = tables();
+        assert!(grazing(&t, End::Camera, 0) && !grazing(&t, End::Camera, 1));
+        let grazing = compare(&with(3, 0, 0.0));
+        assert_eq!((grazing.tangent, grazing.beyond), (1, 0));
+        assert_eq!(grazing.mismatches(), 0);
+        let facing = compare(&with(3, 1, 0.0));
+        assert_eq!((facing.tangent, facing.beyond), (0, 1));
+        assert_eq!(facing.first_beyond, Some(1));
+        assert_eq!(facing.mismatches(), 1);
+        // A grazing segment must still agree on f.
+        let f_differs = compare(&with(0, 0, 0.6));
+        assert_eq!((f_differs.tangent, f_differs.beyond), (0, 1));
+    }
+
+    #[test]
+    fn a_few_segments_may_agree_only_within_one_percent() {
+        let loose = compare(&with(4, 1, 0.75 * 1.005));
+        assert_eq!((loose.loose, loose.beyond), (1, 0));
+        // 1 of 2 segments is more than 1 in 10 000 only while 2 < 10 000 segments.
+        assert!(!loose.too_many_loose());
+        assert_eq!(loose.mismatches(), 0);
+        let many = ShadingComparison {
+            segments: 20_000,
+            loose: 3,
+            ..Default::default()
+        };
+        assert!(many.too_many_loose());
+        assert_eq!(many.mismatches(), 3);
+    }
+
+    #[test]
+    fn tables_of_other_sizes_differ() {
+        let c = compare_shading(&Shading::zeroed(3), &shading(), &tables(), End::Camera);
+        assert_eq!(c.segments, 3);
+        assert!(c.beyond >= 1 && c.mismatches() >= 1);
+        let a = CombinationData {
+            visibility: vec![0b1011, 0],
+            ..Default::default()
+        };
+        let b = CombinationData {
+            visibility: vec![0b0001],
+            ..Default::default()
+        };
+        assert_eq!(visibility_differences(&a, &b), 2 + 32);
+        assert_eq!(visibility_differences(&a, &a), 0);
+    }
+}
