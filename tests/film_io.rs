@@ -374,14 +374,27 @@ fn read_errors_name_the_path() {
 fn a_folder_in_the_way_is_refused_before_writing() {
     let dir = tempfile::tempdir().unwrap();
     let target = dir.path().join("taken.exr");
-    std::fs::create_dir(&target).unwrap();
-    std::fs::write(target.join("keep"), b"k").unwrap();
+    put_a_folder_at(&target);
     let err = write_exr(&target, &test_film(3, 2, true), &meta()).unwrap_err();
     assert!(matches!(err, FilmError::Invalid { .. }), "{err}");
     assert!(err.to_string().contains("taken.exr"), "{err}");
     assert!(err.to_string().contains("is a folder"), "{err}");
+    assert_only_the_folder_left(dir.path(), &target);
+}
+
+/// A folder, with a file in it, where an output file is to go.
+fn put_a_folder_at(target: &Path) {
+    std::fs::create_dir(target).unwrap();
+    std::fs::write(target.join("keep"), b"k").unwrap();
+}
+
+/// `dir` holds the folder of [`put_a_folder_at`] as it was, and nothing else.
+fn assert_only_the_folder_left(dir: &Path, target: &Path) {
     assert!(target.join("keep").exists());
-    assert_eq!(dir_entries(dir.path()), ["taken.exr"]);
+    assert_eq!(
+        dir_entries(dir),
+        [target.file_name().unwrap().to_str().unwrap()]
+    );
 }
 
 #[test]
@@ -392,13 +405,11 @@ fn failing_rename_removes_temp() {
     let target = dir.path().join("taken.exr");
     let mut file = AtomicFile::create(&target).unwrap();
     std::io::Write::write_all(file.writer(), b"contents").unwrap();
-    std::fs::create_dir(&target).unwrap();
-    std::fs::write(target.join("keep"), b"k").unwrap();
+    put_a_folder_at(&target);
     let err = file.commit().unwrap_err();
     assert!(matches!(err, FilmError::Io { .. }), "{err}");
     assert!(err.to_string().contains("taken.exr"), "{err}");
-    assert!(target.join("keep").exists());
-    assert_eq!(dir_entries(dir.path()), ["taken.exr"]);
+    assert_only_the_folder_left(dir.path(), &target);
 }
 
 #[test]

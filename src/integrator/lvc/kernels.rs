@@ -42,15 +42,16 @@ impl Kernels {
     /// [`Kernels::new`] with the accumulation's tally made as `tally` says (tests build
     /// both).
     pub fn with_tally(gpu: &Gpu, options: &LvcOptions, tally: AccumulateTally) -> vk::Result<Self> {
-        let lvc = |kernel: Kernel, bindings| {
+        let with_constants = |kernel: Kernel, bindings, constants: &[u32]| {
             vk::compute_pipeline(
                 gpu,
                 kernel,
                 bindings,
                 size_of::<LvcPush>() as u32,
-                &[WORKGROUP],
+                constants,
             )
         };
+        let lvc = |kernel: Kernel, bindings| with_constants(kernel, bindings, &[WORKGROUP]);
         let pt = |kernel: Kernel, bindings| {
             vk::compute_pipeline(
                 gpu,
@@ -70,7 +71,10 @@ impl Kernels {
             camera_generate: lvc(shaders::INTEGRATOR_LVC_CAMERA_GENERATE, 5)?,
             camera_vertex: lvc(shaders::INTEGRATOR_LVC_CAMERA_VERTEX, 13)?,
             camera_direct: lvc(shaders::INTEGRATOR_LVC_CAMERA_DIRECT, 10)?,
-            camera_connect: camera_connect(gpu, options)?,
+            camera_connect: {
+                let (kernel, constants) = camera_connect(options);
+                with_constants(kernel, 11, &constants)?
+            },
             camera_bounce: lvc(shaders::INTEGRATOR_LVC_CAMERA_BOUNCE, 9)?,
             camera_accumulate: lvc(tally.kernel(), 8)?,
             finish: lvc(shaders::INTEGRATOR_LVC_FINISH, 5)?,
@@ -79,28 +83,16 @@ impl Kernels {
     }
 }
 
-/// The variant's connection kernel: uniform, or resampled with shared memory for the
-/// run's M candidates per invocation (specialization constant 1, `CANDIDATE_CAPACITY`).
-fn camera_connect(gpu: &Gpu, options: &LvcOptions) -> vk::Result<ComputePipeline> {
-    let push = size_of::<LvcPush>() as u32;
+/// The variant's connection kernel and its specialization constants: uniform, or
+/// resampled with shared memory for the run's M candidates per invocation (constant 1,
+/// `CANDIDATE_CAPACITY`).
+fn camera_connect(options: &LvcOptions) -> (Kernel, Vec<u32>) {
     match options.variant {
-        Variant::LvcBdpt => vk::compute_pipeline(
-            gpu,
-            shaders::INTEGRATOR_LVC_CAMERA_CONNECT,
-            11,
-            push,
-            &[WORKGROUP],
+        Variant::LvcBdpt => (shaders::INTEGRATOR_LVC_CAMERA_CONNECT, vec![WORKGROUP]),
+        Variant::CisLbdpt => (
+            shaders::INTEGRATOR_LVC_CAMERA_CONNECT__RESAMPLED,
+            vec![WORKGROUP, options.candidates.clamp(1, MAX_CANDIDATES)],
         ),
-        Variant::CisLbdpt => {
-            let capacity = options.candidates.clamp(1, MAX_CANDIDATES);
-            vk::compute_pipeline(
-                gpu,
-                shaders::INTEGRATOR_LVC_CAMERA_CONNECT__RESAMPLED,
-                11,
-                push,
-                &[WORKGROUP, capacity],
-            )
-        }
     }
 }
 
