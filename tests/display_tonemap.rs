@@ -3,6 +3,8 @@
 //! output, a 2-megapixel film) and on adversarial films (NaN, infinities, negatives,
 //! values at and one ULP below every 8-bit step, zero and huge weights, exposures that
 //! overflow); and a film read from the GPU while rendering against the film's sums.
+//! Pixels must be equal, except that on a device whose division is not correctly rounded
+//! an estimate on an 8-bit step may land on either side of it ([`assert_same`]).
 
 mod common;
 
@@ -119,16 +121,62 @@ fn run_kernel(
     pixels
 }
 
-fn assert_same(gpu: &[u32], cpu: &[u32], what: &str, film: &[[f32; 4]]) {
+/// `film` with every finite sum scaled by `factor` (weights kept).
+fn scaled_sums(film: &[[f32; 4]], factor: f32) -> Vec<[f32; 4]> {
+    let scale = |x: f32| {
+        if x.is_finite() {
+            (x * factor).clamp(-f32::MAX, f32::MAX)
+        } else {
+            x
+        }
+    };
+    film.iter()
+        .map(|p| [scale(p[0]), scale(p[1]), scale(p[2]), p[3]])
+        .collect()
+}
+
+/// The pixels' bytes, low byte first.
+fn bytes(p: u32) -> [u32; 4] {
+    [0, 8, 16, 24].map(|shift| p >> shift & 255)
+}
+
+/// Asserts the kernel's pixels are the CPU twin's. `bounds`, for the colour view: the
+/// twin's pixels for the film with its sums scaled down and up by 2⁻²¹. The colour view
+/// divides each sum by its weight, and Vulkan lets a device's division be 2.5 ULP from
+/// the quotient (the CPU's is correctly rounded; NVIDIA's is not), so a mean that lies on
+/// an 8-bit step may fall on either side of it there. Scaling the sums by 2⁻²¹ (4 ULP at
+/// most, less the two roundings of the scaled quotient) moves each mean further than the
+/// device may, and the encoding is monotonic: a pixel that differs from the twin's must
+/// lie, byte by byte, between those of the scaled films.
+fn assert_same(
+    gpu: &[u32],
+    cpu: &[u32],
+    bounds: Option<[&[u32]; 2]>,
+    what: &str,
+    film: &[[f32; 4]],
+) {
     assert_eq!(gpu.len(), cpu.len(), "{what}: pixel count");
-    if let Some(i) = gpu.iter().zip(cpu).position(|(g, c)| g != c) {
-        let wrong = gpu.iter().zip(cpu).filter(|(g, c)| g != c).count();
+    let allowed = |i: usize| {
+        bounds.is_some_and(|[lo, hi]| {
+            let (g, a, b) = (bytes(gpu[i]), bytes(lo[i]), bytes(hi[i]));
+            (0..4).all(|c| a[c].min(b[c]) <= g[c] && g[c] <= a[c].max(b[c]))
+        })
+    };
+    let differ: Vec<usize> = (0..gpu.len()).filter(|&i| gpu[i] != cpu[i]).collect();
+    if let Some(&i) = differ.iter().find(|&&i| !allowed(i)) {
         panic!(
-            "{what}: {wrong} pixels differ; first at {i}: GPU {:08x}, CPU {:08x} (film[{i}] if \
-             unscaled: {:?})",
+            "{what}: {} pixels differ, at least one beyond the rounding of a division; first \
+             at {i}: GPU {:08x}, CPU {:08x} (film[{i}] if unscaled: {:?})",
+            differ.len(),
             gpu[i],
             cpu[i],
             film.get(i)
+        );
+    }
+    if !differ.is_empty() {
+        eprintln!(
+            "{what}: {} pixels on an 8-bit step, within a division's rounding",
+            differ.len()
         );
     }
 }
@@ -176,7 +224,12 @@ fn kernel_matches_its_cpu_twin_on_every_view_and_edge_size() {
                     let gpu_pixels =
                         run_kernel(&gpu, &tonemapper, &params, &film_buffer, &aov_buffers);
                     let cpu_pixels = tonemap_cpu(&params, &film, &aovs);
-                    assert_same(&gpu_pixels, &cpu_pixels, &what, &film);
+                    let bounds = (view == View::Colour).then(|| {
+                        [1.0 - 2f32.powi(-21), 1.0 + 2f32.powi(-21)]
+                            .map(|f| tonemap_cpu(&params, &scaled_sums(&film, f), &aovs))
+                    });
+                    let bounds = bounds.as_ref().map(|[lo, hi]| [&lo[..], &hi[..]]);
+                    assert_same(&gpu_pixels, &cpu_pixels, bounds, &what, &film);
                 }
             }
         }

@@ -10,7 +10,9 @@
 // or more, and the pixel takes the number of those at or below it (a binary search), so
 // no pow() approximation can round differently from the PNG. `precise` keeps the
 // compiler from fusing multiply-adds, which would round differently from the CPU twin
-// (src/display/tonemap.rs).
+// (src/display/tonemap.rs). Only the division by the weight may differ from it: Vulkan
+// allows 2.5 ULP there (NVIDIA's is not correctly rounded), so an estimate lying exactly
+// on an 8-bit step may show one value lower or higher than the PNG's on such a device.
 #include "grid.glsl"
 
 struct ToneParams {
