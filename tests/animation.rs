@@ -703,6 +703,28 @@ fn render_frames_refuses_bad_input() {
             "does not exist",
         ),
         (&["--frames", "0..2", "-o", "shot.png"], "must be an .exr"),
+        (
+            &[
+                "--frames",
+                "0..3",
+                "-o",
+                "shot.exr",
+                "--stats",
+                "shot_0002.png",
+            ],
+            "shot_0002.png: its PNG preview and --stats name the same file",
+        ),
+        (
+            &[
+                "--frames",
+                "4..=6",
+                "-o",
+                "shot.exr",
+                "--stats",
+                "./shot_0005.exr",
+            ],
+            "the image and --stats name the same file",
+        ),
     ];
     for (args, want) in cases {
         let mut all = vec!["render", scene, "--width", "8", "--height", "8"];

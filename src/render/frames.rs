@@ -100,6 +100,24 @@ pub fn frame_path(base: &Path, frame: u32, range: &FrameRange) -> PathBuf {
     base.with_file_name(format!("{stem}_{frame:0digits$}{ext}"))
 }
 
+/// The frame of `range` whose image or PNG preview has `path`'s file name (beside
+/// `base` or not: the caller compares folders), if any.
+pub fn frame_named(base: &Path, range: &FrameRange, path: &Path) -> Option<u32> {
+    let name = path.file_name()?.to_str()?;
+    let stem = base.file_stem()?.to_str()?;
+    let number = Path::new(name.strip_prefix(stem)?.strip_prefix('_')?)
+        .file_stem()?
+        .to_str()?;
+    if !number.bytes().all(|b| b.is_ascii_digit()) {
+        return None;
+    }
+    let frame: u32 = number.parse().ok()?;
+    let image = frame_path(base, frame, range);
+    let names_it = |p: &Path| p.file_name().and_then(|n| n.to_str()) == Some(name);
+    let inside = (range.first..range.end).contains(&frame);
+    (inside && (names_it(&image) || names_it(&image.with_extension("png")))).then_some(frame)
+}
+
 /// One finished frame.
 pub struct Frame {
     pub index: u32,
@@ -462,5 +480,29 @@ mod tests {
             frame_path(Path::new("a.exr"), 42, &r),
             PathBuf::from("a_000042.exr")
         );
+    }
+
+    #[test]
+    fn the_frame_a_file_name_belongs_to_is_found() {
+        let r = FrameRange::parse("3..12", 24.0).unwrap();
+        let base = Path::new("out/shot.exr");
+        let named = |p: &str| frame_named(base, &r, Path::new(p));
+        assert_eq!(named("out/shot_0007.exr"), Some(7));
+        assert_eq!(named("elsewhere/shot_0011.png"), Some(11));
+        assert_eq!(named("shot_0003.exr"), Some(3));
+        for other in [
+            "out/shot_0012.exr",
+            "out/shot_0002.png",
+            "out/shot_007.exr",
+            "out/shot_00007.exr",
+            "out/shot_0007.json",
+            "out/shot_+007.exr",
+            "out/shot.exr",
+            "out/shot_.exr",
+            "out/shots_0007.exr",
+            "out/stats.json",
+        ] {
+            assert_eq!(named(other), None, "{other}");
+        }
     }
 }

@@ -16,8 +16,8 @@ use std::process::ExitCode;
 use anyhow::{anyhow, bail};
 use splitray::film::ImageFiles;
 use splitray::render::frames::{
-    check_frames, frame_path, render_frames, Frame, FrameRange, FramesControl, FramesRun,
-    DEFAULT_FPS,
+    check_frames, frame_named, frame_path, render_frames, Frame, FrameRange, FramesControl,
+    FramesRun, DEFAULT_FPS,
 };
 use splitray::render::{RenderError, RenderOptions, RenderStats, Shard};
 use splitray::scene::AnimatedScene;
@@ -78,9 +78,9 @@ pub(super) fn run(args: &RenderArgs, spec: &str) -> anyhow::Result<ExitCode> {
     let job = read_sequence(args, spec)?;
     let range = job.range;
     let base = output_path(args, &job.animated.scene.name, Shard::WHOLE)?;
+    refuse_clashes(args, &base, &range)?;
     // The first frame's files (and the stats file) before the GPU: a path that cannot be
     // written fails at once. Each later frame's files are created before its render.
-    super::refuse_clashes(args, &frame_path(&base, range.first, &range))?;
     let files = RenderFiles::create(
         &frame_path(&base, range.first, &range),
         args.stats.as_deref(),
@@ -100,6 +100,21 @@ pub(super) fn run(args: &RenderArgs, spec: &str) -> anyhow::Result<ExitCode> {
         t.finish(&super::super::timeline::command_line())?;
     }
     Ok(report_sequence_end(signals.received(), run, &range, &base))
+}
+
+/// Refuses a sequence whose files would overwrite one another: the first frame's against
+/// the others (stats, timeline), and the frame whose image or PNG the stats file names, if
+/// any. (Frames cannot clash with one another, their numbers differ, and the timeline is
+/// a .json file.)
+fn refuse_clashes(args: &RenderArgs, base: &Path, range: &FrameRange) -> anyhow::Result<()> {
+    let named = args
+        .stats
+        .as_deref()
+        .and_then(|stats| frame_named(base, range, stats));
+    for frame in std::iter::once(range.first).chain(named) {
+        super::refuse_clashes(args, &frame_path(base, frame, range))?;
+    }
+    Ok(())
 }
 
 /// What one sequence makes, read before any output is created.
