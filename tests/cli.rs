@@ -514,6 +514,14 @@ fn benches_refuse_empty_films_and_zero_counts() {
             "{args:?}: {t}"
         );
     }
+    // A count no device can hold (16 TB of keys) is refused before its host data is made.
+    let out = splitray(&["bench", "primitives", "--n", "4000000000000"], dir.path());
+    let t = text(&out);
+    assert_eq!(out.status.code(), Some(1), "{t}");
+    assert!(
+        t.contains("'bench-keys' needs 16000000000000 bytes") && !t.contains("panicked"),
+        "{t}"
+    );
 }
 
 #[test]

@@ -354,6 +354,10 @@ pub fn run(gpu: &Gpu, opts: &PrimitivesBenchOptions) -> BenchResult<PrimitivesRe
     let mut rows = Vec::new();
     let mut targets = Vec::new();
 
+    // The largest inputs, checked before their host data is made: a count the device
+    // cannot hold fails at once, not after filling the host's memory.
+    gpu.check_buffer_size("bench-keys", opts.n as u64 * 4)?;
+    gpu.check_buffer_size("bench-scan", opts.scan_n as u64 * 4)?;
     let host_cores_before = host::effective_cores();
     let (sorted, sort_target) = bench_sort(gpu, &tuning, opts.n, runs)?;
     rows.extend(sorted);
