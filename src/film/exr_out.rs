@@ -70,7 +70,11 @@ pub fn write_exr(
     film: &Film,
     meta: &RenderMetadata,
 ) -> Result<(), FilmError> {
-    let path = path.as_ref();
+    // Generic only in this shim: the encoder is compiled once, here, not in every caller.
+    write_exr_at(path.as_ref(), film, meta)
+}
+
+fn write_exr_at(path: &Path, film: &Film, meta: &RenderMetadata) -> Result<(), FilmError> {
     let mut file = AtomicFile::create(path)?;
     encode_exr(film, meta, file.writer(), path)?;
     warn_non_finite(film, path);

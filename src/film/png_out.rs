@@ -110,7 +110,15 @@ pub fn write_png_preview_with(
     film: &Film,
     settings: &PreviewSettings,
 ) -> Result<(), FilmError> {
-    let path = path.as_ref();
+    // Generic only in this shim: the encoder is compiled once, here, not in every caller.
+    write_png_preview_at(path.as_ref(), film, settings)
+}
+
+fn write_png_preview_at(
+    path: &Path,
+    film: &Film,
+    settings: &PreviewSettings,
+) -> Result<(), FilmError> {
     let mut file = AtomicFile::create(path)?;
     encode_png(film, settings, file.writer(), path)?;
     super::exr_out::warn_non_finite(film, path);

@@ -191,7 +191,11 @@ impl Checkpoint {
     /// Reads and checks a checkpoint: errors name `path` and say what is wrong with it
     /// (not a checkpoint, another version, truncated, corrupted).
     pub fn read(path: impl AsRef<Path>) -> Result<Self, RenderError> {
-        let path = path.as_ref();
+        // Generic only in this shim: the parser is compiled once, here.
+        Self::read_at(path.as_ref())
+    }
+
+    fn read_at(path: &Path) -> Result<Self, RenderError> {
         let bytes = std::fs::read(path).map_err(|e| FilmError::io(path, "read", e))?;
         let header_start = SIGNATURE.len() + 8;
         if !bytes.starts_with(SIGNATURE) {

@@ -44,12 +44,17 @@ struct Part {
 /// that is missing, unreadable, not a splitray part, of another scene, size or
 /// settings, a shard given twice, or one whose passes another part holds too.
 pub fn merge_parts(paths: &[impl AsRef<Path>]) -> Result<MergedImage, RenderError> {
+    // Generic only in this shim: the merge is compiled once, here, not in every caller.
+    merge_paths(&paths.iter().map(AsRef::as_ref).collect::<Vec<&Path>>())
+}
+
+fn merge_paths(paths: &[&Path]) -> Result<MergedImage, RenderError> {
     if paths.is_empty() {
         return Err(RenderError::Options("merge needs at least one part".into()));
     }
     let mut parts: Vec<Part> = Vec::with_capacity(paths.len());
     for path in paths {
-        let part = read_part(path.as_ref())?;
+        let part = read_part(path)?;
         for earlier in &parts {
             check_belongs_with(&part, earlier)?;
         }
