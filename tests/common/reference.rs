@@ -209,30 +209,17 @@ fn first_difference(committed: &SceneExport, today: &SceneExport) -> Option<Stri
     Some("the camera, film, lights or header differ".to_string())
 }
 
-/// An RGB EXR of `size` as rows of [r, g, b], top row first.
+/// An RGB EXR of `size` as rows of [r, g, b], top row first (read by splitray's reader,
+/// which keeps the stored values bit for bit).
 pub fn read_rgb(path: &Path, size: (u32, u32)) -> Vec<[f32; 3]> {
-    let image = exr::prelude::read_first_flat_layer_from_file(path)
-        .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let layer = &image.layer_data;
+    let (film, _) = splitray::film::read_exr(path).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(
-        (layer.size.0 as u32, layer.size.1 as u32),
+        (film.width(), film.height()),
         size,
         "{}: size differs from the manifest's",
         path.display()
     );
-    let channel = |name: &str| -> Vec<f32> {
-        layer
-            .channel_data
-            .list
-            .iter()
-            .find(|c| c.name.to_string() == name)
-            .unwrap_or_else(|| panic!("{}: no channel {name}", path.display()))
-            .sample_data
-            .values_as_f32()
-            .collect()
-    };
-    let (r, g, b) = (channel("R"), channel("G"), channel("B"));
-    (0..r.len()).map(|i| [r[i], g[i], b[i]]).collect()
+    film.mean_rgb_buffer()
 }
 
 /// The figures of one comparison (see the module docs for the tests).
