@@ -144,10 +144,10 @@ fn bytes(p: u32) -> [u32; 4] {
 /// twin's pixels for the film with its sums scaled down and up by 2⁻²¹. The colour view
 /// divides each sum by its weight, and Vulkan lets a device's division be 2.5 ULP from
 /// the quotient (the CPU's is correctly rounded; NVIDIA's is not), so a mean that lies on
-/// an 8-bit step may fall on either side of it there. Scaling the sums by 2⁻²¹ (4 ULP at
-/// most, less the two roundings of the scaled quotient) moves each mean further than the
-/// device may, and the encoding is monotonic: a pixel that differs from the twin's must
-/// lie, byte by byte, between those of the scaled films.
+/// an 8-bit step may fall on either side of it there. Scaling the sums by 2⁻²¹ (4 to 8
+/// ULP, less half a ULP for each rounding of the scaled sum and its quotient) moves each
+/// mean further than the device may, and the encoding is monotonic: a pixel that differs
+/// from the twin's must lie, byte by byte, between those of the scaled films.
 fn assert_same(
     gpu: &[u32],
     cpu: &[u32],
