@@ -31,12 +31,11 @@ render: build
 # nextest takes about 0.6 of its time (436 s against 680-700 s on 2 vCPUs). Without
 # it, `cargo test` runs the same tests.
 test: deps
-	@if $(CARGO) nextest --version >/dev/null 2>&1; then \
-	  echo "SPLITRAY_VALIDATION=1 $(CARGO) nextest run --cargo-profile ci --locked --all-targets --no-fail-fast"; \
-	  SPLITRAY_VALIDATION=1 $(CARGO) nextest run --cargo-profile ci --locked --all-targets --no-fail-fast; \
+	@export SPLITRAY_VALIDATION=1; set -x; \
+	if $(CARGO) nextest --version >/dev/null 2>&1; then \
+	  $(CARGO) nextest run --cargo-profile ci --locked --all-targets --no-fail-fast; \
 	else \
-	  echo "SPLITRAY_VALIDATION=1 $(CARGO) test --profile ci --locked --all-targets"; \
-	  SPLITRAY_VALIDATION=1 $(CARGO) test --profile ci --locked --all-targets; \
+	  $(CARGO) test --profile ci --locked --all-targets; \
 	fi
 
 # A real one-node Slurm cluster on localhost (munged, slurmctld, slurmd) renders one

@@ -108,9 +108,7 @@ pub fn frame_named(base: &Path, range: &FrameRange, path: &Path) -> Option<u32> 
     let number = Path::new(name.strip_prefix(stem)?.strip_prefix('_')?)
         .file_stem()?
         .to_str()?;
-    if !number.bytes().all(|b| b.is_ascii_digit()) {
-        return None;
-    }
+    // Any spelling that parses ("+7", "007") is caught by comparing the names below.
     let frame: u32 = number.parse().ok()?;
     let image = frame_path(base, frame, range);
     let names_it = |p: &Path| p.file_name().and_then(|n| n.to_str()) == Some(name);
