@@ -249,30 +249,24 @@ fn output_path(args: &RenderArgs, scene_name: &str, shard: Shard) -> anyhow::Res
 /// Refuses outputs that would overwrite one another or an input ([`refuse_clashing_paths`]):
 /// `exr` (a frame's, for a sequence), its PNG, the stats, checkpoint and timeline; the
 /// reference and the checkpoint resumed.
-fn refuse_clashes(args: &RenderArgs, exr: &Path) -> anyhow::Result<()> {
+fn refuse_clashes<'a>(args: &'a RenderArgs, exr: &'a Path) -> anyhow::Result<()> {
     let png = exr.with_extension("png");
-    fn role<'a>(what: &'a str, path: &'a Option<PathBuf>) -> Option<Role<'a>> {
-        path.as_deref().map(|path| Role { what, path })
-    }
+    let file = |what, path: &'a Option<PathBuf>| path.as_deref().map(|p| Role::file(what, p));
+    let checkpoint =
+        |what, path: &'a Option<PathBuf>| path.as_deref().map(|p| Role::checkpoint(what, p));
     let outputs: Vec<Role> = [
-        Some(Role {
-            what: "the image",
-            path: exr,
-        }),
-        Some(Role {
-            what: "its PNG preview",
-            path: &png,
-        }),
-        role("--stats", &args.stats),
-        role("--checkpoint", &args.checkpoint),
-        role("--timeline", &args.timeline),
+        Some(Role::file("the image", exr)),
+        Some(Role::file("its PNG preview", &png)),
+        file("--stats", &args.stats),
+        checkpoint("--checkpoint", &args.checkpoint),
+        file("--timeline", &args.timeline),
     ]
     .into_iter()
     .flatten()
     .collect();
     let inputs: Vec<Role> = [
-        role("--reference", &args.reference),
-        role("--resume", &args.resume),
+        file("--reference", &args.reference),
+        checkpoint("--resume", &args.resume),
     ]
     .into_iter()
     .flatten()

@@ -40,17 +40,39 @@ impl RenderFiles {
 pub struct Role<'a> {
     pub what: &'a str,
     pub path: &'a Path,
+    /// The render's checkpoint: the one it saves, or the one it resumes. The two may be
+    /// one file (that is how a resumed render keeps going); no other pair may.
+    pub checkpoint: bool,
+}
+
+impl<'a> Role<'a> {
+    pub fn file(what: &'a str, path: &'a Path) -> Self {
+        Self {
+            what,
+            path,
+            checkpoint: false,
+        }
+    }
+
+    pub fn checkpoint(what: &'a str, path: &'a Path) -> Self {
+        Self {
+            what,
+            path,
+            checkpoint: true,
+        }
+    }
 }
 
 /// Refuses a render whose outputs would overwrite one another, or overwrite one of its
 /// inputs (a reference image, the checkpoint it resumes): the later write would replace
 /// the earlier one after the render, losing it. Saving the checkpoint over the one the
-/// render resumes is allowed: that is how a resumed render keeps going.
+/// render resumes is allowed.
 pub fn refuse_clashing_paths(outputs: &[Role], inputs: &[Role]) -> anyhow::Result<()> {
     for (i, a) in outputs.iter().enumerate() {
-        for b in outputs[i + 1..].iter().chain(inputs) {
-            let resumes_its_checkpoint = a.what == "--checkpoint" && b.what == "--resume";
-            if !resumes_its_checkpoint && same_file(a.path, b.path) {
+        let later_outputs = outputs[i + 1..].iter().map(|b| (b, false));
+        for (b, input) in later_outputs.chain(inputs.iter().map(|b| (b, true))) {
+            let saves_over_its_resumed_checkpoint = input && a.checkpoint && b.checkpoint;
+            if !saves_over_its_resumed_checkpoint && same_file(a.path, b.path) {
                 anyhow::bail!(
                     "{}: {} and {} name the same file: the render would be lost",
                     a.path.display(),
@@ -111,5 +133,59 @@ impl CheckpointFile {
             None => AtomicFile::create(&self.path)?,
         };
         checkpoint.write(file)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn clash(outputs: &[Role], inputs: &[Role]) -> Option<String> {
+        refuse_clashing_paths(outputs, inputs)
+            .err()
+            .map(|e| e.to_string())
+    }
+
+    #[test]
+    fn only_a_checkpoint_saved_over_the_one_resumed_may_share_its_path() {
+        let dir = tempfile::tempdir().unwrap();
+        let same = dir.path().join("run.ckpt");
+        let other = dir.path().join("other.ckpt");
+        let saved = Role::checkpoint("--checkpoint", &same);
+        let resumed = Role::checkpoint("--resume", &same);
+        assert_eq!(clash(&[saved], &[resumed]), None);
+        let saved = Role::checkpoint("--checkpoint", &same);
+        let resumed_elsewhere = Role::checkpoint("--resume", &other);
+        assert_eq!(clash(&[saved], &[resumed_elsewhere]), None);
+
+        // Any other pair on one path is refused, naming both roles.
+        let pairs = [
+            (
+                Role::file("the image", &same),
+                Role::checkpoint("--resume", &same),
+            ),
+            (
+                Role::checkpoint("--checkpoint", &same),
+                Role::file("--reference", &same),
+            ),
+            (
+                Role::file("--stats", &same),
+                Role::file("--reference", &same),
+            ),
+        ];
+        for (output, input) in pairs {
+            let (a, b) = (output.what, input.what);
+            let message = clash(&[output], &[input]).expect("refused");
+            assert!(
+                message.contains(&format!("{a} and {b} name the same file")),
+                "{message}"
+            );
+        }
+        let outputs = [
+            Role::checkpoint("--checkpoint", &same),
+            Role::file("--timeline", &same),
+        ];
+        let message = clash(&outputs, &[]).expect("two outputs on one path");
+        assert!(message.contains("--checkpoint and --timeline"), "{message}");
     }
 }
