@@ -21,15 +21,14 @@ render: build
 	./target/release/splitray render $(SCENE) $(RENDER_FLAGS) -o out/$(SCENE).exr --stats out/$(SCENE).stats.json
 
 # Every GPU test opens its device with VK_LAYER_KHRONOS_validation and fails on any
-# validation error or warning (tests/common/mod.rs); SPLITRAY_VALIDATION turns it on for
+# validation error or warning (tests/suite/common/mod.rs); SPLITRAY_VALIDATION turns it on for
 # anything else that opens a device. The `ci` profile (Cargo.toml) is release optimisation
 # with debug assertions: the light-transport tests sample millions of paths.
 #
-# Where cargo-nextest is installed it runs the tests, two at a time from any binaries:
-# most tests keep one of two cores busy (`animation`: 41.5 s of CPU in 41.7 s), and
-# `cargo test` waits for each binary's slowest test before the next binary starts, so
-# nextest takes about 0.6 of its time (436 s against 680-700 s on 2 vCPUs). Without
-# it, `cargo test` runs the same tests.
+# Where cargo-nextest is installed it runs the tests, each in a process of its own, two
+# at a time: most tests keep one of two cores busy (`animation`: 41.5 s of CPU in 41.7
+# s). Without it, `cargo test` runs the same tests in one process, where the GPU tests
+# take turns on the device (tests/suite/common/turn.rs), so it takes longer.
 test: deps
 	@export SPLITRAY_VALIDATION=1; set -x; \
 	if $(CARGO) nextest --version >/dev/null 2>&1; then \
@@ -45,7 +44,7 @@ test: deps
 # The binary is built as `make test` builds it (with the test targets' features), so
 # after `make test` this builds nothing.
 slurm-test: deps
-	$(CARGO) test --profile ci --locked --no-run --test cli_long_renders
+	$(CARGO) test --profile ci --locked --no-run --test suite
 	bash tools/slurm/test-local-cluster.sh target/ci/splitray
 
 # Clippy in the `ci` profile reuses what `make test` built (the build script's compiled

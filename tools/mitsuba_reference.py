@@ -11,7 +11,7 @@ Writes, for each reference NAME of REFERENCES below, into tests/data/reference/:
 NAME_mean.exr and NAME_stderr.exr (float32 RGB), NAME.scene.json (the scene it was
 rendered from) and its entry in references.json (the manifest: scene, Mitsuba
 integrator, max_depth, rr_depth, film, samples, variant, time taken, image mean). The
-tests read the manifest (tests/common/reference.rs), so a reference and the settings
+tests read the manifest (tests/suite/common/reference.rs), so a reference and the settings
 splitray must match travel together.
 
 The scene: `splitray export-scene SCENE --width W --height H -o NAME.scene.json`, not a

@@ -1,6 +1,6 @@
 #version 460
 // Test kernel: f and pdf of a BSDF stack for (params index, wo, wi, mode) queries, to
-// compare with the Rust twin (tests/bsdf_gpu.rs).
+// compare with the Rust twin (tests/suite/bsdf_gpu.rs).
 #include "grid.glsl"
 #include "bsdf.glsl"
 

@@ -1,6 +1,6 @@
 #version 460
 // Test kernel: the frame and shading-normal helpers of bsdf.glsl against
-// src/bsdf/frame.rs and shading_normal_correction (tests/bsdf_gpu.rs). Per query
+// src/bsdf/frame.rs and shading_normal_correction (tests/suite/bsdf_gpu.rs). Per query
 // (wo, wi, ns, ng as vec4s) writes 4 vec4s: the frame's s and t for ns, wo in that
 // frame, and (to_world(to_local(wo)), correction for radiance, for importance).
 #include "grid.glsl"

@@ -1,6 +1,6 @@
 #version 460
 // Test kernel: writes every field of BsdfParams as a float, in declaration order (36 per
-// record), so tests/bsdf_gpu.rs can prove the Rust and GLSL layouts agree. Also echoes
+// record), so tests/suite/bsdf_gpu.rs can prove the Rust and GLSL layouts agree. Also echoes
 // the material-key helpers for key `keys[i]`: type and id.
 #include "grid.glsl"
 #include "bsdf.glsl"

@@ -1,7 +1,7 @@
 #version 460
 // Test kernel: bsdf_sample for (params index, wo, random numbers, mode) queries, to
 // compare with the Rust twin and to draw GPU samples for chi-square tests
-// (tests/bsdf_gpu.rs).
+// (tests/suite/bsdf_gpu.rs).
 #include "grid.glsl"
 #include "bsdf.glsl"
 

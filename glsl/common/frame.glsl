@@ -1,6 +1,6 @@
 // Camera and per-pass parameters shared by the integrator kernels, passed as push
 // constants (128 bytes, the size every device offers). `FrameParams` in
-// src/integrator/gpu_types.rs is the Rust side; tests/render.rs checks the two agree.
+// src/integrator/gpu_types.rs is the Rust side; tests/suite/render.rs checks the two agree.
 #ifndef SPLITRAY_FRAME_GLSL
 #define SPLITRAY_FRAME_GLSL
 

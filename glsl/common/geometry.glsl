@@ -1,5 +1,5 @@
 // Ray, hit and triangle layouts shared with Rust (src/trace/types.rs, checked by
-// tests/trace_layout.rs), and the one ray–triangle test every GPU tracer uses.
+// tests/suite/trace_brute_force.rs), and the one ray–triangle test every GPU tracer uses.
 #ifndef SPLITRAY_GEOMETRY_GLSL
 #define SPLITRAY_GEOMETRY_GLSL
 

@@ -1,6 +1,6 @@
 // Counter-based random numbers: a value is a pure function of (pixel, sample, dimension,
 // seed), so images do not depend on scheduling, chunking or device.
-// Mirrored by src/bidir/random.rs (tests/bidir_random.rs compares the two).
+// Mirrored by src/bidir/random.rs (tests/suite/bidir_random.rs compares the two).
 #ifndef SPLITRAY_RANDOM_GLSL
 #define SPLITRAY_RANDOM_GLSL
 

@@ -1,5 +1,5 @@
 #version 460
-// Writes the FrameParams push constants back as 32 words, so tests/render.rs can prove
+// Writes the FrameParams push constants back as 32 words, so tests/suite/render.rs can prove
 // the Rust and GLSL layouts agree.
 #include "frame.glsl"
 layout(local_size_x = 1) in;

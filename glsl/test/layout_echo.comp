@@ -1,6 +1,6 @@
 #version 460
 // Writes every field of the shared structs as floats, in declaration order, so
-// tests/trace_layout.rs can prove the Rust and GLSL layouts agree.
+// tests/suite/trace_brute_force.rs can prove the Rust and GLSL layouts agree.
 #include "grid.glsl"
 #include "geometry.glsl"
 

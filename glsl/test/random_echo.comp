@@ -1,6 +1,6 @@
 #version 460
 // out[i] = the bits of random01(q.index, q.sample, q.dimension, q.seed) for query i: the
-// GLSL side of the CPU twin test of src/bidir/random.rs (tests/bidir_random.rs).
+// GLSL side of the CPU twin test of src/bidir/random.rs (tests/suite/bidir_random.rs).
 #include "grid.glsl"
 #include "random.glsl"
 struct Query {

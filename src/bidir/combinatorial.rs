@@ -37,7 +37,7 @@
 //!   adds the count of t' = 1 times `d_vcm` — so it is dropped ([`emitter_hit`]);
 //! - the light tracer skips light vertex 1 ([`CombinatorialCounts::traces_light_vertex`]).
 //!
-//! `tests/cbpt_mis.rs` holds every weight equal to the brute-force oracle with the
+//! `tests/suite/cbpt_mis.rs` holds every weight equal to the brute-force oracle with the
 //! counts of [`CombinatorialCounts::of_path`].
 
 use super::connect::{Connector, Sample};

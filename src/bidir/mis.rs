@@ -3,7 +3,7 @@
 //! Georgiev's "Implementing Vertex Connection and Merging", 2012, as SmallVCM's
 //! `vertexcm.hxx` has it), so that a connection's weight costs O(1) whatever the path
 //! length. [`crate::bidir::oracle`] computes the same weights by brute force from
-//! explicit products of densities; `tests/bidir_mis.rs` holds the two equal.
+//! explicit products of densities; `tests/suite/bidir_mis.rs` holds the two equal.
 //!
 //! # The path and its techniques
 //!

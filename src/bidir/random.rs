@@ -1,6 +1,6 @@
 //! Counter-based random numbers, the CPU twin of `glsl/common/random.glsl`: a value is a
 //! pure function of (index, sample, dimension, seed), so a bidirectional image does not
-//! depend on how its work is split among threads. `tests/bidir_random.rs` checks the twin
+//! depend on how its work is split among threads. `tests/suite/bidir_random.rs` checks the twin
 //! against the GLSL function bit for bit.
 //!
 //! The bidirectional integrators draw a camera subpath and a light subpath per pixel

@@ -31,7 +31,7 @@
 //!   then (remapped) the reflect/refract choice, `(u1, u2)` the direction.
 //!
 //! The Rust code mirrors the GLSL statement by statement in `f32`, so that the CPU and
-//! GPU agree to rounding (`tests/bsdf_gpu.rs`).
+//! GPU agree to rounding (`tests/suite/bsdf_gpu.rs`).
 
 pub mod chi2;
 pub mod frame;

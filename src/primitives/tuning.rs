@@ -19,7 +19,7 @@
 //!   invocations × 4 bytes = 32 KiB of shared memory, the Vulkan minimum) and, for
 //!   key-value sorts, ping-pongs through interleaved (key, value) pairs.
 //!   Measured on lavapipe (Mesa 25.0.7, LLVM 15, 2 cores shared with other work;
-//!   `tuning_sweep` in `tests/primitives_bench.rs`, minimum over rounds that interleave
+//!   `tuning_sweep` in `tests/suite/primitives_bench.rs`, minimum over rounds that interleave
 //!   the tunings and the CPU reference; 2026-11-22, load average 3–7): a lane's buffer
 //!   or shared-memory access costs about as much as a scalar access, and barriers and
 //!   subgroup operations cost extra, so per-invocation segments with `uvec4` accesses

@@ -6,7 +6,7 @@
 //! and every setting the integrator reports ([`crate::integrator::Integrator::settings`]).
 //! Left out on purpose:
 //! - names (scene, materials): renaming a file changes no pixel;
-//! - the tracer and the device: every tracer returns the same hits (tests/trace_tracers.rs)
+//! - the tracer and the device: every tracer returns the same hits (tests/suite/trace_tracers.rs)
 //!   and devices differ only in floating-point rounding, so shards of one image may be
 //!   rendered by different tracers on different machines. Both are recorded in the image
 //!   header all the same. (A resumed render is bit-identical to an uninterrupted one on

@@ -8,7 +8,7 @@
 //! through [`Integrator::set_frame`] (its scene tables written in place, uploading only
 //! the changed ranges), and the film is cleared. Each frame is then rendered by the
 //! same pass loop as a still, so frame k is bit for bit the still render of the scene
-//! posed at time k (tests/animation.rs).
+//! posed at time k (tests/suite/animation.rs).
 
 use std::cell::RefCell;
 use std::ops::Range;

@@ -12,7 +12,7 @@
 //!
 //! Merged shards equal one render of the same passes up to the rounding of the films'
 //! sums (GPU films add their passes in `f32`; a merged film adds the shards' sums in
-//! another order), not bit for bit: see tests/shards.rs for the bound.
+//! another order), not bit for bit: see tests/suite/shards.rs for the bound.
 //!
 //! Shard numbers are 0-based: `0/4` … `3/4`, as Slurm array task ids and Kubernetes
 //! completion indices usually are.

@@ -27,7 +27,7 @@
 //! - rLimit/pLimit are [`DacrtParams::leaf_rays`] (β) and [`DacrtParams::leaf_triangles`]
 //!   (α). PDACRT uses α = β = 256 to fill GPU blocks; neither the thesis nor this crate
 //!   has Mora's exact values, and a serial CPU traversal wants small leaves: on the bunny
-//!   at 512×512 (`bunny_dacrt_threshold_sweep` in tests/trace_tracers.rs) throughput is
+//!   at 512×512 (`bunny_dacrt_threshold_sweep` in tests/suite/trace_tracers.rs) throughput is
 //!   flat within noise for α in 8..64 and β in 4..32, and drops by a third at 256/256;
 //!   the defaults α = 16, β = 8 sit in the middle of that plateau. Boxes that can no longer be
 //!   split, and nodes deeper than [`DacrtParams::max_depth`], are also intersected

@@ -1,5 +1,5 @@
 //! Ray, hit and triangle records as the GPU sees them (std430). The GLSL side is
-//! `glsl/common/geometry.glsl`; `tests/trace_layout.rs` proves the two agree.
+//! `glsl/common/geometry.glsl`; `tests/suite/trace_brute_force.rs` proves the two agree.
 
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;

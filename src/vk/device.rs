@@ -168,7 +168,7 @@ impl Gpu {
     /// With validation on, do not open or drop a `Gpu` while another thread uses
     /// another one: the validation layer of Debian 12 (1.3.239) keeps all instances' and
     /// devices' state in one unsynchronised map, and such a process crashes now and then
-    /// (the tests take turns for this: tests/common/turn.rs).
+    /// (the tests take turns for this: tests/suite/common/turn.rs).
     pub fn new(desc: &GpuDesc) -> Result<Self> {
         let _span = tracing::info_span!("open device").entered();
         let instance = Instance::new(desc.instance)?;

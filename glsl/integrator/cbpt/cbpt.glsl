@@ -1,6 +1,6 @@
 // CBPT's combination kernels (§4 of Pajot et al. 2011): the linking vertices and the
 // push constants they share. The Rust side is src/integrator/cbpt/layout.rs and gpu.rs;
-// tests/cbpt_gpu.rs checks the layouts and every kernel against its CPU twin
+// tests/suite/cbpt_gpu.rs checks the layouts and every kernel against its CPU twin
 // (src/integrator/cbpt/cpu_kernels.rs).
 #ifndef SPLITRAY_CBPT_GLSL
 #define SPLITRAY_CBPT_GLSL

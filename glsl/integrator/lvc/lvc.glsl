@@ -1,6 +1,6 @@
 // Records and pure functions of the light-vertex-cache integrators (LVC-BDPT, CIS-LBDPT).
 // src/integrator/lvc/gpu.rs is the Rust side (sizes asserted there, layouts checked by
-// tests/lvc_kernels.rs). The walks, techniques and MIS weights are those of the CPU BPT
+// tests/suite/lvc_kernels.rs). The walks, techniques and MIS weights are those of the CPU BPT
 // (src/bidir/: walk.rs, connect.rs, mis.rs, camera.rs), operation for operation where
 // it matters, so that the CPU twins agree to rounding. Include geometry.glsl first.
 #ifndef SPLITRAY_LVC_GLSL

@@ -1,7 +1,7 @@
 //! The combination's data as the kernels see them (§4): the linking vertices of a
 //! population couple, uploaded as two arrays, and the combination data of every linking
 //! segment, downloaded into host memory. `glsl/integrator/cbpt/cbpt.glsl` is the GLSL
-//! side; `tests/cbpt_gpu.rs` checks the layouts against it.
+//! side; `tests/suite/cbpt_gpu.rs` checks the layouts against it.
 //!
 //! **Linking vertices.** The camera table holds every camera vertex past the pinhole that
 //! a connection can use (a surface with a non-delta lobe); the light table holds the

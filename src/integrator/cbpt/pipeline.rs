@@ -18,7 +18,7 @@
 //! whichever is shorter. The order of step 2 is the paper's: step t is launched only
 //! after step t − 1's data went back, so a device whose submissions execute in the
 //! submitting thread (lavapipe) does not hold step t − 1's data back behind step t's
-//! work (tests/cbpt_pipeline.rs holds the loop to that). Not pipelined, every step
+//! work (tests/suite/cbpt_pipeline.rs holds the loop to that). Not pipelined, every step
 //! waits for its own combination (the synchronous reference of `bench cbpt`). The
 //! image is the same either way: each step's work depends on that step alone, and
 //! passes are summed in order.

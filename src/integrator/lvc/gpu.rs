@@ -1,5 +1,5 @@
 //! Records shared with `glsl/integrator/lvc/lvc.glsl` (sizes asserted here, layouts
-//! checked against the GLSL by `tests/lvc_kernels.rs`).
+//! checked against the GLSL by `tests/suite/lvc_kernels.rs`).
 
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;

@@ -1,4 +1,4 @@
-//! CPU twins of the kernels, for the tests that compare them (`tests/lvc_kernels.rs`):
+//! CPU twins of the kernels, for the tests that compare them (`tests/suite/lvc_kernels.rs`):
 //! the walks and techniques are the CPU `bpt`'s ([`crate::bidir`]) run on the kernels'
 //! records, so each kernel is checked against the code it mirrors.
 //!

@@ -643,7 +643,7 @@ impl Integrator for PtIntegrator<'_> {
     }
 
     /// Material sorting is not among them: it never changes the image
-    /// (tests/pt_analytic.rs), so parts rendered with it and without (on devices whose
+    /// (tests/suite/pt_analytic.rs), so parts rendered with it and without (on devices whose
     /// defaults differ) merge.
     fn settings(&self) -> Vec<(String, String)> {
         let o = &self.options;

@@ -1,0 +1,153 @@
+//! The GPU brute-force tracer against its CPU twin, and the shared struct layouts.
+
+use crate::common;
+
+use glam::Vec3;
+use splitray::shaders;
+use splitray::trace::{cpu, BruteForceTracer, GpuTriangle, Hit, Query, Ray};
+use splitray::vk::{ComputePipeline, PipelineDesc, StreamKind};
+
+#[test]
+fn brute_force_matches_cpu_on_random_triangle_soups() {
+    let gpu = common::gpu();
+    for (triangles, rays, seed) in [
+        (1usize, 100usize, 1u64),
+        (513, 4099, 2),
+        (1000, 20_000, 3),
+        (3, 0, 4),
+        (2000, 1, 5),
+    ] {
+        let soup = common::triangle_soup(triangles, seed);
+        let rays = common::random_rays(rays, seed + 100);
+        let mut tracer = BruteForceTracer::new(&gpu, &soup).unwrap();
+        let hits = common::trace_hits(&gpu, &mut tracer, &rays, Query::ClosestHit);
+        let expected = cpu::closest_hits(&rays, &soup);
+        common::assert_same_hits(&hits, &expected, &format!("{triangles} triangles"));
+        if !rays.is_empty() && triangles > 100 {
+            assert!(
+                hits.iter().filter(|h| h.is_hit()).count() > rays.len() / 10,
+                "too few hits to be a test"
+            );
+        }
+        let occ = common::trace_hits(&gpu, &mut tracer, &rays, Query::Occlusion);
+        for (i, (h, r)) in occ.iter().zip(&rays).enumerate() {
+            assert_eq!(h.is_hit(), cpu::occluded(r, &soup), "occlusion of ray {i}");
+        }
+    }
+    common::assert_clean(&gpu);
+}
+
+#[test]
+fn results_do_not_depend_on_batching() {
+    use splitray::trace::brute_force::BruteForceTuning;
+    let gpu = common::gpu();
+    let soup = common::triangle_soup(777, 9);
+    // Every seventh ray an empty segment starting on a triangle (tmin = tmax, tmin >
+    // tmax, NaN tmax): it misses, and skips its tests in a workgroup whose other rays
+    // keep testing (the barriers stay uniform).
+    let rays: Vec<Ray> = common::random_rays(3001, 10)
+        .into_iter()
+        .enumerate()
+        .map(|(i, r)| match (i % 7, (i / 7) % 3) {
+            (0, 0) => Ray::new(soup[i % soup.len()].v0(), Vec3::from(r.dir), 0.0, 0.0),
+            (0, 1) => Ray::new(soup[i % soup.len()].v0(), Vec3::from(r.dir), 0.5, 0.25),
+            (0, _) => Ray::new(soup[i % soup.len()].v0(), Vec3::from(r.dir), 0.0, f32::NAN),
+            _ => r,
+        })
+        .collect();
+    let expected = cpu::closest_hits(&rays, &soup);
+    assert!(rays
+        .iter()
+        .zip(&expected)
+        .all(|(r, h)| !r.is_empty() || !h.is_hit()));
+    for (workgroup_size, batch) in [(1, 1), (8, 7), (64, 512), (256, 64)] {
+        let mut tracer = BruteForceTracer::with_tuning(
+            &gpu,
+            &soup,
+            BruteForceTuning {
+                workgroup_size,
+                batch,
+            },
+        )
+        .unwrap();
+        let hits = common::trace_hits(&gpu, &mut tracer, &rays, Query::ClosestHit);
+        common::assert_same_hits(
+            &hits,
+            &expected,
+            &format!("wg {workgroup_size}, batch {batch}"),
+        );
+    }
+    common::assert_clean(&gpu);
+}
+
+#[test]
+fn rust_and_glsl_struct_layouts_agree() {
+    let gpu = common::gpu();
+    let n = 5usize;
+    let f = common::uniforms(n * 24, 77);
+    let rays: Vec<Ray> = (0..n)
+        .map(|i| {
+            Ray::new(
+                Vec3::new(f[i], f[i + 1], f[i + 2]),
+                Vec3::new(f[i + 3], f[i + 4], f[i + 5]),
+                f[i + 6],
+                f[i + 7],
+            )
+        })
+        .collect();
+    let hits: Vec<Hit> = (0..n)
+        .map(|i| Hit {
+            t: f[i + 8],
+            triangle: i as u32 * 3 + 1,
+            u: f[i + 9],
+            v: f[i + 10],
+        })
+        .collect();
+    let tris: Vec<GpuTriangle> = (0..n)
+        .map(|i| GpuTriangle {
+            v0: [f[i], f[i + 1], f[i + 2], f[i + 3]],
+            e1: [f[i + 4], f[i + 5], f[i + 6], f[i + 7]],
+            e2: [f[i + 8], f[i + 9], f[i + 10], f[i + 11]],
+        })
+        .collect();
+    let pipeline = ComputePipeline::new(
+        &gpu,
+        &PipelineDesc {
+            kernel: shaders::TEST_LAYOUT_ECHO,
+            bindings: 4,
+            push_constant_bytes: 4,
+            spec: &[64],
+        },
+    )
+    .unwrap();
+    let (rb, hb, tb) = (
+        gpu.upload("r", &rays).unwrap(),
+        gpu.upload("h", &hits).unwrap(),
+        gpu.upload("t", &tris).unwrap(),
+    );
+    let out = gpu.zeroed::<f32>("out", n * 24).unwrap();
+    let mut rec = gpu.recorder(StreamKind::Main).unwrap();
+    rec.dispatch_items(
+        &pipeline,
+        &[(&rb).into(), (&hb).into(), (&tb).into(), (&out).into()],
+        &(n as u32),
+        n as u64,
+    )
+    .unwrap();
+    gpu.wait(&rec.submit(&[]).unwrap()).unwrap();
+    let fields = out.read::<f32>().unwrap();
+    for i in 0..n {
+        let (r, h, t) = (&rays[i], &hits[i], &tris[i]);
+        let mut expected = vec![];
+        expected.extend(r.origin);
+        expected.push(r.tmin);
+        expected.extend(r.dir);
+        expected.push(r.tmax);
+        expected.extend([h.t, h.triangle as f32, h.u, h.v]);
+        expected.extend(t.v0);
+        expected.extend(t.e1);
+        expected.extend(t.e2);
+        assert_eq!(&fields[i * 24..(i + 1) * 24], &expected[..], "record {i}");
+    }
+    common::assert_clean(&gpu);
+}
