@@ -76,11 +76,12 @@ pub fn line_col(text: &str, offset: usize) -> (usize, usize) {
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
     /// A file that does not exist or cannot be read.
-    #[error("{path}: cannot read file: {source}", path = .path.display())]
+    /// The message carries the cause: it is not also a `source`, which would print it
+    /// twice in a chain (`{:#}`).
+    #[error("{path}: cannot read file: {error}", path = .path.display())]
     Io {
         path: PathBuf,
-        #[source]
-        source: std::io::Error,
+        error: std::io::Error,
     },
     /// A file referenced from another one (mesh from a TOML, MTL from an OBJ) is missing.
     #[error("{at}: {what} '{name}' not found (looked for {path})", path = .path.display())]

@@ -34,9 +34,9 @@ pub struct ObjMesh {
 }
 
 pub(crate) fn read_text(path: &Path) -> Result<String, SceneError> {
-    std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+    std::fs::read_to_string(path).map_err(|error| SceneError::Io {
         path: path.to_path_buf(),
-        source,
+        error,
     })
 }
 
@@ -187,9 +187,9 @@ fn read_mtl(full: &Path, at: Location, name: String) -> Result<String, SceneErro
             name,
             path: full.to_path_buf(),
         }),
-        Err(source) => Err(SceneError::Io {
+        Err(error) => Err(SceneError::Io {
             path: full.to_path_buf(),
-            source,
+            error,
         }),
         Ok(mtl_text) => prescan_mtl(&mtl_text, &label(full)).map(|()| mtl_text),
     }

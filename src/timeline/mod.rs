@@ -34,12 +34,19 @@ pub enum TimelineError {
     Subscriber(String),
     #[error(transparent)]
     Gpu(#[from] crate::vk::VkError),
+    /// The message carries the cause, not also a `source` (a chain would repeat it).
     #[error("not a trace-event JSON file: {0}")]
-    Json(#[from] serde_json::Error),
+    Json(serde_json::Error),
     #[error("not a trace-event file: {0}")]
     Format(String),
     #[error("cannot draw the timeline: {0}")]
     Draw(String),
+}
+
+impl From<serde_json::Error> for TimelineError {
+    fn from(error: serde_json::Error) -> Self {
+        Self::Json(error)
+    }
 }
 
 /// Sets a timeline counter: `timeline_counter!("pt", "live paths", n)` makes a sample

@@ -193,12 +193,12 @@ impl Gpu {
             });
         let allocation = match allocation {
             Ok(a) => a,
-            Err(source) => {
+            Err(error) => {
                 // SAFETY: unused buffer of this device.
                 unsafe { device.destroy_buffer(raw, None) };
                 return Err(VkError::Alloc {
                     name: name.to_string(),
-                    source,
+                    error,
                 });
             }
         };

@@ -577,9 +577,9 @@ fn create_allocator(
         buffer_device_address: true,
         allocation_sizes: Default::default(),
     })
-    .map_err(|source| VkError::Alloc {
+    .map_err(|error| VkError::Alloc {
         name: "allocator".into(),
-        source,
+        error,
     })
 }
 

@@ -17,11 +17,11 @@ pub enum VkError {
     MissingFeature { device: String, what: String },
     #[error("--device {0}: no such device (see `splitray info`)")]
     UnknownDevice(String),
-    #[error("GPU memory allocation failed for '{name}': {source}")]
+    /// The message carries the cause, not also a `source` (a chain would repeat it).
+    #[error("GPU memory allocation failed for '{name}': {error}")]
     Alloc {
         name: String,
-        #[source]
-        source: gpu_allocator::AllocationError,
+        error: gpu_allocator::AllocationError,
     },
     #[error(
         "buffer '{name}' needs {size} bytes ({size_h}), more than one buffer can hold on \

@@ -349,12 +349,29 @@ fn assert_fails(dir: &Path, args: &[&str], expect: &[&str]) {
     for e in expect {
         assert!(t.contains(e), "{args:?}: expected {e:?} in:\n{t}");
     }
+    assert_each_cause_once(&t);
     let leftovers: Vec<_> = std::fs::read_dir(dir)
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .filter(|n| n.ends_with(".exr") || n.ends_with(".png") || n.contains(".tmp"))
         .collect();
     assert!(leftovers.is_empty(), "{args:?} left {leftovers:?}");
+}
+
+/// The `error:` line names each cause once: an error whose message includes its cause
+/// must not also report it as its source, or the printed chain ends "…: E: E".
+fn assert_each_cause_once(printed: &str) {
+    for line in printed.lines().filter(|l| l.starts_with("error: ")) {
+        let parts: Vec<&str> = line.split(": ").collect();
+        let n = parts.len();
+        for k in 1..=n / 2 {
+            assert_ne!(
+                parts[n - 2 * k..n - k],
+                parts[n - k..],
+                "the cause is printed twice: {line}"
+            );
+        }
+    }
 }
 
 #[test]
@@ -374,7 +391,13 @@ fn bad_input_gives_a_clear_error_and_no_output() {
     assert_fails(
         d,
         &["render", "missing.toml", "-o", "a.exr"],
-        &["missing.toml"],
+        &["missing.toml", "cannot read file", "No such file"],
+    );
+    std::fs::write(d.join("bad.json"), "{nope").unwrap();
+    assert_fails(
+        d,
+        &["timeline", "bad.json", "-o", "t.svg"],
+        &["bad.json", "not a trace-event JSON file", "line 1 column 2"],
     );
     assert_fails(
         d,
