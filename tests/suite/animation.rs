@@ -5,6 +5,7 @@
 //! with its scene tables moved in place; `render --frames` writes the numbered files.
 
 use crate::common;
+use crate::common::cli::splitray;
 
 use std::path::{Path, PathBuf};
 
@@ -581,15 +582,6 @@ fn every_tracer_follows_moving_geometry() {
         }
     }
     common::assert_clean(&gpu);
-}
-
-fn splitray(args: &[&str], cwd: &Path) -> std::process::Output {
-    std::process::Command::new(env!("CARGO_BIN_EXE_splitray"))
-        .args(args)
-        .current_dir(cwd)
-        .env("RUST_LOG", "warn")
-        .output()
-        .expect("run splitray")
 }
 
 fn files_in(dir: &Path) -> Vec<String> {

@@ -2,24 +2,9 @@
 //! giving a clear error, a non-zero exit status and no output file.
 
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Output;
 
-fn splitray(args: &[&str], cwd: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_splitray"))
-        .args(args)
-        .current_dir(cwd)
-        .env("RUST_LOG", "warn")
-        .output()
-        .expect("run splitray")
-}
-
-fn text(o: &Output) -> String {
-    format!(
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    )
-}
+use crate::common::cli::{printed as text, splitray};
 
 #[test]
 fn info_lists_devices_streams_and_validation() {

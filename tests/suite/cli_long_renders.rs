@@ -6,30 +6,14 @@
 
 use std::io::{BufRead, BufReader};
 use std::path::Path;
-use std::process::{Child, Command, Output, Stdio};
+use std::process::{Child, Command, Stdio};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
 use splitray::film::read_exr;
 use splitray::render::Checkpoint;
 
-fn command(args: &[&str], cwd: &Path) -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_splitray"));
-    c.args(args).current_dir(cwd).env("RUST_LOG", "warn");
-    c
-}
-
-fn splitray(args: &[&str], cwd: &Path) -> Output {
-    command(args, cwd).output().expect("run splitray")
-}
-
-fn text(o: &Output) -> String {
-    format!(
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    )
-}
+use crate::common::cli::{command, printed as text, splitray};
 
 /// Names in `dir` that are outputs or temporary files.
 fn outputs(dir: &Path) -> Vec<String> {

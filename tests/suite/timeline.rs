@@ -527,17 +527,8 @@ fn spans_of_rayon_workers_land_on_their_own_tracks() {
 }
 
 fn splitray(args: &[&str], cwd: &std::path::Path) -> (bool, String) {
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_splitray"))
-        .args(args)
-        .current_dir(cwd)
-        .env("RUST_LOG", "warn")
-        .output()
-        .expect("run splitray");
-    let text = format!(
-        "{}{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out = common::cli::splitray(args, cwd);
+    let text = common::cli::printed(&out);
     assert!(!text.contains("panicked"), "{text}");
     (out.status.success(), text)
 }

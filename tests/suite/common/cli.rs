@@ -3,14 +3,16 @@
 use std::path::Path;
 use std::process::{Command, Output};
 
+/// `splitray ARGS` in `dir`, warnings and errors logged, to run or spawn.
+pub fn command(args: &[&str], dir: &Path) -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_splitray"));
+    c.args(args).current_dir(dir).env("RUST_LOG", "warn");
+    c
+}
+
 /// Runs `splitray ARGS` in `dir` (warnings and errors logged) and waits for it.
 pub fn splitray(args: &[&str], dir: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_splitray"))
-        .args(args)
-        .current_dir(dir)
-        .env("RUST_LOG", "warn")
-        .output()
-        .expect("run splitray")
+    command(args, dir).output().expect("run splitray")
 }
 
 /// Everything the command printed: standard output, then standard error.
