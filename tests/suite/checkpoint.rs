@@ -17,19 +17,6 @@ use splitray::render::{
 use splitray::scene::{builtin, Scene};
 use splitray::vk::Gpu;
 
-fn options(scene: &Scene, kind: IntegratorKind, spp: u32) -> RenderOptions {
-    RenderOptions::resolve(
-        scene,
-        Some(24),
-        Some(16),
-        Some(spp),
-        Some(7),
-        Some(kind),
-        None,
-    )
-    .unwrap()
-}
-
 /// A render that stops before its `batches + 1`-th batch of passes.
 fn interrupted(gpu: &Gpu, scene: &Scene, opts: &RenderOptions, batches: u32) -> RenderOutput {
     let calls = Cell::new(0);
@@ -86,7 +73,7 @@ fn an_interrupted_and_resumed_render_is_bit_identical_for_every_integrator() {
     for (kind, _) in IntegratorKind::ALL {
         // Six passes: a pass of cbpt holds four samples per pixel.
         let spp = if *kind == IntegratorKind::Cbpt { 24 } else { 6 };
-        let opts = options(&scene, *kind, spp);
+        let opts = common::small_render_options(&scene, *kind, spp);
         // The uninterrupted render saves its film after its first batch of passes (one
         // pass): that checkpoint is what an interrupted render leaves.
         let mut first: Option<Checkpoint> = None;
@@ -134,7 +121,7 @@ fn an_interrupted_and_resumed_render_is_bit_identical_for_every_integrator() {
 fn the_render_loop_hands_its_film_to_the_checkpoint_hook_as_it_goes() {
     let gpu = common::gpu();
     let scene = builtin("cornell-box").unwrap();
-    let opts = options(&scene, IntegratorKind::Ao, 5);
+    let opts = common::small_render_options(&scene, IntegratorKind::Ao, 5);
     let mut saved: Vec<Checkpoint> = Vec::new();
     let mut hook = |s: &FilmSnapshot<'_>| -> Result<(), RenderError> {
         saved.push(Checkpoint::new("cornell-box", &opts, s));
@@ -179,7 +166,7 @@ fn a_checkpoint_of_another_scene_or_settings_is_refused_naming_the_file() {
     let gpu = common::gpu();
     let scene = builtin("cornell-box").unwrap();
     let dir = tempfile::tempdir().unwrap();
-    let opts = options(&scene, IntegratorKind::Pt, 4);
+    let opts = common::small_render_options(&scene, IntegratorKind::Pt, 4);
     let part = interrupted(&gpu, &scene, &opts, 1);
     let checkpoint = Checkpoint::new("cornell-box", &opts, &part.snapshot());
     let path = save(dir.path(), "pt.ckpt", &checkpoint);
@@ -212,10 +199,10 @@ fn a_checkpoint_of_another_scene_or_settings_is_refused_naming_the_file() {
     }
 
     // A one-sample eye render goes through pixel centres: it cannot become a jittered one.
-    let ao1 = options(&scene, IntegratorKind::Ao, 1);
+    let ao1 = common::small_render_options(&scene, IntegratorKind::Ao, 1);
     let single = interrupted(&gpu, &scene, &ao1, 1);
     let c = Checkpoint::new("cornell-box", &ao1, &single.snapshot());
-    let ao4 = options(&scene, IntegratorKind::Ao, 4);
+    let ao4 = common::small_render_options(&scene, IntegratorKind::Ao, 4);
     let err = resumed(&gpu, &scene, &ao4, &c, &path)
         .err()
         .unwrap()
@@ -231,7 +218,7 @@ fn a_checkpoint_of_another_scene_or_settings_is_refused_naming_the_file() {
 fn a_shard_continues_only_its_own_block_of_passes() {
     let gpu = common::gpu();
     let scene = builtin("cornell-box").unwrap();
-    let opts = options(&scene, IntegratorKind::Ao, 8);
+    let opts = common::small_render_options(&scene, IntegratorKind::Ao, 8);
     let shard = Shard::new(1, 2).unwrap();
     let run = |plan: RenderPlan<'_>, stop_after: u32| {
         let calls = Cell::new(0);
@@ -313,7 +300,7 @@ fn small_checkpoint() -> Checkpoint {
         [2.0; 3],
         [3.0; 3],
     ]);
-    let opts = options(&scene, IntegratorKind::Pt, 4);
+    let opts = common::small_render_options(&scene, IntegratorKind::Pt, 4);
     Checkpoint {
         header: CheckpointHeader {
             software: "splitray test".into(),

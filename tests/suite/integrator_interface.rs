@@ -4,25 +4,12 @@
 use crate::common;
 
 use splitray::integrator::{Integrator, IntegratorKind};
-use splitray::render::{create_integrator, render_with, RenderControl, RenderOptions};
+use splitray::render::{create_integrator, render_with, RenderControl};
 use splitray::scene::{builtin, Scene};
 use splitray::vk::Gpu;
 
-fn options(scene: &Scene, kind: IntegratorKind, spp: u32) -> RenderOptions {
-    RenderOptions::resolve(
-        scene,
-        Some(24),
-        Some(16),
-        Some(spp),
-        Some(7),
-        Some(kind),
-        None,
-    )
-    .unwrap()
-}
-
 fn integrator(gpu: &Gpu, scene: &Scene, kind: IntegratorKind) -> Box<dyn Integrator> {
-    create_integrator(gpu, scene, &options(scene, kind, 6)).unwrap()
+    create_integrator(gpu, scene, &common::small_render_options(scene, kind, 6)).unwrap()
 }
 
 #[test]
@@ -74,7 +61,7 @@ fn restoring_a_film_of_another_size_is_refused() {
 fn the_render_loop_stops_at_a_pass_boundary_when_asked() {
     let gpu = common::gpu();
     let scene = builtin("cornell-box").unwrap();
-    let opts = options(&scene, IntegratorKind::Ao, 8);
+    let opts = common::small_render_options(&scene, IntegratorKind::Ao, 8);
     let mut seen = Vec::new();
     let calls = std::cell::Cell::new(0);
     let out = render_with(

@@ -230,19 +230,7 @@ fn equals_brute_force_on_axis_aligned_geometry_with_axis_parallel_and_in_plane_r
 fn equals_brute_force_in_the_cornell_box_from_outside_and_inside() {
     let scene = splitray::scene::load("cornell-box").unwrap();
     let tris = scene.gpu_triangles();
-    let mut rays = common::camera_rays(&scene.camera, 48, 48);
-    let b = scene.bounds();
-    let u = common::uniforms(6 * 3000, 7);
-    for i in 0..3000 {
-        let c = &u[6 * i..];
-        let o = b.min
-            + (b.max - b.min) * Vec3::new(0.1 + 0.8 * c[0], 0.1 + 0.8 * c[1], 0.1 + 0.8 * c[2]);
-        let d = (Vec3::new(c[3], c[4], c[5]) - 0.5)
-            .try_normalize()
-            .unwrap_or(Vec3::X);
-        let tmax = if i % 3 == 0 { 100.0 } else { f32::INFINITY };
-        rays.push(Ray::new(o, d, 1e-4, tmax));
-    }
+    let mut rays = common::cornell_box_rays_from_outside_and_inside(&scene);
     rays.extend(surface_rays(&tris, 2000, 8, 0.0));
     let bvh = CpuBvh::new(&tris);
     assert_exact(&bvh, &rays, &tris, "cornell box");

@@ -280,24 +280,7 @@ fn cpu_dacrt_keeps_the_smaller_index_among_equal_hits() {
 fn cpu_dacrt_equals_brute_force_in_the_cornell_box_from_outside_and_inside() {
     let scene = splitray::scene::load("cornell-box").unwrap();
     let tris = scene.gpu_triangles();
-    let mut rays = common::camera_rays(&scene.camera, 48, 48);
-    // Cameras inside the scene box, looking everywhere.
-    let b = scene.bounds();
-    let u = common::uniforms(6 * 3000, 7);
-    for i in 0..3000 {
-        let c = &u[6 * i..];
-        let o = b.min
-            + (b.max - b.min) * Vec3::new(0.1 + 0.8 * c[0], 0.1 + 0.8 * c[1], 0.1 + 0.8 * c[2]);
-        let d = (Vec3::new(c[3], c[4], c[5]) - 0.5)
-            .try_normalize()
-            .unwrap_or(Vec3::X);
-        rays.push(Ray::new(
-            o,
-            d,
-            1e-4,
-            if i % 3 == 0 { 100.0 } else { f32::INFINITY },
-        ));
-    }
+    let rays = common::cornell_box_rays_from_outside_and_inside(&scene);
     for params in params_grid() {
         assert_dacrt_exact(&rays, &tris, &params, "cornell box");
     }

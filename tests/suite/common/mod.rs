@@ -204,6 +204,47 @@ pub fn camera_rays(
         .collect()
 }
 
+/// The Cornell box's primary rays at 48 × 48, then 3000 rays from inside its bounds in
+/// every direction (every third one ending at t = 100): hits from outside and inside.
+pub fn cornell_box_rays_from_outside_and_inside(
+    scene: &splitray::scene::Scene,
+) -> Vec<splitray::trace::Ray> {
+    let mut rays = camera_rays(&scene.camera, 48, 48);
+    let b = scene.bounds();
+    let u = uniforms(6 * 3000, 7);
+    for i in 0..3000 {
+        let c = &u[6 * i..];
+        let o = b.min
+            + (b.max - b.min)
+                * glam::Vec3::new(0.1 + 0.8 * c[0], 0.1 + 0.8 * c[1], 0.1 + 0.8 * c[2]);
+        let d = (glam::Vec3::new(c[3], c[4], c[5]) - 0.5)
+            .try_normalize()
+            .unwrap_or(glam::Vec3::X);
+        let tmax = if i % 3 == 0 { 100.0 } else { f32::INFINITY };
+        rays.push(splitray::trace::Ray::new(o, d, 1e-4, tmax));
+    }
+    rays
+}
+
+/// A 24 × 16 render of `spp` passes of `kind`, seed 7: small enough for every
+/// integrator, the options the pass-grouping and checkpoint tests share.
+pub fn small_render_options(
+    scene: &splitray::scene::Scene,
+    kind: splitray::integrator::IntegratorKind,
+    spp: u32,
+) -> splitray::render::RenderOptions {
+    splitray::render::RenderOptions::resolve(
+        scene,
+        Some(24),
+        Some(16),
+        Some(spp),
+        Some(7),
+        Some(kind),
+        None,
+    )
+    .unwrap()
+}
+
 /// Uploads `rays`, traces them with `tracer` and reads the hits back.
 pub fn trace_hits(
     gpu: &splitray::vk::Gpu,
