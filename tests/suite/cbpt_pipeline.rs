@@ -4,9 +4,12 @@
 //! `gpu_comp_async` (`Evaluator::launch`) runs the combination before it returns — as on
 //! a device whose submissions execute in the submitting thread, lavapipe — refuses to
 //! return until the CPU thread has begun sampling the next step (seen through the
-//! `cbpt sample` span). A loop that waited for step t's combination before it let the
+//! `cbpt sample` span, through a global subscriber: the test runs alone in a process of
+//! its own). A loop that waited for step t's combination before it let the
 //! CPU thread go on would never get there; the evaluator then gives up with an error.
 //! The image is the one of the plain CPU combination, pipelined or not.
+
+use crate::common;
 
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Condvar, Mutex};
@@ -96,6 +99,12 @@ impl Evaluator for SynchronousDevice<'_> {
 
 #[test]
 fn the_cpu_samples_the_next_step_while_the_device_combines() {
+    // The CPU thread's spans are seen through a global subscriber: one per process.
+    if !common::process::in_own_process(
+        "cbpt_pipeline::the_cpu_samples_the_next_step_while_the_device_combines",
+    ) {
+        return;
+    }
     let sampled = Sampled::default();
     tracing::subscriber::set_global_default(tracing_subscriber::registry().with(sampled.clone()))
         .unwrap();

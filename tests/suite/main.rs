@@ -1,4 +1,11 @@
 //! The integration tests, one binary: each module is one area of splitray.
+//!
+//! nextest runs each test in a process of its own, but `cargo test` (what `make test`
+//! falls back to without nextest) runs them all in one process, on parallel threads. So
+//! a test changes nothing process-wide that another test relies on: no global `tracing`
+//! subscriber (the timeline's capture installs one; a test that needs its own runs in a
+//! child process: common/process.rs), no environment variables, and the GPU tests take
+//! turns on their devices (common/turn.rs).
 
 mod common;
 
