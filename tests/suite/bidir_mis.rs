@@ -231,10 +231,6 @@ fn random_counts(u: &mut impl Iterator<Item = f32>, k: usize) -> TechniqueCounts
     }
 }
 
-fn close(a: f64, b: f64) -> bool {
-    (a - b).abs() <= 2e-4 + 2e-4 * b.abs()
-}
-
 #[test]
 fn recursive_weights_equal_the_brute_force_balance_heuristic_on_random_paths() {
     let mut u = common::uniforms(4_000_000, 21).into_iter();
@@ -263,7 +259,7 @@ fn recursive_weights_equal_the_brute_force_balance_heuristic_on_random_paths() {
                 "case {case} k {k} s {s}: weight {r}"
             );
             assert!(
-                close(r, w[s]),
+                common::mis::close(r, w[s]),
                 "case {case} k {k} s {s}: recursive {r} vs oracle {} (delta {:?}, counts {counts:?})",
                 w[s],
                 path.delta
@@ -324,20 +320,7 @@ fn weights_of_traced_paths_equal_the_oracle() {
                 );
                 let check = |sample: Sample, l: &[Vertex], c: &[Vertex], family: &mut usize| {
                     let d = path_densities(&cpu, &camera, l, c);
-                    let s = sample.s as usize;
-                    assert!(
-                        d.can_sample(&counts, s),
-                        "({}, {}) cannot make its path",
-                        s,
-                        sample.t
-                    );
-                    let w = d.balance_weights(&counts)[s];
-                    assert!(
-                        close(sample.weight as f64, w),
-                        "({s}, {}): recursive {} vs oracle {w}; {d:?}",
-                        sample.t,
-                        sample.weight
-                    );
+                    common::mis::assert_weight_is_the_oracles(&d, &counts, &sample);
                     *family += 1;
                     let k = d.segments();
                     through_mirror.set(through_mirror.get() + d.delta[1..k].contains(&true) as u32);

@@ -28,10 +28,6 @@ use splitray::integrator::cbpt::{
 use splitray::integrator::Integrator;
 use splitray::scene::Scene;
 
-fn close(a: f64, b: f64) -> bool {
-    (a - b).abs() <= 2e-4 + 2e-4 * b.abs()
-}
-
 fn options(camera_paths: u32, light_paths: u32, light_traced: u32, seed: u64) -> CbptOptions {
     CbptOptions {
         seed,
@@ -70,21 +66,8 @@ fn check(
 ) {
     let d = path_densities(&setup.scene, &setup.camera, light, camera);
     let k = d.segments();
-    let path_counts = counts.of_path(k);
-    let s = sample.s as usize;
-    assert!(
-        d.can_sample(&path_counts, s),
-        "({s}, {}) cannot make its path of {k} segments",
-        sample.t
-    );
-    let w = d.balance_weights(&path_counts)[s];
-    assert!(
-        close(sample.weight as f64, w),
-        "({s}, {}), {k} segments: recursive {} vs oracle {w}; {d:?}",
-        sample.t,
-        sample.weight
-    );
-    checked.families[match s {
+    common::mis::assert_weight_is_the_oracles(&d, &counts.of_path(k), sample);
+    checked.families[match sample.s {
         0 => 0,
         1 if sample.t > 1 => 1,
         _ if sample.t == 1 => 3,

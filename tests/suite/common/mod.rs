@@ -5,6 +5,7 @@
 pub mod analytic;
 pub mod cli;
 pub mod lvc_dump;
+pub mod mis;
 pub mod process;
 pub mod reference;
 pub mod scenes;
