@@ -500,7 +500,8 @@ pub fn run(
     })
 }
 
-/// Refuses a scene that does not move, no timed frame and the path workload.
+/// Refuses a scene that does not move, no timed frame, a frame rate that is not a positive
+/// number and the path workload.
 fn check_options(animated: &AnimatedScene, opts: &DynamicBenchOptions) -> BenchResult<()> {
     if !animated.is_animated() {
         return Err(format!(
@@ -512,6 +513,9 @@ fn check_options(animated: &AnimatedScene, opts: &DynamicBenchOptions) -> BenchR
     }
     if opts.frames == 0 {
         return Err("bench dynamic needs at least one timed frame".into());
+    }
+    if !(opts.fps.is_finite() && opts.fps > 0.0) {
+        return Err(format!("--fps {} must be a positive number", opts.fps).into());
     }
     if opts.workloads.contains(&Workload::Path) {
         return Err(PATH_REFUSED.into());

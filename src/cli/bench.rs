@@ -92,7 +92,7 @@ enum BenchCommand {
         )]
         integrators: Vec<IntegratorKind>,
         /// Seconds each integrator renders.
-        #[arg(long, default_value_t = 30.0)]
+        #[arg(long, default_value_t = 30.0, allow_negative_numbers = true)]
         time: f64,
         /// Slices each integrator's time is cut into (taken in turns).
         #[arg(long, default_value_t = 10, value_parser = super::at_least_one())]
@@ -154,7 +154,7 @@ enum BenchCommand {
         )]
         batches: Vec<u32>,
         /// Seconds each integrator renders for the equal-time comparison.
-        #[arg(long, default_value_t = 30.0)]
+        #[arg(long, default_value_t = 30.0, allow_negative_numbers = true)]
         time: f64,
         /// Mitsuba's max_depth (-1 = unbounded, Russian roulette from depth 5).
         #[arg(long, default_value_t = -1, allow_hyphen_values = true, value_parser = super::max_depth_parser())]
@@ -264,7 +264,7 @@ enum BenchCommand {
         #[arg(long, default_value_t = 8)]
         frames: u32,
         /// Frames per second: frame k shows time k / fps.
-        #[arg(long, default_value_t = 24.0)]
+        #[arg(long, default_value_t = 24.0, allow_negative_numbers = true)]
         fps: f64,
         /// The warm-up frame; frames first+1 ..= first+frames are timed.
         #[arg(long, default_value_t = 0)]

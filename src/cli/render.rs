@@ -66,7 +66,7 @@ pub struct RenderArgs {
     integrator: Option<IntegratorKind>,
     /// Render for this many seconds instead (stops after the pass during which the time
     /// ran out; with --spp, at most that many passes).
-    #[arg(long, value_name = "SECONDS")]
+    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
     time: Option<f64>,
     /// pt, bpt, light, lvc-bdpt, cis-lbdpt, cbpt: maximum path depth as in Mitsuba (1 =
     /// emitters seen directly, 2 = direct light, -1 = unbounded; default: the scene's,
@@ -142,7 +142,8 @@ pub struct RenderArgs {
         long,
         value_name = "SECONDS",
         default_value_t = 300.0,
-        requires = "checkpoint"
+        requires = "checkpoint",
+        allow_negative_numbers = true
     )]
     checkpoint_every: f64,
     /// Continue the render saved in this checkpoint: to --spp N samples per pixel in all,
@@ -171,7 +172,7 @@ pub struct RenderArgs {
     #[arg(long, value_name = "A..B")]
     frames: Option<String>,
     /// Frames per second of --frames (default 24).
-    #[arg(long, requires = "frames")]
+    #[arg(long, requires = "frames", allow_negative_numbers = true)]
     fps: Option<f64>,
     /// Show the film converging in a window (needs an X11 display); closing it stops the
     /// render and writes what it has. Keys: Up/Down exposure, A next view (colour, depth,

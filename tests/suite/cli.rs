@@ -465,6 +465,41 @@ fn bad_input_gives_a_clear_error_and_no_output() {
         ],
         &["--cbpt-nt 4000000000", "1048576 paths per step"],
     );
+    // A negative number of seconds is a value that splitray refuses, not an unknown
+    // option.
+    assert_fails(
+        d,
+        &["render", "--time", "-1", "-o", "a.exr"],
+        &["--time must be a positive number"],
+    );
+    assert_fails(
+        d,
+        &[
+            "render",
+            "--checkpoint",
+            "c.ckpt",
+            "--checkpoint-every",
+            "-5",
+            "-o",
+            "a.exr",
+        ],
+        &["--checkpoint-every must be"],
+    );
+    assert_fails(
+        d,
+        &["render", "--frames", "0..2", "--fps", "-24", "-o", "a.exr"],
+        &["--fps -24 must be a positive number"],
+    );
+    assert_fails(
+        d,
+        &["bench", "bdpt", "cornell-box", "--time", "-1"],
+        &["--time must be a positive number"],
+    );
+    assert_fails(
+        d,
+        &["bench", "dynamic", "waves", "--fps", "-24"],
+        &["--fps -24 must be a positive number"],
+    );
     // clap's own usage errors exit with 2; an unknown integrator is one of them.
     let out = splitray(&["render", "--integrator", "bogus"], d);
     assert!(!out.status.success() && text(&out).contains("bogus"));
