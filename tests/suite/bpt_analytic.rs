@@ -22,16 +22,13 @@
 //! heuristic takes that tail away in `bpt` itself.
 use crate::common;
 
-use common::analytic::assert_agrees;
+use common::analytic::{assert_agrees, lambert, mixed};
 
 use glam::Vec3;
 use splitray::bidir::TechniqueCounts;
 use splitray::integrator::bpt::{BidirMode, BptIntegrator, BptOptions};
 use splitray::integrator::Integrator;
-use splitray::scene::{
-    BsdfKind, Camera, FilmSize, Material, MaterialBsdf, MaterialLayer, MicrofacetModel,
-    RenderSettings, Scene, Triangle,
-};
+use splitray::scene::{Camera, FilmSize, Material, RenderSettings, Scene, Triangle};
 
 const SIZE: u32 = 16;
 
@@ -57,33 +54,6 @@ fn sphere(material: Material) -> Scene {
         materials: vec![material],
         point_lights: vec![],
         settings: RenderSettings::default(),
-    }
-}
-
-fn lambert(albedo: f32, le: f32) -> Material {
-    Material {
-        diffuse: Vec3::splat(albedo),
-        emission: Vec3::splat(le),
-        ..Material::named("wall")
-    }
-}
-
-/// Half Lambert (ρ 0.5), half mirror (ρ 0.8): total albedo 0.65.
-fn mixed(le: f32) -> Material {
-    let layer = |kind, r: f32| MaterialLayer {
-        kind,
-        reflectance: Vec3::splat(r),
-        roughness: 0.0,
-        distribution: MicrofacetModel::Ggx,
-        ior: 1.5,
-        weight: 0.5,
-    };
-    Material {
-        emission: Vec3::splat(le),
-        bsdf: Some(MaterialBsdf {
-            layers: vec![layer(BsdfKind::Lambert, 0.5), layer(BsdfKind::Mirror, 0.8)],
-        }),
-        ..Material::named("mixed")
     }
 }
 

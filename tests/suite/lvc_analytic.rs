@@ -20,16 +20,13 @@
 //! and the splats).
 use crate::common;
 
-use common::analytic::assert_agrees;
+use common::analytic::{assert_agrees, lambert, mixed};
 
 use glam::Vec3;
 use splitray::integrator::lvc::{Families, LvcIntegrator, LvcOptions, Variant};
 use splitray::integrator::pt::PtScene;
 use splitray::integrator::Integrator;
-use splitray::scene::{
-    BsdfKind, Camera, FilmSize, Material, MaterialBsdf, MaterialLayer, MicrofacetModel,
-    RenderSettings, Scene, Triangle,
-};
+use splitray::scene::{Camera, FilmSize, Material, RenderSettings, Scene, Triangle};
 use splitray::trace::TracerKind;
 use splitray::vk::Gpu;
 
@@ -102,33 +99,6 @@ fn enclosure(material: Material) -> Scene {
     }
 }
 
-fn lambert(albedo: f32) -> Material {
-    Material {
-        diffuse: Vec3::splat(albedo),
-        emission: Vec3::ONE,
-        ..Material::named("wall")
-    }
-}
-
-/// Half Lambert (ρ 0.5), half mirror (ρ 0.8): total albedo 0.65.
-fn mixed() -> Material {
-    let layer = |kind, r: f32| MaterialLayer {
-        kind,
-        reflectance: Vec3::splat(r),
-        roughness: 0.0,
-        distribution: MicrofacetModel::Ggx,
-        ior: 1.5,
-        weight: 0.5,
-    };
-    Material {
-        emission: Vec3::ONE,
-        bsdf: Some(MaterialBsdf {
-            layers: vec![layer(BsdfKind::Lambert, 0.5), layer(BsdfKind::Mirror, 0.8)],
-        }),
-        ..Material::named("mixed")
-    }
-}
-
 /// The image mean and its standard error over groups of passes.
 fn image_mean(gpu: &Gpu, scene: &Scene, options: &LvcOptions, g: Groups) -> (f64, f64) {
     let options = &LvcOptions {
@@ -176,13 +146,13 @@ fn options(variant: Variant, max_depth: i32, families: Families) -> LvcOptions {
 fn furnace_converges_to_le_over_one_minus_albedo() {
     let gpu = common::gpu();
     let all = Families::default();
-    let scene = enclosure(lambert(0.5));
+    let scene = enclosure(lambert(0.5, 1.0));
     for variant in [Variant::LvcBdpt, Variant::CisLbdpt] {
         let got = image_mean(&gpu, &scene, &options(variant, -1, all), WEIGHTED);
         assert_agrees(&format!("{variant:?} lambert, unbounded"), got, 2.0);
     }
     // Delta vertices inside the paths, at a depth that keeps the test short.
-    let scene = enclosure(mixed());
+    let scene = enclosure(mixed(1.0));
     for variant in [Variant::LvcBdpt, Variant::CisLbdpt] {
         let got = image_mean(&gpu, &scene, &options(variant, 6, all), WEIGHTED);
         let what = format!("{variant:?} lambert + mirror, max_depth 6");
@@ -195,7 +165,7 @@ fn furnace_converges_to_le_over_one_minus_albedo() {
 fn each_technique_family_alone_sums_the_path_lengths_it_samples() {
     let gpu = common::gpu();
     let (rho, depth) = (0.5, 4);
-    let scene = enclosure(lambert(rho as f32));
+    let scene = enclosure(lambert(rho as f32, 1.0));
     let none = Families {
         emitter_hit: false,
         light_sample: false,

@@ -10,13 +10,7 @@ use splitray::vk::{ComputePipeline, PipelineDesc, StreamKind};
 #[test]
 fn brute_force_matches_cpu_on_random_triangle_soups() {
     let gpu = common::gpu();
-    for (triangles, rays, seed) in [
-        (1usize, 100usize, 1u64),
-        (513, 4099, 2),
-        (1000, 20_000, 3),
-        (3, 0, 4),
-        (2000, 1, 5),
-    ] {
+    for (triangles, rays, seed) in common::RANDOM_SOUPS {
         let soup = common::triangle_soup(triangles, seed);
         let rays = common::random_rays(rays, seed + 100);
         let mut tracer = BruteForceTracer::new(&gpu, &soup).unwrap();

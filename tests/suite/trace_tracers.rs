@@ -221,14 +221,7 @@ fn split_plane_rays() -> Vec<Ray> {
 
 #[test]
 fn cpu_dacrt_equals_brute_force_on_random_soups_for_any_thresholds() {
-    for (triangles, rays, seed) in [
-        (1usize, 100usize, 1u64),
-        (513, 4099, 2),
-        (1000, 20_000, 3),
-        (3, 0, 4),
-        (2000, 1, 5),
-        (0, 10, 6),
-    ] {
+    for (triangles, rays, seed) in common::RANDOM_SOUPS.into_iter().chain([(0, 10, 6)]) {
         let soup = common::triangle_soup(triangles, seed);
         let rays = common::random_rays(rays, seed + 100);
         for params in params_grid() {
@@ -423,14 +416,7 @@ fn ray_query_gpu() -> Option<common::TestGpu> {
 #[test]
 fn ray_query_matches_brute_force_on_random_soups() {
     let Some(gpu) = ray_query_gpu() else { return };
-    for (triangles, rays, seed) in [
-        (1usize, 100usize, 1u64),
-        (513, 4099, 2),
-        (1000, 20_000, 3),
-        (3, 0, 4),
-        (2000, 1, 5),
-        (0, 10, 6),
-    ] {
+    for (triangles, rays, seed) in common::RANDOM_SOUPS.into_iter().chain([(0, 10, 6)]) {
         let soup = common::triangle_soup(triangles, seed);
         let rays = common::random_rays(rays, seed + 100);
         let mut tracer = RayQueryTracer::new(&gpu, &soup).unwrap();

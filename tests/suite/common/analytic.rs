@@ -1,4 +1,8 @@
-//! Checking a Monte Carlo estimate against a closed-form value.
+//! Checking a Monte Carlo estimate against a closed-form value, and the materials of the
+//! analytic scenes (an enclosure whose every wall emits and reflects alike).
+
+use glam::Vec3;
+use splitray::scene::{BsdfKind, Material, MaterialBsdf, MaterialLayer, MicrofacetModel};
 
 /// The mean of independent estimates (passes of a render) and its standard error.
 pub fn mean_and_standard_error(estimates: &[f64]) -> (f64, f64) {
@@ -18,4 +22,32 @@ pub fn assert_agrees(what: &str, (mean, se): (f64, f64), expected: f64) {
         "{what}: {mean} vs {expected} (se {se})"
     );
     assert!(se < 0.02 * expected, "{what}: too noisy to say ({se})");
+}
+
+/// A Lambertian wall of albedo `albedo` emitting `le`.
+pub fn lambert(albedo: f32, le: f32) -> Material {
+    Material {
+        diffuse: Vec3::splat(albedo),
+        emission: Vec3::splat(le),
+        ..Material::named("wall")
+    }
+}
+
+/// Half Lambert (ρ 0.5), half mirror (ρ 0.8): total albedo 0.65; emitting `le`.
+pub fn mixed(le: f32) -> Material {
+    let layer = |kind, r: f32| MaterialLayer {
+        kind,
+        reflectance: Vec3::splat(r),
+        roughness: 0.0,
+        distribution: MicrofacetModel::Ggx,
+        ior: 1.5,
+        weight: 0.5,
+    };
+    Material {
+        emission: Vec3::splat(le),
+        bsdf: Some(MaterialBsdf {
+            layers: vec![layer(BsdfKind::Lambert, 0.5), layer(BsdfKind::Mirror, 0.8)],
+        }),
+        ..Material::named("mixed")
+    }
 }

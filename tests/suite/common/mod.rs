@@ -143,6 +143,16 @@ pub fn uniforms(n: usize, seed: u64) -> Vec<f32> {
         .collect()
 }
 
+/// (triangles, rays, seed) of the random soups the tracers are checked on: one triangle,
+/// sizes that are not powers of two, no rays, one ray.
+pub const RANDOM_SOUPS: [(usize, usize, u64); 5] = [
+    (1, 100, 1),
+    (513, 4099, 2),
+    (1000, 20_000, 3),
+    (3, 0, 4),
+    (2000, 1, 5),
+];
+
 /// A soup of `n` triangles in the unit cube, of mixed sizes, a few of them degenerate
 /// (every 97th a point, the next a collinear sliver).
 pub fn triangle_soup(n: usize, seed: u64) -> Vec<splitray::trace::GpuTriangle> {
