@@ -35,6 +35,30 @@ fn interrupted(gpu: &Gpu, scene: &Scene, opts: &RenderOptions, batches: u32) -> 
     .unwrap()
 }
 
+/// A whole render that hands its film to `save` whenever the render loop offers a
+/// checkpoint (an interval of 0 s).
+fn checkpointed(
+    gpu: &Gpu,
+    scene: &Scene,
+    opts: &RenderOptions,
+    save: &mut dyn FnMut(&FilmSnapshot<'_>) -> Result<(), RenderError>,
+) -> RenderOutput {
+    render_from(
+        gpu,
+        scene,
+        opts,
+        RenderPlan {
+            checkpoint: Some(CheckpointHook { every_s: 0.0, save }),
+            ..Default::default()
+        },
+        RenderControl {
+            progress: &mut |_| {},
+            stop: &|| false,
+        },
+    )
+    .unwrap()
+}
+
 fn resumed(
     gpu: &Gpu,
     scene: &Scene,
@@ -81,23 +105,7 @@ fn an_interrupted_and_resumed_render_is_bit_identical_for_every_integrator() {
             first.get_or_insert_with(|| Checkpoint::new("cornell-box", &opts, s));
             Ok(())
         };
-        let whole = render_from(
-            &gpu,
-            &scene,
-            &opts,
-            RenderPlan {
-                checkpoint: Some(CheckpointHook {
-                    every_s: 0.0,
-                    save: &mut hook,
-                }),
-                ..Default::default()
-            },
-            RenderControl {
-                progress: &mut |_| {},
-                stop: &|| false,
-            },
-        )
-        .unwrap();
+        let whole = checkpointed(&gpu, &scene, &opts, &mut hook);
         assert_eq!(whole.sums.passes, 6, "{kind}");
         let saved = first.expect("a checkpoint before the last batch");
         assert_eq!(saved.header.passes, 1, "{kind}");
@@ -127,23 +135,7 @@ fn the_render_loop_hands_its_film_to_the_checkpoint_hook_as_it_goes() {
         saved.push(Checkpoint::new("cornell-box", &opts, s));
         Ok(())
     };
-    let whole = render_from(
-        &gpu,
-        &scene,
-        &opts,
-        RenderPlan {
-            checkpoint: Some(CheckpointHook {
-                every_s: 0.0,
-                save: &mut hook,
-            }),
-            ..Default::default()
-        },
-        RenderControl {
-            progress: &mut |_| {},
-            stop: &|| false,
-        },
-    )
-    .unwrap();
+    let whole = checkpointed(&gpu, &scene, &opts, &mut hook);
     // `ao` renders one pass per batch: saved after each but the last.
     let passes: Vec<u32> = saved.iter().map(|c| c.header.passes).collect();
     assert_eq!(passes, [1, 2, 3, 4]);
