@@ -87,7 +87,7 @@ pub struct RenderOptions {
     /// `bpt`, `light`, `lvc-bdpt`, `cis-lbdpt`: keep one image per technique (s, t)
     /// ([`Integrator::extra_images`]).
     pub bdpt_techniques: bool,
-    /// `lvc-bdpt`, `cis-lbdpt`: connections, candidates, streams, sorting.
+    /// `lvc-bdpt`, `cis-lbdpt`: connections, candidates, resampling, streams, sorting.
     pub lvc: integrator::lvc::options::LvcSettings,
     /// `cbpt`: population sizes, batch size, where the combination runs.
     pub cbpt: integrator::cbpt::CbptSettings,

@@ -22,6 +22,7 @@ use serde::Serialize;
 
 use super::{median, EvenMedian};
 use crate::film::{FilmSums, Reference};
+use crate::integrator::lvc::Resampling;
 use crate::integrator::{Integrator, IntegratorKind};
 use crate::render::{create_integrator, device_description, RenderError, RenderOptions};
 use crate::scene::Scene;
@@ -42,6 +43,9 @@ pub struct BdptBenchOptions {
     pub reference: Option<Arc<Reference>>,
     /// The tracer of the GPU integrators (`None`: the scene's, else the default).
     pub tracer: Option<crate::trace::TracerKind>,
+    /// `cis-lbdpt` once per resampling listed (named `cis-lbdpt` with the default's,
+    /// `cis-lbdpt independent` with independent draws).
+    pub resampling: Vec<Resampling>,
     /// The equal-spp comparison of `lvc-bdpt` and `cis-lbdpt` (passes 0: none).
     pub equal_spp: super::lvc::SppPlan,
 }
@@ -64,6 +68,7 @@ impl Default for BdptBenchOptions {
             seed: 0,
             reference: None,
             tracer: None,
+            resampling: vec![Resampling::default()],
             equal_spp: Default::default(),
         }
     }
@@ -164,9 +169,16 @@ impl fmt::Display for BdptBenchReport {
                  standard errors); \"excess\" and the ratios are without it"
             )?;
         }
+        let w = self
+            .rows
+            .iter()
+            .map(|r| r.integrator.len())
+            .max()
+            .unwrap_or(0)
+            .max(8);
         writeln!(
             f,
-            "{:<8} {:>8} {:>7} {:>12} {:>9} {:>16} {:>12} {:>12}",
+            "{:<w$} {:>8} {:>7} {:>12} {:>9} {:>16} {:>12} {:>12}",
             "",
             "seconds",
             "passes",
@@ -183,7 +195,7 @@ impl fmt::Display for BdptBenchReport {
             let figure = |m: Option<f64>| m.map_or("-".to_string(), |m| format!("{m:.4e}"));
             writeln!(
                 f,
-                "{:<8} {:>8.2} {:>7} {:>12.0} {:>9.3} {:>16} {:>12} {:>12}",
+                "{:<w$} {:>8.2} {:>7} {:>12.0} {:>9.3} {:>16} {:>12} {:>12}",
                 r.integrator,
                 r.seconds,
                 r.passes,
@@ -212,16 +224,24 @@ impl fmt::Display for BdptBenchReport {
         }
         let row = |k: &str| self.rows.iter().find(|r| r.integrator == k);
         let mse = |k: &str| row(k)?.comparable_mse();
-        if let (Some(cis), Some(lvc)) = (mse("cis-lbdpt"), mse("lvc-bdpt")) {
-            writeln!(f, "relative MSE cis-lbdpt / lvc-bdpt: {:.3}", cis / lvc)?;
+        let cis_rows = self
+            .rows
+            .iter()
+            .filter(|r| r.integrator.starts_with("cis-lbdpt"));
+        for cis_row in cis_rows {
+            let name = &cis_row.integrator;
+            let (Some(cis), Some(lvc)) = (cis_row.comparable_mse(), mse("lvc-bdpt")) else {
+                continue;
+            };
+            writeln!(f, "relative MSE {name} / lvc-bdpt: {:.3}", cis / lvc)?;
             // A slice's last call can overrun it (its pass count comes from the previous
             // call's rate), and an unbiased estimate's MSE falls as 1 / time: MSE × seconds
             // compares the two at exactly equal time.
             let seconds = |k: &str| row(k).map_or(1.0, |r| r.seconds);
             writeln!(
                 f,
-                "relative MSE × seconds cis-lbdpt / lvc-bdpt: {:.3}",
-                cis * seconds("cis-lbdpt") / (lvc * seconds("lvc-bdpt"))
+                "relative MSE × seconds {name} / lvc-bdpt: {:.3}",
+                cis * seconds(name) / (lvc * seconds("lvc-bdpt"))
             )?;
         }
         super::lvc::write_equal_spp(f, &self.equal_spp)
@@ -231,6 +251,9 @@ impl fmt::Display for BdptBenchReport {
 /// One integrator under measurement.
 struct Contestant {
     kind: IntegratorKind,
+    /// The row's name: the integrator's, and its resampling where that is not the
+    /// default.
+    label: String,
     integrator: Box<dyn Integrator>,
     next_pass: u32,
     /// Seconds per pass of the latest call, which sizes the next one.
@@ -247,7 +270,12 @@ fn counter(i: &dyn Integrator, name: &str) -> u64 {
 }
 
 impl Contestant {
-    fn new(gpu: &Gpu, scene: &Scene, options: &RenderOptions) -> Result<Self, RenderError> {
+    fn new(
+        gpu: &Gpu,
+        scene: &Scene,
+        options: &RenderOptions,
+        label: String,
+    ) -> Result<Self, RenderError> {
         let mut integrator = create_integrator(gpu, scene, options)?;
         // Warm-up (lavapipe compiles each kernel at its first dispatch), then an empty
         // film: the measured passes continue from pass 1.
@@ -257,6 +285,7 @@ impl Contestant {
         integrator.restore(&empty)?;
         Ok(Self {
             kind: options.integrator,
+            label,
             integrator,
             next_pass: 1,
             pass_seconds: None,
@@ -320,7 +349,22 @@ pub fn run(
             options.tracer,
         )?;
         o.max_depth = options.max_depth;
-        contestants.push(Contestant::new(gpu, scene, &o)?);
+        if kind != IntegratorKind::CisLbdpt {
+            contestants.push(Contestant::new(gpu, scene, &o, kind.name().into())?);
+            continue;
+        }
+        for (k, &resampling) in options.resampling.iter().enumerate() {
+            if options.resampling[..k].contains(&resampling) {
+                continue;
+            }
+            o.lvc.resampling = Some(resampling);
+            let label = if resampling == Resampling::default() {
+                kind.name().to_string()
+            } else {
+                format!("{} {}", kind.name(), resampling.name())
+            };
+            contestants.push(Contestant::new(gpu, scene, &o, label)?);
+        }
     }
     let slice = options.seconds / rounds as f64;
     let pixels = options.width as f64 * options.height as f64;
@@ -339,7 +383,7 @@ pub fn run(
             IntegratorKind::Bpt | IntegratorKind::Light | IntegratorKind::Cbpt
         );
         rows.push(BdptRow {
-            integrator: c.kind.name().to_string(),
+            integrator: c.label.clone(),
             seconds: c.seconds,
             passes: c.passes,
             samples_per_second: median(c.samples.iter().copied(), EvenMedian::Mean),

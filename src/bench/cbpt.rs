@@ -594,6 +594,7 @@ pub fn run(
                 reference: Some(reference.clone()),
                 tracer: Some(options.tracers[0]),
                 equal_spp: Default::default(),
+                ..Default::default()
             },
         )?),
         None => None,

@@ -14,6 +14,7 @@ use splitray::bench::pt::{self as pt_bench, PtBenchOptions};
 use splitray::bench::trace::{self, TraceBenchOptions};
 use splitray::bench::workloads::Workload;
 use splitray::film::Reference;
+use splitray::integrator::lvc::Resampling;
 use splitray::integrator::IntegratorKind;
 use splitray::scene::{AnimatedScene, Scene};
 use splitray::trace::pdacrt::LevelStats;
@@ -108,6 +109,11 @@ enum BenchCommand {
         /// scene, in the scenes' order (all or none).
         #[arg(long, value_name = "REF.exr")]
         reference: Vec<PathBuf>,
+        /// cis-lbdpt's draws of its connections from the candidates: systematic (the
+        /// default) or independent; both (systematic,independent) make two contestants,
+        /// `cis-lbdpt` and `cis-lbdpt independent`.
+        #[arg(long, value_delimiter = ',', default_value = "systematic")]
+        resampling: Vec<Resampling>,
         /// Passes of the equal-spp comparison of lvc-bdpt and cis-lbdpt (0: none).
         #[arg(long, default_value_t = 4)]
         spp: u32,
@@ -534,6 +540,7 @@ fn run_bdpt(
         spp_rounds,
         streams,
         sort,
+        resampling,
         json,
         ..
     } = what
@@ -555,6 +562,7 @@ fn run_bdpt(
                 seed: *seed,
                 reference,
                 tracer: None,
+                resampling: resampling.clone(),
                 equal_spp: SppPlan {
                     passes: *spp,
                     rounds: *spp_rounds,

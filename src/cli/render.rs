@@ -11,6 +11,7 @@ use std::process::ExitCode;
 use anyhow::{bail, Context};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
+use splitray::integrator::lvc::Resampling;
 use splitray::integrator::IntegratorKind;
 use splitray::render::{
     render_from, Checkpoint, CheckpointHook, FilmSnapshot, Progress, RenderControl, RenderError,
@@ -94,6 +95,10 @@ pub struct RenderArgs {
     /// are resampled from (default 10, at most 16).
     #[arg(long, value_name = "M")]
     candidates: Option<u32>,
+    /// cis-lbdpt: how the N connections are drawn from the M candidates: systematic
+    /// (default; one random number u, draw k at (u + k) / N) or independent.
+    #[arg(long)]
+    resampling: Option<Resampling>,
     /// lvc-bdpt, cis-lbdpt: streams for the direct-lighting, connection and next-bounce
     /// kernels: 3 (default; concurrent where the device has several queues) or 1 (the
     /// same image).

@@ -12,8 +12,8 @@
 //! | t = 1 (light tracing)          | 2 ..= max_depth |
 //! | s, t ≥ 2 (cache connections)   | 3 ..= max_depth |
 //!
-//! — the connections both uniform and resampled (an unbiased resampling must leave the
-//! answer alone) — and all of them together, weighted, to the whole sum. A wall of mixed
+//! — the connections uniform and resampled, by independent and by systematic draws (an
+//! unbiased resampling must leave the answer alone) — and all of them together, weighted, to the whole sum. A wall of mixed
 //! diffuse and mirror layers (total albedo Σ wᵢ ρᵢ) keeps the answer and puts delta
 //! vertices inside the paths. The image mean's standard error comes from the spread of
 //! independent groups of passes (the pixels of a pass are correlated through the cache
@@ -23,7 +23,7 @@ use crate::common;
 use common::analytic::{assert_agrees, lambert, mixed};
 
 use glam::Vec3;
-use splitray::integrator::lvc::{Families, LvcIntegrator, LvcOptions, Variant};
+use splitray::integrator::lvc::{Families, LvcIntegrator, LvcOptions, Resampling, Variant};
 use splitray::integrator::pt::PtScene;
 use splitray::integrator::Integrator;
 use splitray::scene::{Camera, FilmSize, Material, RenderSettings, Scene, Triangle};
@@ -210,7 +210,7 @@ fn each_technique_family_alone_sums_the_path_lengths_it_samples() {
             3,
         ),
         (
-            "s, t >= 2 resampled",
+            "s, t >= 2 resampled (systematic draws)",
             Variant::CisLbdpt,
             Families {
                 connection: true,
@@ -223,5 +223,18 @@ fn each_technique_family_alone_sums_the_path_lengths_it_samples() {
         let got = image_mean(&gpu, &scene, &options(variant, depth, f), ALONE);
         assert_agrees(what, got, lengths(rho, shortest, depth as u32));
     }
+    let connections = Families {
+        connection: true,
+        ..none
+    };
+    // The resampled family above drew systematically (the default); independent draws
+    // must leave the answer alone too.
+    let independent = LvcOptions {
+        resampling: Resampling::Independent,
+        ..options(Variant::CisLbdpt, depth, connections)
+    };
+    let got = image_mean(&gpu, &scene, &independent, ALONE);
+    let what = "s, t >= 2 resampled by independent draws";
+    assert_agrees(what, got, lengths(rho, 3, depth as u32));
     common::assert_clean(&gpu);
 }

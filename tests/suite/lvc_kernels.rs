@@ -11,9 +11,10 @@
 //! - camera pass: vertex records (`camera_generate`, `camera_vertex`, `camera_bounce`)
 //!   against `bidir::walk::camera_subpath`; emitter hits, direct lighting and
 //!   connections (`camera_vertex`, `camera_direct`, `camera_connect`, uniform and
-//!   resampled) against `Connector` on the GPU's own records, with the cache vertices the
-//!   selection must have drawn; `camera_accumulate` and `finish` against sums of the
-//!   dumped contributions, and the visibility tally of every bounce, summed into the
+//!   resampled, independent and systematic draws) against `Connector` on the GPU's own
+//!   records, with the cache vertices the selection must have drawn (and, resampled,
+//!   each draw's candidate and copies from `twin::resample`); `camera_accumulate` and
+//!   `finish` against sums of the dumped contributions, and the visibility tally of every bounce, summed into the
 //!   integrator's counters, against `twin::accumulate`'s; with sorting on, every bounce's `order` (`sort_keys` and the
 //!   radix sort of the keys' ranks) against a stable CPU sort of the 32-bit material
 //!   keys of the same hits.
@@ -27,11 +28,11 @@ use crate::common;
 
 use common::lvc_dump::{render, BounceDump, ChunkDump};
 use glam::Vec3;
-use splitray::bidir::random::{fold_seed, PathSampler};
+use splitray::bidir::random::{fold_seed, random01, PathSampler};
 use splitray::bidir::{Connector, CpuScene, PinholeCamera, WalkSettings};
 use splitray::integrator::lvc::fixed::FixedFilm;
 use splitray::integrator::lvc::gpu::{dims, Contribution, LvcVertex, VERTEX_CONNECTIBLE};
-use splitray::integrator::lvc::{twin, LvcOptions, Variant, Visibility};
+use splitray::integrator::lvc::{twin, LvcOptions, Resampling, Variant, Visibility};
 use splitray::integrator::pt::PtScene;
 use splitray::integrator::Integrator;
 use splitray::scene::{builtin, Material, PointLight, Scene, Triangle};
@@ -620,8 +621,10 @@ fn check_connections(
             // A candidate drawn c times is one slot with c times its contribution: the
             // copies of the traced slots account for all n draws.
             let mut draws = 0;
-            for g in slots {
+            let mut copies_of = Vec::new();
+            for g in slots.clone() {
                 if !g.is_some() {
+                    copies_of.push(0);
                     continue;
                 }
                 let (_, chosen) = candidates
@@ -632,12 +635,46 @@ fn check_connections(
                 let once = v * (total / lum(v)) * scale;
                 let copies = (lum(g.value()) / lum(once)).round().max(1.0);
                 draws += copies as usize;
+                copies_of.push(copies as usize);
                 compare_sample("resampled connection", Some((once * copies, w, t)), g);
             }
             assert!(
                 draws == n || total == 0.0,
                 "{draws} of {n} resampled draws traced (total target {total})"
             );
+            let targets: Vec<f32> = candidates
+                .iter()
+                .map(|(_, c)| c.map_or(0.0, |c| lum(c.0)))
+                .collect();
+            let random = |k: u32| random01(pixel, pass, dims::select(j, dims::RESAMPLE + k), seed);
+            let Some(expected) = twin::resample(&targets, n as u32, o.resampling, random) else {
+                return;
+            };
+            // Where a draw's point lies within rounding of the end of a candidate's
+            // interval, the GPU's targets (rounded otherwise) may draw the neighbour.
+            if expected.iter().any(|d| d.margin < 1e-4) {
+                return;
+            }
+            // Which draws the GPU traced, and how often each candidate was drawn: the
+            // twin's, draw for draw.
+            for (k, g) in slots.enumerate() {
+                let c = expected[k].candidate;
+                let first = expected[..k].iter().all(|d| d.candidate != c);
+                let copies = expected.iter().filter(|d| d.candidate == c).count();
+                if first {
+                    assert_eq!(
+                        (g.target, copies_of[k]),
+                        (candidates[c].0, copies),
+                        "resampled draw {k} ({:?}): the cache vertex and its copies",
+                        o.resampling
+                    );
+                } else {
+                    assert!(
+                        !g.is_some(),
+                        "draw {k} repeats an earlier draw and is traced"
+                    );
+                }
+            }
         }
     }
 }
@@ -662,15 +699,34 @@ fn lamps_with_a_point_light_unbounded() {
     );
 }
 
+/// Independent draws: two connections from five candidates, bounded depth.
 #[test]
 fn cornell_box_resampled_bounded_depth() {
     let mut o = options(Variant::CisLbdpt, 2, 4);
     o.candidates = 5;
+    o.resampling = Resampling::Independent;
     check_case(Case {
         name: "cornell-box",
         scene: builtin("cornell-box").unwrap(),
         width: 9,
         height: 9,
+        options: o,
+        passes: 2,
+    });
+}
+
+/// Systematic draws: three connections from seven candidates (N does not divide M, so
+/// candidates are drawn floor or ceil of N w times), unbounded paths.
+#[test]
+fn cornell_box_resampled_systematically() {
+    let mut o = options(Variant::CisLbdpt, 3, -1);
+    o.candidates = 7;
+    o.resampling = Resampling::Systematic;
+    check_case(Case {
+        name: "cornell-box systematic",
+        scene: builtin("cornell-box").unwrap(),
+        width: 7,
+        height: 5,
         options: o,
         passes: 2,
     });

@@ -10,6 +10,7 @@
 mod common;
 
 mod animation;
+mod bdpt_bench;
 mod bidir_mis;
 mod bidir_random;
 mod bpt_agreement;

@@ -19,7 +19,9 @@
 // g(y) V(y) (sum_m p^_m / p^(y)) |C_q| / (M N N_L) is unbiased wherever p^ > 0 when g > 0
 // (luminance of a non-negative RGB value with positive weights). Only those N are traced,
 // a candidate drawn more than once with one shadow ray. Keeping the best N instead would
-// be biased. With M = N = 1 the sum over p^ is p^(y)
+// be biased. The N draws are independent (the thesis's) or systematic (--resampling):
+// one u, draw k at (u + k) / N, which keeps each candidate's expected count N p^ / sum p^
+// and so the same expectation. With M = N = 1 the sum over p^ is p^(y)
 // itself, the weight exactly 1 and the result the uniform one (bit for bit where the
 // compiler fuses the two variants' arithmetic alike: lavapipe does, NVIDIA's not always).
 //
@@ -166,10 +168,16 @@ void main() {
     float scale = float(size) / (float(m_count) * float(n) * float(C.light_paths));
     // The N draws' candidates, four bits each (m < CANDIDATE_CAPACITY <= 16, k < 16).
     uvec2 picks = uvec2(0u);
+    bool systematic = (C.flags & LVC_FLAG_SYSTEMATIC) != 0u;
+    // Systematic draws share one uniform number: draw k sits at (u + k) / N
+    // (src/integrator/lvc/options.rs `Resampling`).
+    float shared_u = random01(pixel, pass, select_dim(j, DIM_RESAMPLE), C.seed);
     for (uint k = 0u; k < n; ++k) {
         // The first candidate whose running sum exceeds u * total (the last one with a
         // non-zero target when rounding leaves u * total at the very end).
-        float u = random01(pixel, pass, select_dim(j, DIM_RESAMPLE + k), C.seed) * total;
+        float u01 = systematic ? (shared_u + float(k)) / float(n)
+                               : random01(pixel, pass, select_dim(j, DIM_RESAMPLE + k), C.seed);
+        float u = u01 * total;
         uint chosen = 0u;
         float running = 0.0;
         for (uint m = 0u; m < m_count; ++m) {

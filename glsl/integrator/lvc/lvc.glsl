@@ -34,6 +34,7 @@ struct LvcConstants {
 };
 
 const uint LVC_FLAG_SORTED = 1u;    // kernels read their items through the sorted order
+const uint LVC_FLAG_SYSTEMATIC = 2u;  // camera_connect's resampled draws are systematic
 
 // Per dispatch, as push constants (32 bytes).
 struct LvcPush {

@@ -66,6 +66,9 @@ pub(super) fn render_options(
     if args.candidates.is_some() {
         options.lvc.candidates = args.candidates;
     }
+    if args.resampling.is_some() {
+        options.lvc.resampling = args.resampling;
+    }
     if args.streams.is_some() {
         options.lvc.streams = args.streams;
     }

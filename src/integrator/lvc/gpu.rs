@@ -42,6 +42,8 @@ const _: () = assert!(size_of::<LvcConstants>() == 112);
 
 /// Kernels read their items through the material-sorted order.
 pub const FLAG_SORTED: u32 = 1;
+/// CIS-LBDPT's draws are systematic ([`super::options::Resampling::Systematic`]).
+pub const FLAG_SYSTEMATIC: u32 = 2;
 
 impl LvcConstants {
     /// The camera part; counts, depths and the rest are the caller's.

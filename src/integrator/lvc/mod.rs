@@ -65,12 +65,12 @@ use crate::vk::{self, Buffer, Gpu, Recorder};
 use self::cache::LightCache;
 pub use self::camera_pass::Visibility;
 use self::camera_pass::{trace_camera_paths, CameraRange, CameraTargets, Streams};
-use self::gpu::{LvcConstants, FLAG_SORTED};
+use self::gpu::{LvcConstants, FLAG_SORTED, FLAG_SYSTEMATIC};
 use self::kernels::Kernels;
 use self::light_pass::trace_light_paths;
 use self::light_tracing::splat_cache;
 pub use self::observe::{ChunkView, NoObserver, Observer};
-pub use self::options::{Families, LvcOptions, Variant};
+pub use self::options::{Families, LvcOptions, Resampling, Variant};
 use self::plan::{prepass_paths, Plan, PREPASS_SAMPLE};
 use self::techniques::TechniqueRecorder;
 use self::wavefront::Wavefront;
@@ -117,7 +117,11 @@ fn prepass_constants(
     constants.light_count = light_count as u32;
     constants.connections = options.connections;
     constants.candidates = options.candidates;
-    constants.flags = if options.sort { FLAG_SORTED } else { 0 };
+    constants.flags = if options.sort { FLAG_SORTED } else { 0 }
+        | match options.resampling {
+            Resampling::Independent => 0,
+            Resampling::Systematic => FLAG_SYSTEMATIC,
+        };
     constants.set_counts(&lvc_counts(
         &options.families,
         options.connections,
@@ -538,6 +542,7 @@ impl Integrator for LvcIntegrator<'_> {
         ];
         if o.variant == Variant::CisLbdpt {
             s.push(("candidates".into(), o.candidates.to_string()));
+            s.push(("resampling".into(), o.resampling.name().into()));
         }
         s
     }

@@ -11,6 +11,7 @@ use glam::Vec3;
 use super::gpu::{
     Contribution, LvcVertex, VisibilityTally, VERTEX_CONNECTIBLE, VERTEX_EXTENDS, VERTEX_VALID,
 };
+use super::options::Resampling;
 use crate::bidir::random::{pcg_hash, PathSampler};
 use crate::bidir::scene::SurfaceHit;
 use crate::bidir::walk::{camera_subpath, light_subpath};
@@ -207,6 +208,59 @@ pub fn connect(connector: &Connector, y: &LvcVertex, z: &LvcVertex) -> Option<Sa
     let light = subpath_to(to_vertex(connector.scene, y), i);
     let camera = subpath_to(to_vertex(connector.scene, z), j);
     connector.connect(&light, i, &camera, j, &mut Counters::default())
+}
+
+/// One resampled draw of `camera_connect.comp`: the candidate drawn, and how far the
+/// draw's point lay from the nearest end of that candidate's interval, as a fraction of
+/// the total target (a GPU whose targets differ by rounding may draw a neighbour when
+/// that is tiny).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Draw {
+    pub candidate: usize,
+    pub margin: f32,
+}
+
+/// The N draws of CIS-LBDPT's resampling (`camera_connect.comp`): per draw k, a point
+/// u_k · total on the candidates' running sum of targets, and the first candidate whose
+/// running sum passes it (the last one with a target, when rounding leaves the point at
+/// the very end). u_k is `random(k)` for independent draws; systematic draws take
+/// (random(0) + k) / N. `None` when no candidate has a target.
+pub fn resample(
+    targets: &[f32],
+    n: u32,
+    resampling: Resampling,
+    random: impl Fn(u32) -> f32,
+) -> Option<Vec<Draw>> {
+    let total: f32 = targets.iter().sum();
+    // As the kernel's `!(total > 0.0)`: nothing to draw from, NaN included.
+    if total.is_nan() || total <= 0.0 {
+        return None;
+    }
+    let first = random(0);
+    let draw = |k: u32| {
+        let u01 = match resampling {
+            Resampling::Independent => random(k),
+            Resampling::Systematic => (first + k as f32) / n as f32,
+        };
+        let u = u01 * total;
+        let (mut chosen, mut below, mut running) = (0, 0.0f32, 0.0f32);
+        for (m, &target) in targets.iter().enumerate() {
+            if target > 0.0 {
+                chosen = m;
+                below = running;
+                running += target;
+                if u < running {
+                    break;
+                }
+            }
+        }
+        let margin = (u - below).abs().min((running - u).abs()) / total;
+        Draw {
+            candidate: chosen,
+            margin,
+        }
+    };
+    Some((0..n).map(draw).collect())
 }
 
 /// What `camera_accumulate` reads of one camera bounce.
