@@ -13,11 +13,11 @@
 //! | s, t ≥ 2 (cache connections)   | 3 ..= max_depth |
 //!
 //! — the connections uniform and resampled, by independent and by systematic draws (an
-//! unbiased resampling must leave the answer alone) — and all of them together, weighted, to the whole sum. A wall of mixed
-//! diffuse and mirror layers (total albedo Σ wᵢ ρᵢ) keeps the answer and puts delta
-//! vertices inside the paths. The image mean's standard error comes from the spread of
-//! independent groups of passes (the pixels of a pass are correlated through the cache
-//! and the splats).
+//! unbiased resampling must leave the answer alone) — and all of them together,
+//! weighted, to the whole sum. A wall of mixed diffuse and mirror layers (total albedo
+//! Σ wᵢ ρᵢ) keeps the answer and puts delta vertices inside the paths. The image mean's
+//! standard error comes from the spread of independent groups of passes (the pixels of a
+//! pass are correlated through the cache and the splats).
 use crate::common;
 
 use common::analytic::{assert_agrees, lambert, mixed};

@@ -19,9 +19,9 @@
 // g(y) V(y) (sum_m p^_m / p^(y)) |C_q| / (M N N_L) is unbiased wherever p^ > 0 when g > 0
 // (luminance of a non-negative RGB value with positive weights). Only those N are traced,
 // a candidate drawn more than once with one shadow ray. Keeping the best N instead would
-// be biased. The N draws are independent (the thesis's) or systematic (--resampling):
-// one u, draw k at (u + k) / N, which keeps each candidate's expected count N p^ / sum p^
-// and so the same expectation. With M = N = 1 the sum over p^ is p^(y)
+// be biased. The N draws are systematic (the default; one u, draw k at (u + k) / N) or
+// independent (--resampling independent): either way a candidate's expected count is
+// N p^ / sum p^, so the expectation is the same. With M = N = 1 the sum over p^ is p^(y)
 // itself, the weight exactly 1 and the result the uniform one (bit for bit where the
 // compiler fuses the two variants' arithmetic alike: lavapipe does, NVIDIA's not always).
 //
