@@ -403,29 +403,34 @@ bool mf_dielectric_sample_wi(uint dist, float a, float eta, vec3 wo, vec3 u, out
 
 // ---- one layer ---------------------------------------------------------------------
 
+// The layer kinds a pipeline can meet, bit k for BSDF_KIND k (specialization constant 2;
+// every kind by default). A kind left out is compiled out: lavapipe's LLVM spends most
+// of a kernel's first dispatch compiling the microfacet and dielectric code that a scene
+// of diffuse walls never runs (src/bsdf/mod.rs `layer_kinds`).
+layout(constant_id = 2) const uint BSDF_KINDS = 0xFFFFFFFFu;
+#define BSDF_HAS(KIND) ((BSDF_KINDS & (1u << (KIND))) != 0u)
+
 vec3 layer_eval(BsdfLayer l, vec3 wo, vec3 wi, uint mode) {
     vec3 rgb = l.tint_weight.rgb;
-    switch (l.kind) {
-    case BSDF_KIND_LAMBERT: return lambert_eval(rgb, wo, wi);
-    case BSDF_KIND_OREN_NAYAR: return oren_nayar_eval(rgb, l.roughness, wo, wi);
-    case BSDF_KIND_MICROFACET_REFLECTION:
+    if (BSDF_HAS(BSDF_KIND_LAMBERT) && l.kind == BSDF_KIND_LAMBERT) return lambert_eval(rgb, wo, wi);
+    if (BSDF_HAS(BSDF_KIND_OREN_NAYAR) && l.kind == BSDF_KIND_OREN_NAYAR)
+        return oren_nayar_eval(rgb, l.roughness, wo, wi);
+    if (BSDF_HAS(BSDF_KIND_MICROFACET_REFLECTION) && l.kind == BSDF_KIND_MICROFACET_REFLECTION)
         return mf_reflection_eval(rgb, l.distribution, l.roughness, wo, wi);
-    case BSDF_KIND_MICROFACET_DIELECTRIC:
+    if (BSDF_HAS(BSDF_KIND_MICROFACET_DIELECTRIC) && l.kind == BSDF_KIND_MICROFACET_DIELECTRIC)
         return mf_dielectric_eval(rgb, l.distribution, l.roughness, l.ior, wo, wi, mode);
-    default: return vec3(0.0);
-    }
+    return vec3(0.0);
 }
 
 float layer_pdf(BsdfLayer l, vec3 wo, vec3 wi) {
-    switch (l.kind) {
-    case BSDF_KIND_LAMBERT:
-    case BSDF_KIND_OREN_NAYAR: return lambert_pdf(wo, wi);
-    case BSDF_KIND_MICROFACET_REFLECTION:
+    if ((BSDF_HAS(BSDF_KIND_LAMBERT) && l.kind == BSDF_KIND_LAMBERT)
+        || (BSDF_HAS(BSDF_KIND_OREN_NAYAR) && l.kind == BSDF_KIND_OREN_NAYAR))
+        return lambert_pdf(wo, wi);
+    if (BSDF_HAS(BSDF_KIND_MICROFACET_REFLECTION) && l.kind == BSDF_KIND_MICROFACET_REFLECTION)
         return mf_reflection_pdf(l.distribution, l.roughness, wo, wi);
-    case BSDF_KIND_MICROFACET_DIELECTRIC:
+    if (BSDF_HAS(BSDF_KIND_MICROFACET_DIELECTRIC) && l.kind == BSDF_KIND_MICROFACET_DIELECTRIC)
         return mf_dielectric_pdf(l.distribution, l.roughness, l.ior, wo, wi);
-    default: return 0.0;
-    }
+    return 0.0;
 }
 
 // Samples the layer's direction. For delta kinds f and pdf are set; for the others only
@@ -433,16 +438,17 @@ float layer_pdf(BsdfLayer l, vec3 wo, vec3 wi) {
 BsdfSample layer_sample_direction(BsdfLayer l, vec3 wo, vec3 u, uint mode) {
     vec3 rgb = l.tint_weight.rgb;
     vec3 wi;
-    if (l.kind == BSDF_KIND_LAMBERT || l.kind == BSDF_KIND_OREN_NAYAR) {
+    if ((BSDF_HAS(BSDF_KIND_LAMBERT) && l.kind == BSDF_KIND_LAMBERT)
+        || (BSDF_HAS(BSDF_KIND_OREN_NAYAR) && l.kind == BSDF_KIND_OREN_NAYAR)) {
         if (!lambert_sample_wi(wo, u.y, u.z, wi)) return bsdf_no_sample();
         return bsdf_make_sample(vec3(0.0), wi, 0.0, BSDF_REFLECTION | BSDF_DIFFUSE, 1.0);
     }
-    if (l.kind == BSDF_KIND_MIRROR) {
+    if (BSDF_HAS(BSDF_KIND_MIRROR) && l.kind == BSDF_KIND_MIRROR) {
         if (wo.z == 0.0) return bsdf_no_sample();
         wi = vec3(-wo.x, -wo.y, wo.z);
         return bsdf_make_sample(rgb / abs(wi.z), wi, 1.0, BSDF_REFLECTION | BSDF_SPECULAR, 1.0);
     }
-    if (l.kind == BSDF_KIND_DIELECTRIC) {
+    if (BSDF_HAS(BSDF_KIND_DIELECTRIC) && l.kind == BSDF_KIND_DIELECTRIC) {
         if (wo.z == 0.0) return bsdf_no_sample();
         float r = fresnel_dielectric(wo.z, l.ior);
         float t = 1.0 - r;
@@ -457,11 +463,11 @@ BsdfSample layer_sample_direction(BsdfLayer l, vec3 wo, vec3 u, uint mode) {
         if (mode == TRANSPORT_RADIANCE) ft /= etap * etap;
         return bsdf_make_sample(rgb * ft, wi, t, BSDF_TRANSMISSION | BSDF_SPECULAR, etap);
     }
-    if (l.kind == BSDF_KIND_MICROFACET_REFLECTION) {
+    if (BSDF_HAS(BSDF_KIND_MICROFACET_REFLECTION) && l.kind == BSDF_KIND_MICROFACET_REFLECTION) {
         if (!mf_reflection_sample_wi(l.distribution, l.roughness, wo, u.y, u.z, wi)) return bsdf_no_sample();
         return bsdf_make_sample(vec3(0.0), wi, 0.0, BSDF_REFLECTION | BSDF_GLOSSY, 1.0);
     }
-    if (l.kind == BSDF_KIND_MICROFACET_DIELECTRIC) {
+    if (BSDF_HAS(BSDF_KIND_MICROFACET_DIELECTRIC) && l.kind == BSDF_KIND_MICROFACET_DIELECTRIC) {
         uint flags;
         float etap;
         if (!mf_dielectric_sample_wi(l.distribution, l.roughness, l.ior, wo, u, wi, flags, etap))

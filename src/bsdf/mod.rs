@@ -355,6 +355,17 @@ impl Bsdf {
     }
 }
 
+/// The layer kinds `bsdfs` use, bit k for [`kind`] k: the specialization constant
+/// `BSDF_KINDS` of `bsdf.glsl`, which compiles the other kinds out of a kernel.
+pub fn layer_kinds(bsdfs: &[BsdfParams]) -> u32 {
+    bsdfs
+        .iter()
+        .flat_map(|p| &p.layers[..(p.count as usize).min(MAX_LAYERS)])
+        .fold(0, |kinds, layer| {
+            kinds | 1u32.checked_shl(layer.kind).unwrap_or(0)
+        })
+}
+
 impl BsdfParams {
     /// A stack of the given layers (panics on 0 or more than [`MAX_LAYERS`]).
     pub fn new(layers: &[BsdfLayer]) -> Self {

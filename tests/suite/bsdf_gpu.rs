@@ -10,8 +10,8 @@ use splitray::bsdf::chi2::{self, Chi2Settings};
 use splitray::bsdf::key::{key_id, key_type};
 use splitray::bsdf::sampling::uniform_sphere;
 use splitray::bsdf::{
-    kind, material_key, Bsdf, BsdfLayer, BsdfParams, BsdfSample, Distribution, MaterialType,
-    TransportMode,
+    kind, layer_kinds, material_key, Bsdf, BsdfLayer, BsdfParams, BsdfSample, Distribution,
+    MaterialType, TransportMode,
 };
 use splitray::shaders;
 use splitray::vk::{Buffer, ComputePipeline, Gpu, PipelineDesc, StreamKind};
@@ -71,13 +71,25 @@ fn run_kernel<Q: Pod, R: Pod>(
     params: &[BsdfParams],
     queries: &[Q],
 ) -> Vec<R> {
+    run_specialized(gpu, kernel, params, queries, &[64])
+}
+
+/// [`run_kernel`] with the specialization constants `spec` (0: the workgroup size; 2:
+/// `BSDF_KINDS`).
+fn run_specialized<Q: Pod, R: Pod>(
+    gpu: &Gpu,
+    kernel: splitray::shaders::Kernel,
+    params: &[BsdfParams],
+    queries: &[Q],
+    spec: &[u32],
+) -> Vec<R> {
     let pipeline = ComputePipeline::new(
         gpu,
         &PipelineDesc {
             kernel,
             bindings: 3,
             push_constant_bytes: 4,
-            spec: &[64],
+            spec,
         },
     )
     .unwrap();
@@ -329,6 +341,60 @@ fn gpu_eval_and_pdf_match_cpu() {
         }
     }
     eprintln!("eval: {}", report.join("; "));
+    common::assert_clean(&gpu);
+}
+
+/// `BSDF_KINDS` (specialization constant 2 of bsdf.glsl): a kernel specialized to the
+/// kinds its records use (`layer_kinds`) evaluates them as the general kernel does, and
+/// the constant really removes code: a kernel left with Lambert alone evaluates rough
+/// dielectrics to nothing.
+#[test]
+fn kernels_specialized_to_the_kinds_in_use_agree_with_the_general_one() {
+    let gpu = common::gpu();
+    let queries_of = |params: &[BsdfParams], seed: u64| -> Vec<EvalQuery> {
+        let r = uniforms(3000 * 7, seed);
+        (0..3000)
+            .map(|i| {
+                let c = &r[i * 7..];
+                EvalQuery {
+                    wo: random_dir(&c[0..3]).into(),
+                    params: (i % params.len()) as u32,
+                    wi: random_dir(&c[3..6]).into(),
+                    mode: (c[6] < 0.5) as u32,
+                }
+            })
+            .collect()
+    };
+    let eval = |params: &[BsdfParams], queries: &[EvalQuery], spec: &[u32]| -> Vec<[f32; 4]> {
+        run_specialized(&gpu, shaders::BSDF_EVAL_TEST, params, queries, spec)
+    };
+    // Stacks of every kind but Oren–Nayar.
+    let params: Vec<BsdfParams> = random_params(kind::COUNT, 64, 31)
+        .into_iter()
+        .filter(|p| {
+            p.layers[..p.count as usize]
+                .iter()
+                .all(|l| l.kind != kind::OREN_NAYAR)
+        })
+        .collect();
+    let kinds = layer_kinds(&params);
+    assert_eq!(kinds & (1 << kind::OREN_NAYAR), 0);
+    let queries = queries_of(&params, 32);
+    let general = eval(&params, &queries, &[64]);
+    let special = eval(&params, &queries, &[64, 1, kinds]);
+    let nonzero = general.iter().filter(|g| g[3] > 0.0).count();
+    assert!(nonzero > queries.len() / 4, "{nonzero} nonzero pdfs");
+    for (i, (g, s)) in general.iter().zip(&special).enumerate() {
+        assert!(
+            g.iter().zip(s).all(|(g, s)| agree(*g, *s)),
+            "query {i}: general {g:?}, specialized to {kinds:#b} {s:?}"
+        );
+    }
+    let rough = random_params(kind::MICROFACET_DIELECTRIC, 16, 33);
+    let queries = queries_of(&rough, 34);
+    assert!(eval(&rough, &queries, &[64]).iter().any(|g| g[3] > 0.0));
+    let lambert_only = eval(&rough, &queries, &[64, 1, 1 << kind::LAMBERT]);
+    assert!(lambert_only.iter().all(|g| *g == [0.0; 4]));
     common::assert_clean(&gpu);
 }
 

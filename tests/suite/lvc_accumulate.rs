@@ -190,8 +190,13 @@ fn accumulation_and_tally_match_the_twin() {
         builds.push(AccumulateTally::Subgroup);
     }
     for &tally in &builds {
-        let kernels =
-            Kernels::with_tally(&gpu, &LvcOptions::new(Variant::LvcBdpt, false), tally).unwrap();
+        let kernels = Kernels::with_tally(
+            &gpu,
+            &LvcOptions::new(Variant::LvcBdpt, false),
+            u32::MAX,
+            tally,
+        )
+        .unwrap();
         for (k, &paths) in [0usize, 1, 7, 63, 64, 65, 1000, 100_003].iter().enumerate() {
             for connections in [1, 5, 16] {
                 check(

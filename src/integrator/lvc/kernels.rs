@@ -33,15 +33,21 @@ pub struct Kernels {
 }
 
 impl Kernels {
-    /// The kernels of `options`' variant; CIS-LBDPT's connection kernel holds exactly
-    /// `options.candidates` candidates per camera vertex.
-    pub fn new(gpu: &Gpu, options: &LvcOptions) -> vk::Result<Self> {
-        Self::with_tally(gpu, options, AccumulateTally::for_device(gpu))
+    /// The kernels of `options`' variant for a scene whose BSDFs use `bsdf_kinds`
+    /// ([`crate::bsdf::layer_kinds`]; the other kinds are compiled out); CIS-LBDPT's
+    /// connection kernel holds exactly `options.candidates` candidates per camera vertex.
+    pub fn new(gpu: &Gpu, options: &LvcOptions, bsdf_kinds: u32) -> vk::Result<Self> {
+        Self::with_tally(gpu, options, bsdf_kinds, AccumulateTally::for_device(gpu))
     }
 
     /// [`Kernels::new`] with the accumulation's tally made as `tally` says (tests build
     /// both).
-    pub fn with_tally(gpu: &Gpu, options: &LvcOptions, tally: AccumulateTally) -> vk::Result<Self> {
+    pub fn with_tally(
+        gpu: &Gpu,
+        options: &LvcOptions,
+        bsdf_kinds: u32,
+        tally: AccumulateTally,
+    ) -> vk::Result<Self> {
         let with_constants = |kernel: Kernel, bindings, constants: &[u32]| {
             vk::compute_pipeline(
                 gpu,
@@ -51,7 +57,10 @@ impl Kernels {
                 constants,
             )
         };
-        let lvc = |kernel: Kernel, bindings| with_constants(kernel, bindings, &[WORKGROUP]);
+        // Constant 1 is camera_connect's alone; 2 is bsdf.glsl's BSDF_KINDS.
+        let lvc = |kernel: Kernel, bindings| {
+            with_constants(kernel, bindings, &[WORKGROUP, 1, bsdf_kinds])
+        };
         let pt = |kernel: Kernel, bindings| {
             vk::compute_pipeline(
                 gpu,
@@ -72,7 +81,7 @@ impl Kernels {
             camera_vertex: lvc(shaders::INTEGRATOR_LVC_CAMERA_VERTEX, 13)?,
             camera_direct: lvc(shaders::INTEGRATOR_LVC_CAMERA_DIRECT, 10)?,
             camera_connect: {
-                let (kernel, constants) = camera_connect(options);
+                let (kernel, constants) = camera_connect(options, bsdf_kinds);
                 with_constants(kernel, 11, &constants)?
             },
             camera_bounce: lvc(shaders::INTEGRATOR_LVC_CAMERA_BOUNCE, 9)?,
@@ -85,13 +94,20 @@ impl Kernels {
 
 /// The variant's connection kernel and its specialization constants: uniform, or
 /// resampled with shared memory for the run's M candidates per invocation (constant 1,
-/// `CANDIDATE_CAPACITY`).
-fn camera_connect(options: &LvcOptions) -> (Kernel, Vec<u32>) {
+/// `CANDIDATE_CAPACITY`); both with the scene's BSDF kinds (constant 2).
+fn camera_connect(options: &LvcOptions, bsdf_kinds: u32) -> (Kernel, Vec<u32>) {
     match options.variant {
-        Variant::LvcBdpt => (shaders::INTEGRATOR_LVC_CAMERA_CONNECT, vec![WORKGROUP]),
+        Variant::LvcBdpt => (
+            shaders::INTEGRATOR_LVC_CAMERA_CONNECT,
+            vec![WORKGROUP, 1, bsdf_kinds],
+        ),
         Variant::CisLbdpt => (
             shaders::INTEGRATOR_LVC_CAMERA_CONNECT__RESAMPLED,
-            vec![WORKGROUP, options.candidates.clamp(1, MAX_CANDIDATES)],
+            vec![
+                WORKGROUP,
+                options.candidates.clamp(1, MAX_CANDIDATES),
+                bsdf_kinds,
+            ],
         ),
     }
 }

@@ -249,7 +249,7 @@ impl<'t> LvcIntegrator<'t> {
             gpu: gpu.clone(),
             tracer,
             options: *options,
-            kernels: Kernels::new(gpu, options)?,
+            kernels: Kernels::new(gpu, options, crate::bsdf::layer_kinds(&scene.bsdfs))?,
             scene: SceneBuffers::new(gpu, scene)?,
             light_table: scene.lights.clone(),
             constants_buffer: gpu.upload("lvc-constants", &[constants])?,
