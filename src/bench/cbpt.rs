@@ -593,7 +593,6 @@ pub fn run(
                 seed: options.seed,
                 reference: Some(reference.clone()),
                 tracer: Some(options.tracers[0]),
-                equal_spp: Default::default(),
                 ..Default::default()
             },
         )?),

@@ -613,10 +613,11 @@ fn check_connections(
             let candidates: Vec<(u32, Option<Expected>)> =
                 (0..m).map(|k| (pick(k), contribution(pick(k)))).collect();
             let lum = |v: Vec3| v.dot(Vec3::new(0.212_671, 0.715_16, 0.072_169)).max(0.0);
-            let total: f32 = candidates
+            let targets: Vec<f32> = candidates
                 .iter()
                 .map(|(_, c)| c.map_or(0.0, |c| lum(c.0)))
-                .sum();
+                .collect();
+            let total: f32 = targets.iter().sum();
             let scale = size as f32 / (m as f32 * n as f32 * light_paths as f32);
             // A candidate drawn c times is one slot with c times its contribution: the
             // copies of the traced slots account for all n draws.
@@ -642,10 +643,6 @@ fn check_connections(
                 draws == n || total == 0.0,
                 "{draws} of {n} resampled draws traced (total target {total})"
             );
-            let targets: Vec<f32> = candidates
-                .iter()
-                .map(|(_, c)| c.map_or(0.0, |c| lum(c.0)))
-                .collect();
             let random = |k: u32| random01(pixel, pass, dims::select(j, dims::RESAMPLE + k), seed);
             let Some(expected) = twin::resample(&targets, n as u32, o.resampling, random) else {
                 return;
