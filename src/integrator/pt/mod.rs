@@ -209,19 +209,27 @@ struct Pipelines {
 }
 
 impl Pipelines {
-    fn new(gpu: &Gpu) -> vk::Result<Self> {
-        let make = |kernel, bindings| {
+    /// `pt`'s kernels; the shading kernel compiled for the layer kinds in `bsdf_kinds`
+    /// alone ([`crate::bsdf::layer_kinds`]: specialization constant 2, `BSDF_KINDS` of
+    /// bsdf.glsl; constant 1 is unused).
+    fn new(gpu: &Gpu, bsdf_kinds: u32) -> vk::Result<Self> {
+        let with_constants = |kernel, bindings, constants: &[u32]| {
             vk::compute_pipeline(
                 gpu,
                 kernel,
                 bindings,
                 size_of::<PtParams>() as u32,
-                &[WORKGROUP],
+                constants,
             )
         };
+        let make = |kernel, bindings| with_constants(kernel, bindings, &[WORKGROUP]);
         Ok(Self {
             generate: make(shaders::INTEGRATOR_PT_GENERATE, 3)?,
-            shade: make(shaders::INTEGRATOR_PT_SHADE, 16)?,
+            shade: with_constants(
+                shaders::INTEGRATOR_PT_SHADE,
+                16,
+                &[WORKGROUP, 1, bsdf_kinds],
+            )?,
             nee_accumulate: make(shaders::INTEGRATOR_PT_NEE_ACCUMULATE, 4)?,
             gather: make(shaders::INTEGRATOR_PT_GATHER, 5)?,
             finish: make(shaders::INTEGRATOR_PT_FINISH, 3)?,
@@ -392,7 +400,7 @@ impl<'t> PtIntegrator<'t> {
             gpu: gpu.clone(),
             tracer,
             options: *options,
-            pipelines: Pipelines::new(gpu)?,
+            pipelines: Pipelines::new(gpu, crate::bsdf::layer_kinds(&scene.bsdfs))?,
             scene: SceneBuffers::new(gpu, scene)?,
             wave: Wavefront::new(gpu, chunk, options.sort)?,
             accum: Arc::new(gpu.zeroed::<[f32; 4]>("pt-accum", pixels)?),
