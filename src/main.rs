@@ -4,13 +4,11 @@ mod cli;
 
 use std::process::ExitCode;
 
-use clap::Parser;
-
 fn main() -> ExitCode {
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn"))
         .format_timestamp(None)
         .init();
-    let args = cli::Cli::parse();
+    let args = cli::Cli::from_command_line();
     match cli::run(args) {
         Ok(code) => code,
         Err(e) => {

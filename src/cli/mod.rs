@@ -12,7 +12,7 @@ mod timeline;
 
 use std::process::ExitCode;
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 
 /// splitray renders scenes headlessly on any Vulkan 1.3 device (a GPU, or the lavapipe
 /// CPU driver) with GLSL compute kernels.
@@ -24,6 +24,29 @@ use clap::{Parser, Subcommand};
 pub struct Cli {
     #[command(subcommand)]
     pub command: Command,
+}
+
+impl Cli {
+    /// The command line, parsed; exits with clap's message on a usage error. A negative
+    /// number is read as the value of the option before it (`--width -3` is refused as a
+    /// width, not taken for an unknown option `-3`).
+    pub fn from_command_line() -> Self {
+        let matches = negative_numbers_are_values(Self::command()).get_matches();
+        Self::from_arg_matches(&matches).unwrap_or_else(|e| e.exit())
+    }
+}
+
+/// `cmd` with every option that takes a value, in every subcommand, accepting a negative
+/// number as that value.
+fn negative_numbers_are_values(cmd: clap::Command) -> clap::Command {
+    cmd.mut_args(|arg| {
+        if arg.get_action().takes_values() {
+            arg.allow_negative_numbers(true)
+        } else {
+            arg
+        }
+    })
+    .mut_subcommands(negative_numbers_are_values)
 }
 
 #[derive(Debug, Subcommand)]

@@ -517,6 +517,44 @@ fn bad_input_gives_a_clear_error_and_no_output() {
 /// Every benchmark refuses a film side of 0 or past 16384, and counts that would
 /// measure nothing, with clap's usage error (exit 2) naming the option, before it opens
 /// a device (two of them used to panic on a width of 0).
+/// A negative number given to an option is its value, refused as such (not read as an
+/// unknown option `-3` with advice to write `-- -3`).
+#[test]
+fn a_negative_number_is_refused_as_the_value_of_its_option() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases: &[(&[&str], &str)] = &[
+        (
+            &["render", "cornell-box", "--width", "-3"],
+            "'--width <WIDTH>'",
+        ),
+        (&["render", "cornell-box", "--spp", "-1"], "'--spp <SPP>'"),
+        (
+            &["render", "cornell-box", "--seed", "-5"],
+            "'--seed <SEED>'",
+        ),
+        (
+            &["render", "cornell-box", "--connections", "-1"],
+            "'--connections <N>'",
+        ),
+        (
+            &["bench", "bdpt", "cornell-box", "--rounds", "-2"],
+            "'--rounds <ROUNDS>'",
+        ),
+    ];
+    for (args, option) in cases {
+        let out = splitray(args, dir.path());
+        let t = text(&out);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {t}");
+        assert!(
+            t.contains(&format!(
+                "invalid value '{}' for {option}",
+                args[args.len() - 1]
+            )) && !t.contains("unexpected argument"),
+            "{args:?}: {t}"
+        );
+    }
+}
+
 #[test]
 fn benches_refuse_empty_films_and_zero_counts() {
     let dir = tempfile::tempdir().unwrap();
