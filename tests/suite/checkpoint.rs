@@ -8,6 +8,7 @@ use std::cell::Cell;
 use std::path::Path;
 
 use splitray::film::{AtomicFile, FilmSums};
+use splitray::integrator::lvc::options::{LvcOptions, LvcSettings, Variant};
 use splitray::integrator::IntegratorKind;
 use splitray::render::checkpoint::{CheckpointHeader, SavedOptions, SIGNATURE};
 use splitray::render::{
@@ -122,6 +123,39 @@ fn an_interrupted_and_resumed_render_is_bit_identical_for_every_integrator() {
         assert_eq!(out.metadata.spp, spp);
         assert!(out.total_render_time_s > saved.header.render_time_s);
     }
+    common::assert_clean(&gpu);
+}
+
+/// A cache integrator's checkpoint keeps N, M and the draws it ran with even where the
+/// render left them to the defaults, so that a build with other defaults continues the
+/// same estimator; the options read back from it (what `render --resume` starts from)
+/// continue the render bit for bit.
+#[test]
+fn a_cache_integrators_checkpoint_keeps_its_estimator_explicit() {
+    let gpu = common::gpu();
+    let scene = builtin("cornell-box").unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let opts = common::small_render_options(&scene, IntegratorKind::CisLbdpt, 4);
+    assert_eq!(opts.lvc, LvcSettings::default(), "the defaults, left unset");
+    let mut first: Option<Checkpoint> = None;
+    let mut hook = |s: &FilmSnapshot<'_>| -> Result<(), RenderError> {
+        first.get_or_insert_with(|| Checkpoint::new("cornell-box", &opts, s));
+        Ok(())
+    };
+    let whole = checkpointed(&gpu, &scene, &opts, &mut hook);
+    let path = save(dir.path(), "cis.ckpt", &first.unwrap());
+    let read = Checkpoint::read(&path).unwrap();
+    let defaults = LvcOptions::new(Variant::CisLbdpt, false);
+    let kept = read.header.options.lvc;
+    assert_eq!(kept.connections, Some(defaults.connections));
+    assert_eq!(kept.candidates, Some(defaults.candidates));
+    assert_eq!(kept.resampling, Some(defaults.resampling));
+    // Neither changes the image; sorting's default is the device's.
+    assert_eq!((kept.streams, kept.sort), (None, None));
+
+    let again = read.header.options.to_options().unwrap();
+    let out = resumed(&gpu, &scene, &again, &read, &path).unwrap();
+    assert!(out.sums == whole.sums, "the resumed film differs");
     common::assert_clean(&gpu);
 }
 

@@ -204,4 +204,53 @@ impl LvcSettings {
         o.sort = self.sort.unwrap_or(o.sort);
         o
     }
+
+    /// These settings with what decides the estimate (N, M and how the draws are made)
+    /// taken from today's defaults where unset: what a checkpoint keeps, so that a build
+    /// with other defaults continues it with the estimator it was started with. The
+    /// streams and sorting stay as given: they never change the image, and sorting's
+    /// default is the device's.
+    pub fn with_estimator_pinned(self) -> Self {
+        let defaults = LvcOptions::new(Variant::CisLbdpt, false);
+        Self {
+            connections: Some(self.connections.unwrap_or(defaults.connections)),
+            candidates: Some(self.candidates.unwrap_or(defaults.candidates)),
+            resampling: Some(self.resampling.unwrap_or(defaults.resampling)),
+            ..self
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pinning_fills_the_estimators_defaults_and_keeps_what_was_given() {
+        let defaults = LvcOptions::new(Variant::CisLbdpt, false);
+        let given = LvcSettings {
+            connections: Some(3),
+            streams: Some(1),
+            ..LvcSettings::default()
+        };
+        let pinned = given.with_estimator_pinned();
+        assert_eq!(pinned.connections, Some(3));
+        assert_eq!(pinned.candidates, Some(defaults.candidates));
+        assert_eq!(pinned.resampling, Some(defaults.resampling));
+        assert_eq!((pinned.streams, pinned.sort), (Some(1), None));
+        assert_eq!(pinned.with_estimator_pinned(), pinned);
+        // The options it gives are the ones the unpinned settings give.
+        for variant in [Variant::LvcBdpt, Variant::CisLbdpt] {
+            for sort_pays in [false, true] {
+                let (a, b) = (
+                    given.options(variant, sort_pays),
+                    pinned.options(variant, sort_pays),
+                );
+                assert_eq!(
+                    (a.connections, a.candidates, a.resampling, a.streams, a.sort),
+                    (b.connections, b.candidates, b.resampling, b.streams, b.sort)
+                );
+            }
+        }
+    }
 }
