@@ -112,3 +112,15 @@ fn film_side_parser() -> clap::builder::RangedI64ValueParser<u32> {
 fn at_least_one() -> clap::builder::RangedI64ValueParser<u32> {
     clap::value_parser!(u32).range(1..)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// clap's own checks of the command line as `from_command_line` builds it (names,
+    /// conflicts, value parsers), which it otherwise makes only when an option is used.
+    #[test]
+    fn the_command_line_is_well_formed() {
+        negative_numbers_are_values(Cli::command()).debug_assert();
+    }
+}
