@@ -60,6 +60,21 @@ fn checkpointed(
     .unwrap()
 }
 
+/// A whole render of the Cornell box and the checkpoint of its first batch of passes.
+fn whole_and_first_checkpoint(
+    gpu: &Gpu,
+    scene: &Scene,
+    opts: &RenderOptions,
+) -> (RenderOutput, Checkpoint) {
+    let mut first: Option<Checkpoint> = None;
+    let mut hook = |s: &FilmSnapshot<'_>| -> Result<(), RenderError> {
+        first.get_or_insert_with(|| Checkpoint::new("cornell-box", opts, s));
+        Ok(())
+    };
+    let whole = checkpointed(gpu, scene, opts, &mut hook);
+    (whole, first.expect("a checkpoint before the last batch"))
+}
+
 fn resumed(
     gpu: &Gpu,
     scene: &Scene,
@@ -101,14 +116,8 @@ fn an_interrupted_and_resumed_render_is_bit_identical_for_every_integrator() {
         let opts = common::small_render_options(&scene, *kind, spp);
         // The uninterrupted render saves its film after its first batch of passes (one
         // pass): that checkpoint is what an interrupted render leaves.
-        let mut first: Option<Checkpoint> = None;
-        let mut hook = |s: &FilmSnapshot<'_>| -> Result<(), RenderError> {
-            first.get_or_insert_with(|| Checkpoint::new("cornell-box", &opts, s));
-            Ok(())
-        };
-        let whole = checkpointed(&gpu, &scene, &opts, &mut hook);
+        let (whole, saved) = whole_and_first_checkpoint(&gpu, &scene, &opts);
         assert_eq!(whole.sums.passes, 6, "{kind}");
-        let saved = first.expect("a checkpoint before the last batch");
         assert_eq!(saved.header.passes, 1, "{kind}");
         let path = save(dir.path(), &format!("{kind}.ckpt"), &saved);
         let read = Checkpoint::read(&path).unwrap();
@@ -137,13 +146,8 @@ fn a_cache_integrators_checkpoint_keeps_its_estimator_explicit() {
     let dir = tempfile::tempdir().unwrap();
     let opts = common::small_render_options(&scene, IntegratorKind::CisLbdpt, 4);
     assert_eq!(opts.lvc, LvcSettings::default(), "the defaults, left unset");
-    let mut first: Option<Checkpoint> = None;
-    let mut hook = |s: &FilmSnapshot<'_>| -> Result<(), RenderError> {
-        first.get_or_insert_with(|| Checkpoint::new("cornell-box", &opts, s));
-        Ok(())
-    };
-    let whole = checkpointed(&gpu, &scene, &opts, &mut hook);
-    let path = save(dir.path(), "cis.ckpt", &first.unwrap());
+    let (whole, first) = whole_and_first_checkpoint(&gpu, &scene, &opts);
+    let path = save(dir.path(), "cis.ckpt", &first);
     let read = Checkpoint::read(&path).unwrap();
     let defaults = LvcOptions::new(Variant::CisLbdpt, false);
     let kept = read.header.options.lvc;

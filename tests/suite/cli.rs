@@ -542,17 +542,24 @@ fn a_negative_number_is_refused_as_the_value_of_its_option() {
         ),
     ];
     for (args, option) in cases {
-        let out = splitray(args, dir.path());
-        let t = text(&out);
-        assert_eq!(out.status.code(), Some(2), "{args:?}: {t}");
+        let t = usage_error(args, dir.path());
+        let value = args[args.len() - 1];
         assert!(
-            t.contains(&format!(
-                "invalid value '{}' for {option}",
-                args[args.len() - 1]
-            )) && !t.contains("unexpected argument"),
+            t.contains(&format!("invalid value '{value}' for {option}"))
+                && !t.contains("unexpected argument"),
             "{args:?}: {t}"
         );
     }
+}
+
+/// What `splitray args` printed, having checked that clap refused it as a usage error
+/// (exit code 2) and nothing panicked.
+fn usage_error(args: &[&str], dir: &Path) -> String {
+    let out = splitray(args, dir);
+    let t = text(&out);
+    assert_eq!(out.status.code(), Some(2), "{args:?}: {t}");
+    assert!(!t.contains("panicked"), "{args:?}: {t}");
+    t
 }
 
 #[test]
@@ -587,13 +594,8 @@ fn benches_refuse_empty_films_and_zero_counts() {
         ),
     ];
     for (args, option) in cases {
-        let out = splitray(args, dir.path());
-        let t = text(&out);
-        assert_eq!(out.status.code(), Some(2), "{args:?}: {t}");
-        assert!(
-            t.contains(option) && !t.contains("panicked"),
-            "{args:?}: {t}"
-        );
+        let t = usage_error(args, dir.path());
+        assert!(t.contains(option), "{args:?}: {t}");
     }
     // A count no device can hold (16 TB of keys) is refused before its host data is made.
     let out = splitray(&["bench", "primitives", "--n", "4000000000000"], dir.path());
