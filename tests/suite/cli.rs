@@ -514,9 +514,6 @@ fn bad_input_gives_a_clear_error_and_no_output() {
     }
 }
 
-/// Every benchmark refuses a film side of 0 or past 16384, and counts that would
-/// measure nothing, with clap's usage error (exit 2) naming the option, before it opens
-/// a device (two of them used to panic on a width of 0).
 /// A negative number given to an option is its value, refused as such (not read as an
 /// unknown option `-3` with advice to write `-- -3`).
 #[test]
@@ -562,6 +559,9 @@ fn usage_error(args: &[&str], dir: &Path) -> String {
     t
 }
 
+/// Every benchmark refuses a film side of 0 or past 16384, and counts that would
+/// measure nothing, with clap's usage error (exit 2) naming the option, before it opens
+/// a device (two of them used to panic on a width of 0).
 #[test]
 fn benches_refuse_empty_films_and_zero_counts() {
     let dir = tempfile::tempdir().unwrap();
