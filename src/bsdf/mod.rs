@@ -366,6 +366,13 @@ pub fn layer_kinds(bsdfs: &[BsdfParams]) -> u32 {
         })
 }
 
+/// The specialization constants of a kernel that includes `bsdf.glsl`: 0 its workgroup
+/// size (`grid.glsl`), 1 the kernel's own constant (`constant_1`; a kernel that declares
+/// none ignores it) and 2 `BSDF_KINDS`, the layer kinds compiled in ([`layer_kinds`]).
+pub fn kernel_constants(workgroup: u32, constant_1: u32, bsdf_kinds: u32) -> [u32; 3] {
+    [workgroup, constant_1, bsdf_kinds]
+}
+
 impl BsdfParams {
     /// A stack of the given layers (panics on 0 or more than [`MAX_LAYERS`]).
     pub fn new(layers: &[BsdfLayer]) -> Self {

@@ -10,8 +10,8 @@ use splitray::bsdf::chi2::{self, Chi2Settings};
 use splitray::bsdf::key::{key_id, key_type};
 use splitray::bsdf::sampling::uniform_sphere;
 use splitray::bsdf::{
-    kind, layer_kinds, material_key, Bsdf, BsdfLayer, BsdfParams, BsdfSample, Distribution,
-    MaterialType, TransportMode,
+    kernel_constants, kind, layer_kinds, material_key, Bsdf, BsdfLayer, BsdfParams, BsdfSample,
+    Distribution, MaterialType, TransportMode,
 };
 use splitray::shaders;
 use splitray::vk::{Buffer, ComputePipeline, Gpu, PipelineDesc, StreamKind};
@@ -75,7 +75,7 @@ fn run_kernel<Q: Pod, R: Pod>(
 }
 
 /// [`run_kernel`] with the specialization constants `spec` (0: the workgroup size; 2:
-/// `BSDF_KINDS`).
+/// `BSDF_KINDS`; as `kernel_constants` makes them).
 fn run_specialized<Q: Pod, R: Pod>(
     gpu: &Gpu,
     kernel: splitray::shaders::Kernel,
@@ -381,7 +381,7 @@ fn kernels_specialized_to_the_kinds_in_use_agree_with_the_general_one() {
     assert_eq!(kinds & (1 << kind::OREN_NAYAR), 0);
     let queries = queries_of(&params, 32);
     let general = eval(&params, &queries, &[64]);
-    let special = eval(&params, &queries, &[64, 1, kinds]);
+    let special = eval(&params, &queries, &kernel_constants(64, 1, kinds));
     let nonzero = general.iter().filter(|g| g[3] > 0.0).count();
     assert!(nonzero > queries.len() / 4, "{nonzero} nonzero pdfs");
     for (i, (g, s)) in general.iter().zip(&special).enumerate() {
@@ -393,7 +393,11 @@ fn kernels_specialized_to_the_kinds_in_use_agree_with_the_general_one() {
     let rough = random_params(kind::MICROFACET_DIELECTRIC, 16, 33);
     let queries = queries_of(&rough, 34);
     assert!(eval(&rough, &queries, &[64]).iter().any(|g| g[3] > 0.0));
-    let lambert_only = eval(&rough, &queries, &[64, 1, 1 << kind::LAMBERT]);
+    let lambert_only = eval(
+        &rough,
+        &queries,
+        &kernel_constants(64, 1, 1 << kind::LAMBERT),
+    );
     assert!(lambert_only.iter().all(|g| *g == [0.0; 4]));
     common::assert_clean(&gpu);
 }

@@ -153,10 +153,11 @@ impl GpuCombiner {
                 "cbpt: a batch of {batch} segments is not a positive multiple of 32"
             )));
         }
-        // Compiled for the scene's layer kinds alone (constant 2, `BSDF_KINDS` of
-        // bsdf.glsl; constant 1 is unused): lavapipe compiles a kernel at its first
-        // dispatch, and the kinds a scene lacks are most of the shading kernels' code.
-        let constants = [WORKGROUP, 1, crate::bsdf::layer_kinds(&scene.tables.bsdfs)];
+        // Compiled for the scene's layer kinds alone: lavapipe compiles a kernel at its
+        // first dispatch, and the kinds a scene lacks are most of the shading kernels'
+        // code.
+        let bsdf_kinds = crate::bsdf::layer_kinds(&scene.tables.bsdfs);
+        let constants = crate::bsdf::kernel_constants(WORKGROUP, 1, bsdf_kinds);
         let pipeline = |kernel, bindings| {
             compute_pipeline(
                 gpu,

@@ -3,6 +3,7 @@
 
 use super::gpu::LvcPush;
 use super::options::{LvcOptions, Variant, MAX_CANDIDATES};
+use crate::bsdf::kernel_constants;
 use crate::integrator::pt::gpu::PtParams;
 use crate::shaders::{self, Kernel};
 use crate::vk::{self, ComputePipeline, Gpu};
@@ -57,9 +58,13 @@ impl Kernels {
                 constants,
             )
         };
-        // Constant 1 is camera_connect's alone; 2 is bsdf.glsl's BSDF_KINDS.
+        // Constant 1 is camera_connect's alone.
         let lvc = |kernel: Kernel, bindings| {
-            with_constants(kernel, bindings, &[WORKGROUP, 1, bsdf_kinds])
+            with_constants(
+                kernel,
+                bindings,
+                &kernel_constants(WORKGROUP, 1, bsdf_kinds),
+            )
         };
         let pt = |kernel: Kernel, bindings| {
             vk::compute_pipeline(
@@ -95,21 +100,15 @@ impl Kernels {
 /// The variant's connection kernel and its specialization constants: uniform, or
 /// resampled with shared memory for the run's M candidates per invocation (constant 1,
 /// `CANDIDATE_CAPACITY`); both with the scene's BSDF kinds (constant 2).
-fn camera_connect(options: &LvcOptions, bsdf_kinds: u32) -> (Kernel, Vec<u32>) {
-    match options.variant {
-        Variant::LvcBdpt => (
-            shaders::INTEGRATOR_LVC_CAMERA_CONNECT,
-            vec![WORKGROUP, 1, bsdf_kinds],
-        ),
+fn camera_connect(options: &LvcOptions, bsdf_kinds: u32) -> (Kernel, [u32; 3]) {
+    let (kernel, capacity) = match options.variant {
+        Variant::LvcBdpt => (shaders::INTEGRATOR_LVC_CAMERA_CONNECT, 1),
         Variant::CisLbdpt => (
             shaders::INTEGRATOR_LVC_CAMERA_CONNECT__RESAMPLED,
-            vec![
-                WORKGROUP,
-                options.candidates.clamp(1, MAX_CANDIDATES),
-                bsdf_kinds,
-            ],
+            options.candidates.clamp(1, MAX_CANDIDATES),
         ),
-    }
+    };
+    (kernel, kernel_constants(WORKGROUP, capacity, bsdf_kinds))
 }
 
 /// How `camera_accumulate` sums its visibility tally.

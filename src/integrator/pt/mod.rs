@@ -210,8 +210,7 @@ struct Pipelines {
 
 impl Pipelines {
     /// `pt`'s kernels; the shading kernel compiled for the layer kinds in `bsdf_kinds`
-    /// alone ([`crate::bsdf::layer_kinds`]: specialization constant 2, `BSDF_KINDS` of
-    /// bsdf.glsl; constant 1 is unused).
+    /// alone ([`crate::bsdf::layer_kinds`]).
     fn new(gpu: &Gpu, bsdf_kinds: u32) -> vk::Result<Self> {
         let with_constants = |kernel, bindings, constants: &[u32]| {
             vk::compute_pipeline(
@@ -228,7 +227,7 @@ impl Pipelines {
             shade: with_constants(
                 shaders::INTEGRATOR_PT_SHADE,
                 16,
-                &[WORKGROUP, 1, bsdf_kinds],
+                &crate::bsdf::kernel_constants(WORKGROUP, 1, bsdf_kinds),
             )?,
             nee_accumulate: make(shaders::INTEGRATOR_PT_NEE_ACCUMULATE, 4)?,
             gather: make(shaders::INTEGRATOR_PT_GATHER, 5)?,
