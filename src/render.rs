@@ -298,6 +298,7 @@ pub fn render_from(
         aov::render_aovs(gpu, tracer.as_mut(), &triangle_buffer, &camera)?
     };
     let mut integrator = integrator_on(gpu, scene, options, &triangles, tracer)?;
+    warn_if_spp_rounds_up(options, integrator.as_ref());
     render_prepared(
         gpu,
         scene,
@@ -527,6 +528,21 @@ pub fn create_integrator(
     let triangles = scene.gpu_triangles();
     let tracer = options.tracer.create(gpu, &triangles)?;
     integrator_on(gpu, scene, options, &triangles, tracer)
+}
+
+/// Says so when `options.spp` is not a whole number of the integrator's passes: a render
+/// runs whole passes, so it rounds up (a `cbpt` pass adds 4 samples per pixel).
+/// `u32::MAX` bounds nothing (a render for a time), so it is not rounded.
+pub(crate) fn warn_if_spp_rounds_up(options: &RenderOptions, integrator: &dyn Integrator) {
+    let per_pass = integrator.samples_per_pass().max(1);
+    if options.spp != u32::MAX && options.spp % per_pass != 0 {
+        log::warn!(
+            "{} renders {per_pass} samples per pixel a pass: {} spp asked, {} rendered",
+            integrator.name(),
+            options.spp,
+            options.spp.div_ceil(per_pass) * per_pass
+        );
+    }
 }
 
 /// Builds the integrator `options` asks for; it takes the tracer over.

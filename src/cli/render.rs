@@ -50,7 +50,8 @@ pub struct RenderArgs {
     /// Film height in pixels (default: the scene's, else 512).
     #[arg(long)]
     height: Option<u32>,
-    /// Samples per pixel (default: the scene's, else 1; more than 1 jitters within pixels).
+    /// Samples per pixel (default: the scene's, else 1; more than 1 jitters within pixels;
+    /// cbpt renders 4 a pass, so it rounds up to a multiple of 4).
     #[arg(long)]
     spp: Option<u32>,
     /// Random seed (same seed, same device → same image).

@@ -270,6 +270,7 @@ impl Sequence {
             &triangles,
             Box::new(SharedTracer(tracer.clone())),
         )?;
+        super::warn_if_spp_rounds_up(options, integrator.as_ref());
         let aov_triangles = gpu.upload("aov-triangles", &triangles)?;
         Ok(Self {
             aov_triangles,

@@ -4,11 +4,14 @@ use glam::Vec3;
 
 use super::{Camera, FilmSize, Location, Scene, SceneError, SceneStats};
 
+/// What [`super::Triangle::is_degenerate`] finds, in words.
+const DEGENERATE: &str = "degenerate (zero area, or an area past 32-bit floating point)";
+
 /// Largest accepted film width or height, in pixels.
 pub const MAX_FILM_DIM: u32 = 16384;
 
-/// Position, look-at and up finite; look_at ≠ position; up non-zero and not parallel to
-/// the view direction; 0 < fov_y < 180.
+/// Position, look-at and up finite; look_at ≠ position, and their distance's square
+/// finite; up non-zero and not parallel to the view direction; 0 < fov_y < 180.
 pub fn validate_camera(camera: &Camera, at: &Location) -> Result<(), SceneError> {
     let err = |message: String| SceneError::Camera {
         at: at.clone(),
@@ -30,6 +33,14 @@ pub fn validate_camera(camera: &Camera, at: &Location) -> Result<(), SceneError>
         )));
     }
     let forward = camera.look_at - camera.position;
+    // Past about 1.8e19 the squared distance overflows f32: the view direction would
+    // normalise to zero and every ray of the camera would be NaN.
+    if !forward.length_squared().is_finite() {
+        return Err(err(format!(
+            "look_at {} is too far from position {} for 32-bit floating point",
+            camera.look_at, camera.position
+        )));
+    }
     if forward.length_squared() <= f32::MIN_POSITIVE
         || forward.length() <= 1e-6 * camera.position.abs().max_element()
     {
@@ -159,14 +170,14 @@ pub fn validate_scene(scene: &Scene, at: &Location) -> Result<SceneStats, SceneE
         return Err(SceneError::Empty {
             at: at.clone(),
             message: format!(
-                "all {} triangles of scene '{}' are degenerate (zero area)",
+                "all {} triangles of scene '{}' are {DEGENERATE}",
                 stats.triangles, scene.name
             ),
         });
     }
     if stats.degenerate_triangles > 0 {
         log::warn!(
-            "{at}: {} of {} triangles are degenerate (zero area); kept",
+            "{at}: {} of {} triangles are {DEGENERATE}; kept",
             stats.degenerate_triangles,
             stats.triangles
         );
@@ -239,6 +250,13 @@ mod tests {
                     ..cam()
                 },
                 "not finite",
+            ),
+            (
+                Camera {
+                    position: Vec3::new(0.0, 0.0, 1e38),
+                    ..cam()
+                },
+                "too far from position",
             ),
         ];
         for (c, want) in bad {

@@ -104,6 +104,42 @@ fn tiny_render_writes_exr_png_and_stats_with_validation_on() {
     );
 }
 
+/// A render runs whole passes: `cbpt`'s add 4 samples per pixel, so `--spp 6` renders 8,
+/// and says so; a whole number of passes says nothing.
+#[test]
+fn spp_rounds_up_to_whole_passes_and_says_so() {
+    let dir = tempfile::tempdir().unwrap();
+    for (spp, rendered, warned) in [("6", 8, true), ("4", 4, false)] {
+        let out = splitray(
+            &[
+                "render",
+                "cornell-box",
+                "-o",
+                "img.exr",
+                "--width",
+                "8",
+                "--height",
+                "8",
+                "--integrator",
+                "cbpt",
+                "--spp",
+                spp,
+                "--validation",
+            ],
+            dir.path(),
+        );
+        assert!(out.status.success(), "{}", text(&out));
+        let said = text(&out).contains("samples per pixel a pass");
+        assert_eq!(said, warned, "{}", text(&out));
+        if warned {
+            let warning = "cbpt renders 4 samples per pixel a pass: 6 spp asked, 8 rendered";
+            assert!(text(&out).contains(warning), "{}", text(&out));
+        }
+        let (_, meta) = splitray::film::read_exr(dir.path().join("img.exr")).unwrap();
+        assert_eq!(meta.spp, rendered);
+    }
+}
+
 #[test]
 fn bpt_render_writes_technique_images_and_its_counters() {
     let dir = tempfile::tempdir().unwrap();
