@@ -86,7 +86,10 @@ impl AtomicFile {
             _ => PathBuf::from("."),
         };
         if !dir.is_dir() {
-            return Err(FilmError::MissingDirectory { path: dir });
+            return Err(FilmError::MissingDirectory {
+                path: target,
+                folder: dir,
+            });
         }
         // Renaming over a folder fails only at the end, after the work.
         if target.is_dir() {
@@ -267,7 +270,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let missing = dir.path().join("no-such-dir");
         let err = write_bytes_atomically(missing.join("x.bin"), b"x").unwrap_err();
-        assert!(matches!(&err, FilmError::MissingDirectory { path } if *path == missing));
+        assert!(matches!(&err, FilmError::MissingDirectory { folder, .. } if *folder == missing));
         assert!(err.to_string().contains("no-such-dir"), "{err}");
     }
 

@@ -8,10 +8,12 @@ use std::path::PathBuf;
 #[derive(Debug, thiserror::Error)]
 pub enum FilmError {
     /// The folder an output should be written into does not exist (or is not a folder).
-    #[error("output directory {} does not exist or is not a directory", .path.display())]
+    #[error("{}: the folder {} does not exist", .path.display(), .folder.display())]
     MissingDirectory {
-        /// The folder that was expected to exist.
+        /// The output file.
         path: PathBuf,
+        /// Its folder, which was expected to exist.
+        folder: PathBuf,
     },
 
     /// An I/O operation on `path` failed. The underlying error is part of the message,

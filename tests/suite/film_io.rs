@@ -243,7 +243,9 @@ fn missing_parent_directory_is_an_error_and_leaves_nothing() {
     let target = missing.join("out.exr");
 
     let err = write_exr(&target, &film, &meta()).unwrap_err();
-    assert!(matches!(&err, FilmError::MissingDirectory { path } if *path == missing));
+    assert!(
+        matches!(&err, FilmError::MissingDirectory { path, folder } if *folder == missing && *path == target)
+    );
     assert!(
         err.to_string().contains(&*missing.to_string_lossy()),
         "{err}"
@@ -419,7 +421,7 @@ fn parent_that_is_a_file_is_a_missing_directory() {
     std::fs::write(&file, b"x").unwrap();
     let err = write_png_preview(file.join("out.png"), &test_film(1, 1, false), 1.0).unwrap_err();
     assert!(
-        matches!(&err, FilmError::MissingDirectory { path } if *path == file),
+        matches!(&err, FilmError::MissingDirectory { folder, .. } if *folder == file),
         "{err}"
     );
     assert_eq!(dir_entries(dir.path()), ["plain-file"]);
