@@ -110,24 +110,12 @@ fn tiny_render_writes_exr_png_and_stats_with_validation_on() {
 fn spp_rounds_up_to_whole_passes_and_says_so() {
     let dir = tempfile::tempdir().unwrap();
     for (spp, rendered, warned) in [("6", 8, true), ("4", 4, false)] {
-        let out = splitray(
-            &[
-                "render",
-                "cornell-box",
-                "-o",
-                "img.exr",
-                "--width",
-                "8",
-                "--height",
-                "8",
-                "--integrator",
-                "cbpt",
-                "--spp",
-                spp,
-                "--validation",
-            ],
-            dir.path(),
-        );
+        let render = "render cornell-box -o img.exr --width 8 --height 8 --integrator cbpt";
+        let args: Vec<&str> = render
+            .split_whitespace()
+            .chain(["--validation", "--spp", spp])
+            .collect();
+        let out = splitray(&args, dir.path());
         assert!(out.status.success(), "{}", text(&out));
         let said = text(&out).contains("samples per pixel a pass");
         assert_eq!(said, warned, "{}", text(&out));
