@@ -627,10 +627,10 @@ fn pt_options(gpu: &Gpu, options: &RenderOptions) -> integrator::pt::PtOptions {
 /// `lvc-bdpt`'s and `cis-lbdpt`'s settings: the variant's, with the render's seed, depths,
 /// spp and technique images.
 fn lvc_options(gpu: &Gpu, options: &RenderOptions) -> integrator::lvc::LvcOptions {
-    let variant = match options.integrator {
-        IntegratorKind::CisLbdpt => integrator::lvc::Variant::CisLbdpt,
-        _ => integrator::lvc::Variant::LvcBdpt,
-    };
+    let variant = options
+        .integrator
+        .lvc_variant()
+        .unwrap_or(integrator::lvc::Variant::LvcBdpt);
     let mut lvc = options
         .lvc
         .options(variant, integrator::lvc::sort_pays(gpu));

@@ -103,7 +103,7 @@ pub fn configurations(
 ) -> Vec<(IntegratorKind, u32, bool)> {
     let mut out = Vec::new();
     for &kind in integrators {
-        if !matches!(kind, IntegratorKind::LvcBdpt | IntegratorKind::CisLbdpt) {
+        if kind.lvc_variant().is_none() {
             continue;
         }
         for &sort in &plan.sort {

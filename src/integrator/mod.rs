@@ -231,6 +231,16 @@ impl IntegratorKind {
         }
     }
 
+    /// The light-vertex-cache variant this integrator runs, for the cache integrators
+    /// (`lvc-bdpt`, `cis-lbdpt`).
+    pub fn lvc_variant(self) -> Option<lvc::Variant> {
+        match self {
+            Self::LvcBdpt => Some(lvc::Variant::LvcBdpt),
+            Self::CisLbdpt => Some(lvc::Variant::CisLbdpt),
+            _ => None,
+        }
+    }
+
     pub fn name(self) -> &'static str {
         match self {
             Self::Primary => "primary",

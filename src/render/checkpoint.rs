@@ -32,7 +32,6 @@ use super::fingerprint::Fingerprint;
 use super::shard::Shard;
 use super::{FilmSnapshot, RenderError, RenderOptions};
 use crate::film::{AtomicFile, FilmError, FilmSums};
-use crate::integrator::IntegratorKind;
 
 /// The first 16 bytes of every checkpoint.
 pub const SIGNATURE: &[u8; 16] = b"\x89splitray-ckpt\r\n";
@@ -83,11 +82,9 @@ impl SavedOptions {
             strategy: format!("{:?}", options.strategy).to_lowercase(),
             time_limit: options.time_limit,
             cbpt: options.cbpt,
-            lvc: match options.integrator {
-                IntegratorKind::LvcBdpt | IntegratorKind::CisLbdpt => {
-                    options.lvc.with_estimator_pinned()
-                }
-                _ => options.lvc,
+            lvc: match options.integrator.lvc_variant() {
+                Some(_) => options.lvc.with_estimator_pinned(),
+                None => options.lvc,
             },
         }
     }

@@ -106,10 +106,7 @@ pub fn planned_buffers(size: &RenderSize<'_>, integrator: IntegratorKind) -> Vec
     for name in gpu_film {
         buffers.push(PlannedBuffer::by_address(name, pixels * vec4));
     }
-    if matches!(
-        integrator,
-        IntegratorKind::LvcBdpt | IntegratorKind::CisLbdpt
-    ) {
+    if integrator.lvc_variant().is_some() {
         // The light-vertex-cache kernels take their films through one binding; the
         // splat film holds at least one pass of fixed-point words per pixel.
         let splat = pixels * crate::integrator::lvc::fixed::FIXED_WORDS as u64 * 4;

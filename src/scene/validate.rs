@@ -33,15 +33,16 @@ pub fn validate_camera(camera: &Camera, at: &Location) -> Result<(), SceneError>
         )));
     }
     let forward = camera.look_at - camera.position;
+    let distance2 = forward.length_squared();
     // Past about 1.8e19 the squared distance overflows f32: the view direction would
     // normalise to zero and every ray of the camera would be NaN.
-    if !forward.length_squared().is_finite() {
+    if !distance2.is_finite() {
         return Err(err(format!(
             "look_at {} is too far from position {} for 32-bit floating point",
             camera.look_at, camera.position
         )));
     }
-    if forward.length_squared() <= f32::MIN_POSITIVE
+    if distance2 <= f32::MIN_POSITIVE
         || forward.length() <= 1e-6 * camera.position.abs().max_element()
     {
         return Err(err(format!(
