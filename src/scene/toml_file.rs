@@ -95,7 +95,7 @@
 //! seed = 1
 //! integrator = "path"
 //! tracer = "pdacrt"
-//! max_depth = 8
+//! max_depth = 8                     # -1: unbounded (the default)
 //! ```
 
 use std::path::Path;
@@ -142,13 +142,13 @@ struct FilmToml {
 #[serde(deny_unknown_fields)]
 struct MaterialToml {
     name: Spanned<String>,
-    diffuse: Option<[f32; 3]>,
-    specular: Option<[f32; 3]>,
-    shininess: Option<f32>,
+    diffuse: Option<Spanned<[f32; 3]>>,
+    specular: Option<Spanned<[f32; 3]>>,
+    shininess: Option<Spanned<f32>>,
     ior: Option<Spanned<f32>>,
-    dissolve: Option<f32>,
+    dissolve: Option<Spanned<f32>>,
     illum: Option<u32>,
-    emission: Option<[f32; 3]>,
+    emission: Option<Spanned<[f32; 3]>>,
     bsdf: Option<Spanned<String>>,
     reflectance: Option<Spanned<[f32; 3]>>,
     roughness: Option<Spanned<f32>>,
@@ -181,27 +181,56 @@ struct LayerKeys<'a> {
 }
 
 impl MaterialToml {
+    /// Checks the colours and numbers the table sets (the checks `validate_scene` makes
+    /// of every material), so that a bad one is reported at its line.
+    fn check_values(&self, at: &Loc) -> Result<(), SceneError> {
+        let name = self.name.get_ref();
+        for (what, v) in [
+            ("diffuse", &self.diffuse),
+            ("specular", &self.specular),
+            ("emission", &self.emission),
+        ] {
+            if let Some(v) = v {
+                let (c, at) = (Vec3::from(*v.get_ref()), at(v.span()));
+                validate::check_finite(c, &at, || format!("material '{name}' {what}"))?;
+                validate::check_non_negative(c, &at, || format!("material '{name}' {what}"))?;
+            }
+        }
+        for (what, v) in [
+            ("shininess", &self.shininess),
+            ("ior", &self.ior),
+            ("dissolve", &self.dissolve),
+        ] {
+            if let Some(v) = v {
+                let x = Vec3::splat(*v.get_ref());
+                validate::check_finite(x, &at(v.span()), || format!("material '{name}' {what}"))?;
+            }
+        }
+        Ok(())
+    }
+
     fn apply(&self, m: &mut Material, bsdf: &Option<MaterialBsdf>) {
-        if let Some(v) = self.diffuse {
-            m.diffuse = v.into();
+        let colour = |v: &Spanned<[f32; 3]>| Vec3::from(*v.get_ref());
+        if let Some(v) = &self.diffuse {
+            m.diffuse = colour(v);
         }
-        if let Some(v) = self.specular {
-            m.specular = v.into();
+        if let Some(v) = &self.specular {
+            m.specular = colour(v);
         }
-        if let Some(v) = self.shininess {
-            m.shininess = v;
+        if let Some(v) = &self.shininess {
+            m.shininess = *v.get_ref();
         }
         if let Some(v) = &self.ior {
             m.ior = *v.get_ref();
         }
-        if let Some(v) = self.dissolve {
-            m.dissolve = v;
+        if let Some(v) = &self.dissolve {
+            m.dissolve = *v.get_ref();
         }
         if let Some(v) = self.illum {
             m.illum = v;
         }
-        if let Some(v) = self.emission {
-            m.emission = v.into();
+        if let Some(v) = &self.emission {
+            m.emission = colour(v);
         }
         if bsdf.is_some() {
             m.bsdf = bsdf.clone();
@@ -402,8 +431,33 @@ const DEFAULT_IOR: f32 = 1.5;
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct PointLightToml {
-    position: [f32; 3],
-    intensity: [f32; 3],
+    position: Spanned<[f32; 3]>,
+    intensity: Spanned<[f32; 3]>,
+}
+
+/// The `[[point_light]]` tables, each checked as `validate_scene` checks a light, so that
+/// a bad value is reported at its line.
+fn point_lights(tables: &[PointLightToml], at: &Loc) -> Result<Vec<PointLight>, SceneError> {
+    let mut lights = Vec::with_capacity(tables.len());
+    for (i, l) in tables.iter().enumerate() {
+        let position = Vec3::from(*l.position.get_ref());
+        let intensity = Vec3::from(*l.intensity.get_ref());
+        let (at_position, at_intensity) = (at(l.position.span()), at(l.intensity.span()));
+        validate::check_finite(position, &at_position, || {
+            format!("point light {i} position")
+        })?;
+        validate::check_finite(intensity, &at_intensity, || {
+            format!("point light {i} intensity")
+        })?;
+        validate::check_non_negative(intensity, &at_intensity, || {
+            format!("point light {i} intensity")
+        })?;
+        lights.push(PointLight {
+            position,
+            intensity,
+        });
+    }
+    Ok(lights)
 }
 
 #[derive(Deserialize)]
@@ -413,7 +467,8 @@ struct RenderToml {
     seed: Option<u64>,
     integrator: Option<Spanned<String>>,
     tracer: Option<Spanned<String>>,
-    max_depth: Option<u32>,
+    /// As `--max-depth`: −1 is unbounded (the default).
+    max_depth: Option<Spanned<i64>>,
 }
 
 /// Loads and validates a TOML scene file (see the module documentation for the format),
@@ -481,14 +536,7 @@ pub fn parse_toml_animated(
         film: FilmSize::default(),
         triangles,
         materials,
-        point_lights: doc
-            .point_light
-            .iter()
-            .map(|l| PointLight {
-                position: l.position.into(),
-                intensity: l.intensity.into(),
-            })
-            .collect(),
+        point_lights: point_lights(&doc.point_light, &at_span)?,
         settings: match doc.render {
             Some(r) => render_settings(r, &at_span)?,
             None => RenderSettings::default(),
@@ -604,6 +652,7 @@ fn apply_material_tables(
     at: &Loc,
 ) -> Result<(), SceneError> {
     for m in tables {
+        m.check_values(at)?;
         let bsdf = m.explicit_bsdf(at)?;
         let name = m.name.get_ref();
         let mut found = false;
@@ -672,11 +721,26 @@ fn render_settings(r: RenderToml, at: &Loc) -> Result<RenderSettings, SceneError
             .parse::<TracerKind>()
             .map_err(|e| invalid(name.span(), e))?;
     }
+    let max_depth = match r.max_depth {
+        None => None,
+        Some(d) => match *d.get_ref() {
+            -1 => None,
+            depth => Some(u32::try_from(depth).map_err(|_| {
+                invalid(
+                    d.span(),
+                    format!(
+                        "max_depth {depth}: expected -1 (unbounded) or a depth from 0 to {}",
+                        u32::MAX
+                    ),
+                )
+            })?),
+        },
+    };
     Ok(RenderSettings {
         spp: r.spp.map(Spanned::into_inner),
         seed: r.seed,
         integrator: r.integrator.map(Spanned::into_inner),
         tracer: r.tracer.map(Spanned::into_inner),
-        max_depth: r.max_depth,
+        max_depth,
     })
 }

@@ -77,7 +77,11 @@ pub fn validate_film(film: &FilmSize, at: &Location) -> Result<(), SceneError> {
     Ok(())
 }
 
-fn check_finite(v: Vec3, at: &Location, what: impl FnOnce() -> String) -> Result<(), SceneError> {
+pub(super) fn check_finite(
+    v: Vec3,
+    at: &Location,
+    what: impl FnOnce() -> String,
+) -> Result<(), SceneError> {
     if v.is_finite() {
         Ok(())
     } else {
@@ -91,7 +95,7 @@ fn check_finite(v: Vec3, at: &Location, what: impl FnOnce() -> String) -> Result
 
 /// Radiance, reflectances and intensities are never negative: a negative channel would
 /// make the integrators' pdfs and weights meaningless rather than just dim the image.
-fn check_non_negative(
+pub(super) fn check_non_negative(
     v: Vec3,
     at: &Location,
     what: impl FnOnce() -> String,

@@ -331,6 +331,20 @@ fn a_sequence_file_with_other_triangles_is_refused() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("has vertex normals on 0 triangles"), "{e}");
+    // As many triangles, but the first quad split along its other diagonal.
+    let other_diagonal = sheet_obj(10.0, true).replace(
+        "f 1//1 7//7 2//2\nf 1//1 6//6 7//7\n",
+        "f 1//1 6//6 2//2\nf 2//2 6//6 7//7\n",
+    );
+    assert_ne!(other_diagonal, sheet_obj(10.0, true));
+    std::fs::write(dir.path().join("sheet_01.obj"), other_diagonal).unwrap();
+    let e = scene::load_animated(path.to_str().unwrap())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("'sheet_01.obj' joins its vertices into faces otherwise than 'sheet_00.obj'"),
+        "{e}"
+    );
 }
 
 fn options(scene: &Scene, integrator: IntegratorKind, tracer: TracerKind) -> RenderOptions {

@@ -102,6 +102,11 @@ fn good_toml_loads_with_relative_paths() {
     assert_eq!(s.settings.integrator.as_deref(), Some("path"));
     assert_eq!(s.settings.tracer.as_deref(), Some("pdacrt"));
     assert_eq!(s.settings.max_depth, Some(5));
+    // As on the command line, -1 is unbounded: the default.
+    let unbounded = GOOD_TOML.replace("max_depth = 5", "max_depth = -1");
+    let p = write(dir.path(), "unbounded.toml", &unbounded);
+    let s = scene::load(p.to_str().unwrap()).unwrap();
+    assert_eq!(s.settings.max_depth, None);
 }
 
 #[test]
@@ -175,7 +180,7 @@ fn toml_errors_have_line_and_column() {
     );
     assert_has(
         &load_err(&p),
-        &["nanlight.toml", "point light 0 position is not finite"],
+        &["nanlight.toml:4:", "point light 0 position is not finite"],
     );
 
     let p = write(
@@ -186,10 +191,32 @@ fn toml_errors_have_line_and_column() {
     assert_has(
         &load_err(&p),
         &[
-            "darklight.toml",
+            "darklight.toml:5:",
             "point light 0 intensity [1, -2, 1] is negative",
         ],
     );
+
+    // A [[material]] table's values are checked at their lines too.
+    for (i, (line, expect)) in [
+        (
+            "diffuse = [-1, 2, 1]",
+            "material 'red' diffuse [-1, 2, 1] is negative",
+        ),
+        (
+            "emission = [1, inf, 1]",
+            "material 'red' emission is not finite",
+        ),
+        ("dissolve = nan", "material 'red' dissolve is not finite"),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let name = format!("material{i}.toml");
+        let text =
+            format!("[[mesh]]\npath = \"meshes/tri.obj\"\n[[material]]\nname = \"red\"\n{line}\n");
+        let p = write(dir.path(), &name, &text);
+        assert_has(&load_err(&p), &[&format!("{name}:5:"), expect]);
+    }
 
     // A mesh loaded twice brings its materials twice; the list of known names has each once.
     let p = write(
@@ -205,6 +232,10 @@ fn toml_errors_have_line_and_column() {
         ("spp = 0", "spp must be at least 1"),
         ("integrator = \"gpu\"", "unknown integrator 'gpu'"),
         ("tracer = \"gpu\"", "unknown tracer 'gpu'"),
+        (
+            "max_depth = -2",
+            "max_depth -2: expected -1 (unbounded) or a depth from 0 to",
+        ),
     ]
     .into_iter()
     .enumerate()
@@ -313,6 +344,14 @@ fn malformed_obj_and_mtl() {
             "m5.obj",
             &["m5.obj:4", "normal 1 is not finite"],
         ),
+        (
+            "v 0 0 0\nv 1 0 0 0.5 0.5\n",
+            "m6.obj",
+            &[
+                "m6.obj:2",
+                "vertex 2 has 5 numbers: expected x y z, x y z w or x y z r g b",
+            ],
+        ),
     ];
     for (text, name, want) in cases {
         let p = write(dir.path(), name, text);
@@ -327,11 +366,85 @@ fn malformed_obj_and_mtl() {
         ),
         ("newmtl a\nKe 1 nan 1\n", "bad.mtl:2: Ke is not finite"),
         ("newmtl a\nillum x\n", "bad.mtl:2: illum needs an integer"),
+        (
+            "newmtl a\nKd -1 2 1\n",
+            "bad.mtl:2: Kd [-1, 2, 1] is negative",
+        ),
     ] {
         write(dir.path(), "bad.mtl", mtl);
         let p = write(dir.path(), "usesbad.obj", obj);
         assert_has(&load_err(&p), &[want]);
     }
+}
+
+/// The triangles' corners and material names of a loaded scene.
+fn geometry_and_materials(path: &Path) -> (Vec<[Vec3; 3]>, Vec<String>) {
+    let s = scene::load(path.to_str().unwrap()).unwrap();
+    let names = s
+        .triangles
+        .iter()
+        .map(|t| s.materials[t.material as usize].name.clone());
+    (s.triangles.iter().map(|t| t.p).collect(), names.collect())
+}
+
+/// Forms of OBJ that `tobj` alone reads otherwise than the format means load as the
+/// plain form of the same file does.
+#[test]
+fn obj_forms_load_as_the_plain_form() {
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "a.mtl", "newmtl a\nKd 0.1 0.2 0.3\n");
+    write(dir.path(), "b.mtl", "\u{feff}newmtl b\nKd 0.4 0.5 0.6\n");
+    let plain = write(
+        dir.path(),
+        "plain.obj",
+        "mtllib a.mtl\nmtllib b.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvt 0.5 0\n\
+         usemtl a\nf 1/1 2/1 3/1\nusemtl b\nf 2 4 3\n",
+    );
+    let want = geometry_and_materials(&plain);
+    assert_eq!(want.1, ["a", "b"]);
+    let forms = [
+        (
+            "a byte-order mark",
+            "\u{feff}mtllib a.mtl\nmtllib b.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\n\
+             vt 0.5 0\nusemtl a\nf 1/1 2/1 3/1\nusemtl b\nf 2 4 3\n",
+        ),
+        (
+            "two libraries on one line",
+            "mtllib a.mtl b.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvt 0.5 0\n\
+             usemtl a\nf 1/1 2/1 3/1\nusemtl b\nf 2 4 3\n",
+        ),
+        (
+            "libraries after the usemtl naming them",
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvt 0.5 0\nusemtl a\nf 1/1 2/1 3/1\n\
+             mtllib a.mtl\nusemtl b\nf 2 4 3\nmtllib b.mtl\n",
+        ),
+        (
+            "trailing comments, a one-number vt and colours on some vertices",
+            "mtllib a.mtl b.mtl\nv 0 0 0 1 0 0 # red\nv 1 0 0\nv 0 1 0 0 1 0\n\
+             v 1 1 0 # fourth\nvt 0.5\nusemtl a\nf 1/1 2/1 3/1 # first\nusemtl b\nf 2 4 3\n",
+        ),
+    ];
+    for (what, text) in forms {
+        let p = write(dir.path(), "form.obj", text);
+        assert_eq!(geometry_and_materials(&p), want, "{what}");
+    }
+    // A name with a space is one library where that file exists.
+    write(
+        dir.path(),
+        "a b.mtl",
+        "newmtl a\nKd 0.1 0.2 0.3\nnewmtl b\nKd 0.4 0.5 0.6\n",
+    );
+    let p = write(
+        dir.path(),
+        "spaced.obj",
+        "mtllib a b.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nusemtl a\nf 1 2 3\n\
+         usemtl b\nf 2 4 3\n",
+    );
+    assert_eq!(
+        geometry_and_materials(&p),
+        want,
+        "a library named with a space"
+    );
 }
 
 #[test]

@@ -202,8 +202,9 @@ fn shape_of(triangles: &[Triangle]) -> Shape {
     }
 }
 
-/// The same triangle count and the same normals (all or none per triangle) as the
-/// first file.
+/// The same triangle count, the same faces over the vertices and the same normals (all
+/// or none per triangle) as the first file: frames blend triangle by triangle, so a file
+/// whose faces join other vertices would tear the mesh apart between frames.
 fn check_same_topology(
     first: &ObjMesh,
     other: &ObjMesh,
@@ -216,6 +217,12 @@ fn check_same_topology(
              vertices): every file of a sequence needs the same faces in the same order",
             3 * b,
             3 * a
+        ));
+    }
+    if first.connectivity != other.connectivity {
+        return Err(format!(
+            "'{name}' joins its vertices into faces otherwise than '{first_name}': every \
+             file of a sequence needs the same faces in the same order"
         ));
     }
     let with_normals = |m: &ObjMesh| m.triangles.iter().filter(|t| t.n.is_some()).count();

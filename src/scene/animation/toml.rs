@@ -239,10 +239,7 @@ impl MeshToml {
         pose_keyed(&rest, file0, base.as_ref(), key0.as_ref(), &mut triangles);
         let moves = keys.is_some() || sequence.is_some();
         Ok(LoadedMesh {
-            mesh: ObjMesh {
-                triangles,
-                materials: mesh.materials,
-            },
+            mesh: ObjMesh { triangles, ..mesh },
             motion: moves.then(|| MeshMotion {
                 name: rel.clone(),
                 range: 0..0,

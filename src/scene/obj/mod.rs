@@ -1,8 +1,11 @@
 //! Wavefront OBJ + MTL loading (through `tobj`) and export.
 //!
-//! Before `tobj` sees a file it is pre-scanned here, so that malformed numbers, NaN / inf
-//! coordinates and out-of-range face indices are reported with their line number (and so
-//! that inputs on which `tobj` would panic never reach it). Faces are triangulated;
+//! Before `tobj` sees a file it is pre-scanned ([`prescan`]), so that malformed numbers,
+//! NaN / inf coordinates and out-of-range face indices are reported with their line number
+//! (and so that inputs on which `tobj` would panic never reach it), and rewritten where
+//! `tobj` would read it otherwise than the OBJ format means ([`for_tobj`]: libraries named
+//! after a `usemtl` or several to a line, trailing comments, one-number texture
+//! coordinates, vertex colours on some vertices only). Faces are triangulated;
 //! vertex normals are kept when every vertex of a `tobj` mesh has one. Faces without a
 //! material (no `usemtl`, or a `usemtl` naming a material no MTL defines — the latter
 //! logs a warning) get a default material ([`DEFAULT_MATERIAL_NAME`]) appended after the
@@ -23,6 +26,12 @@ use super::{
     Triangle,
 };
 
+mod for_tobj;
+mod prescan;
+
+use for_tobj::{libraries, text_for_tobj, Library};
+use prescan::{prescan_mtl, prescan_obj, ObjScan};
+
 /// Name of the material given to faces that have none.
 pub const DEFAULT_MATERIAL_NAME: &str = "obj-default";
 
@@ -31,13 +40,28 @@ pub const DEFAULT_MATERIAL_NAME: &str = "obj-default";
 pub struct ObjMesh {
     pub triangles: Vec<Triangle>,
     pub materials: Vec<Material>,
+    /// How the file's faces join its vertices, as a hash: two files with the same faces
+    /// (over vertices at any positions, listed in any order) have the same value.
+    pub connectivity: u64,
 }
 
+/// The text of a scene, OBJ or MTL file, without the byte-order mark some editors write
+/// at its start (a BOM is no part of the text: left in, it would hide the first
+/// keyword).
 pub(crate) fn read_text(path: &Path) -> Result<String, SceneError> {
-    std::fs::read_to_string(path).map_err(|error| SceneError::Io {
-        path: path.to_path_buf(),
-        error,
-    })
+    std::fs::read_to_string(path)
+        .map(without_byte_order_mark)
+        .map_err(|error| SceneError::Io {
+            path: path.to_path_buf(),
+            error,
+        })
+}
+
+fn without_byte_order_mark(text: String) -> String {
+    match text.strip_prefix('\u{feff}') {
+        Some(rest) => rest.to_string(),
+        None => text,
+    }
 }
 
 fn label(path: &Path) -> String {
@@ -85,6 +109,7 @@ pub fn load_obj_mesh(path: &Path) -> Result<ObjMesh, SceneError> {
     let mut out = ObjMesh {
         triangles: Vec::new(),
         materials: tobj_materials.iter().map(convert_material).collect(),
+        connectivity: scan.connectivity,
     };
     warn_of_unknown_materials(&scan, &out.materials, &file);
     let mut default_index: Option<u32> = None;
@@ -109,11 +134,12 @@ fn parse_obj(
     dir: &Path,
     scan: &ObjScan,
 ) -> Result<(Vec<tobj::Model>, Vec<tobj::Material>), SceneError> {
+    let libraries = libraries(scan, dir);
     let mtl_error: RefCell<Option<SceneError>> = RefCell::new(None);
     let loader = |mtl: &Path| -> tobj::MTLLoadResult {
         let name = mtl.to_string_lossy().into_owned();
         let full = dir.join(mtl);
-        let at = mtllib_location(scan, file, &name);
+        let at = mtllib_location(&libraries, file, &name);
         let result = read_mtl(&full, at, name).and_then(|mtl_text| {
             tobj::load_mtl_buf(&mut mtl_text.as_bytes()).map_err(|e| SceneError::Syntax {
                 at: Location::file(label(&full)),
@@ -140,6 +166,7 @@ fn parse_obj(
     };
     // The pre-scan rejects every input known to make tobj panic; catching an unwind here
     // is a last line of defence so that a loader bug becomes an error, not a crash.
+    let text = text_for_tobj(text, scan, &libraries);
     let loaded = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         tobj::load_obj_buf(&mut text.as_bytes(), &options, loader)
     }));
@@ -166,12 +193,8 @@ fn parse_obj(
 }
 
 /// Where `file` names the material library `name`: its `mtllib` line, else the file.
-fn mtllib_location(scan: &ObjScan, file: &str, name: &str) -> Location {
-    let line = scan
-        .mtllibs
-        .iter()
-        .find(|(n, _)| n == name)
-        .map(|(_, l)| *l);
+fn mtllib_location(libraries: &[Library], file: &str, name: &str) -> Location {
+    let line = libraries.iter().find(|l| l.name == name).map(|l| l.line);
     match line {
         Some(l) => Location::line(file, l),
         None => Location::file(file),
@@ -180,7 +203,7 @@ fn mtllib_location(scan: &ObjScan, file: &str, name: &str) -> Location {
 
 /// The text of the MTL file `full` (named at `at` as `name`), pre-scanned.
 fn read_mtl(full: &Path, at: Location, name: String) -> Result<String, SceneError> {
-    match std::fs::read_to_string(full) {
+    match std::fs::read_to_string(full).map(without_byte_order_mark) {
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => Err(SceneError::MissingReference {
             at,
             what: "material library",
@@ -291,255 +314,6 @@ fn convert_material(m: &tobj::Material) -> Material {
     }
 }
 
-/// What the OBJ pre-scan learnt besides "no errors".
-#[derive(Debug, Default)]
-struct ObjScan {
-    mtllibs: Vec<(String, usize)>,
-    usemtl: Vec<(String, usize)>,
-}
-
-fn rest_of_line<'a>(line: &'a str, keyword: &str) -> &'a str {
-    line.trim_start()[keyword.len()..].trim()
-}
-
-fn parse_floats(
-    words: &[&str],
-    n: usize,
-    at: &Location,
-    what: &str,
-) -> Result<Vec<f32>, SceneError> {
-    if words.len() < n {
-        return Err(SceneError::Syntax {
-            at: at.clone(),
-            message: format!("{what} needs {n} numbers, found {}", words.len()),
-        });
-    }
-    words[..n]
-        .iter()
-        .map(|w| {
-            w.parse::<f32>().map_err(|_| SceneError::Syntax {
-                at: at.clone(),
-                message: format!("{what}: '{w}' is not a number"),
-            })
-        })
-        .collect()
-}
-
-fn require_finite(vals: &[f32], at: &Location, what: String) -> Result<(), SceneError> {
-    if vals.iter().all(|v| v.is_finite()) {
-        Ok(())
-    } else {
-        let value = vals
-            .iter()
-            .map(|v| v.to_string())
-            .collect::<Vec<_>>()
-            .join(" ");
-        Err(SceneError::NonFinite {
-            at: at.clone(),
-            what,
-            value,
-        })
-    }
-}
-
-/// Line-by-line check of OBJ text: vertex / normal numbers parse and are finite, face
-/// indices are non-zero integers inside the file's vertex / texcoord / normal counts.
-fn prescan_obj(text: &str, file: &str) -> Result<ObjScan, SceneError> {
-    let totals = count_elements(text);
-    let mut seen = [0usize; 3];
-    let mut face = 0usize;
-    let mut scan = ObjScan::default();
-    for (i, line) in text.lines().enumerate() {
-        let words: Vec<&str> = line.split_whitespace().collect();
-        let Some(&keyword) = words.first() else {
-            continue;
-        };
-        let at = || Location::line(file, i + 1);
-        match keyword {
-            "v" => {
-                seen[0] += 1;
-                check_vertex(&words[1..], seen[0], &at())?;
-            }
-            "vt" => {
-                seen[1] += 1;
-                parse_floats(&words[1..], 2, &at(), "texture coordinate")?;
-            }
-            "vn" => {
-                seen[2] += 1;
-                let n = parse_floats(&words[1..], 3, &at(), "vertex normal")?;
-                require_finite(&n, &at(), format!("normal {}", seen[2]))?;
-            }
-            "f" => {
-                face += 1;
-                check_face(&words[1..], face, &seen, &totals, &at)?;
-            }
-            "mtllib" => scan
-                .mtllibs
-                .push((rest_of_line(line, "mtllib").to_string(), i + 1)),
-            "usemtl" => {
-                let name = rest_of_line(line, "usemtl");
-                if name.is_empty() {
-                    return Err(SceneError::Syntax {
-                        at: at(),
-                        message: "usemtl without a material name".to_string(),
-                    });
-                }
-                scan.usemtl.push((name.to_string(), i + 1));
-            }
-            _ => {}
-        }
-    }
-    Ok(scan)
-}
-
-/// The kinds of element a face refers to, in the order of a face vertex's `v/vt/vn`.
-const FACE_INDEX_KINDS: [&str; 3] = ["vertex", "texcoord", "normal"];
-
-/// The file's vertices, texture coordinates and normals ([`FACE_INDEX_KINDS`]).
-fn count_elements(text: &str) -> [usize; 3] {
-    let (mut nv, mut nvt, mut nvn) = (0usize, 0usize, 0usize);
-    for line in text.lines() {
-        match line.split_whitespace().next() {
-            Some("v") => nv += 1,
-            Some("vt") => nvt += 1,
-            Some("vn") => nvn += 1,
-            _ => {}
-        }
-    }
-    [nv, nvt, nvn]
-}
-
-/// Checks the numbers of vertex `index` (`x y z [w]`): finite, and a weight that is not 0.
-fn check_vertex(numbers: &[&str], index: usize, at: &Location) -> Result<(), SceneError> {
-    let xyz = parse_floats(numbers, 3, at, "vertex position")?;
-    require_finite(&xyz, at, format!("vertex {index}"))?;
-    if numbers.len() == 4 {
-        let w = parse_floats(&numbers[3..], 1, at, "vertex w")?[0];
-        if w == 0.0 || !w.is_finite() {
-            return Err(SceneError::Syntax {
-                at: at.clone(),
-                message: format!("vertex {index} has weight w = {w}"),
-            });
-        }
-    }
-    Ok(())
-}
-
-/// Checks face `face`'s vertex references against the elements `seen` before it and
-/// the file's `totals`.
-fn check_face(
-    vertices: &[&str],
-    face: usize,
-    seen: &[usize; 3],
-    totals: &[usize; 3],
-    at: &dyn Fn() -> Location,
-) -> Result<(), SceneError> {
-    if vertices.len() < 3 {
-        return Err(SceneError::Syntax {
-            at: at(),
-            message: format!(
-                "face {face} has {} vertices; a face needs at least 3",
-                vertices.len()
-            ),
-        });
-    }
-    for w in vertices {
-        let parts: Vec<&str> = w.split('/').collect();
-        if parts.len() > 3 || parts[0].is_empty() {
-            return Err(SceneError::Syntax {
-                at: at(),
-                message: format!("face {face}: malformed vertex reference '{w}'"),
-            });
-        }
-        for (k, part) in parts.iter().enumerate() {
-            if part.is_empty() {
-                continue;
-            }
-            let idx: i64 = part.parse().map_err(|_| SceneError::Syntax {
-                at: at(),
-                message: format!("face {face}: '{part}' in '{w}' is not an index"),
-            })?;
-            check_face_index(idx, k, face, seen[k], totals[k], at)?;
-        }
-    }
-    Ok(())
-}
-
-/// Checks index `idx` of kind `k` ([`FACE_INDEX_KINDS`]) in face `face`, where `seen`
-/// elements of that kind come before the face and the file has `total`.
-fn check_face_index(
-    idx: i64,
-    k: usize,
-    face: usize,
-    seen: usize,
-    total: usize,
-    at: &dyn Fn() -> Location,
-) -> Result<(), SceneError> {
-    // Relative (negative) indices count back from the elements seen so far; absolute
-    // ones may point anywhere in the file.
-    let ok = match idx {
-        0 => {
-            return Err(SceneError::Syntax {
-                at: at(),
-                message: format!(
-                    "face {face}: {} index 0 is invalid (OBJ indices start at 1)",
-                    FACE_INDEX_KINDS[k]
-                ),
-            })
-        }
-        i if i < 0 => i.unsigned_abs() <= seen as u64,
-        i => i as u64 <= total as u64,
-    };
-    if !ok {
-        return Err(SceneError::IndexOutOfRange {
-            at: at(),
-            face,
-            kind: FACE_INDEX_KINDS[k],
-            index: idx,
-            count: if idx < 0 { seen } else { total },
-        });
-    }
-    Ok(())
-}
-
-/// Line-by-line check of MTL text: colour and scalar parameters parse and are finite.
-fn prescan_mtl(text: &str, file: &str) -> Result<(), SceneError> {
-    for (i, line) in text.lines().enumerate() {
-        let words: Vec<&str> = line.split_whitespace().collect();
-        let Some(&keyword) = words.first() else {
-            continue;
-        };
-        let at = Location::line(file, i + 1);
-        match keyword {
-            "Ka" | "Kd" | "Ks" | "Ke" => {
-                let v = parse_floats(&words[1..], 3, &at, keyword)?;
-                require_finite(&v, &at, keyword.to_string())?;
-            }
-            "Ns" | "Ni" | "d" | "Tr" => {
-                let v = parse_floats(&words[1..], 1, &at, keyword)?;
-                require_finite(&v, &at, keyword.to_string())?;
-            }
-            "illum" => {
-                let ok = words.get(1).is_some_and(|w| w.parse::<u8>().is_ok());
-                if !ok {
-                    return Err(SceneError::Syntax {
-                        at,
-                        message: "illum needs an integer 0..=255".to_string(),
-                    });
-                }
-            }
-            "newmtl" if words.len() < 2 => {
-                return Err(SceneError::Syntax {
-                    at,
-                    message: "newmtl without a material name".to_string(),
-                })
-            }
-            _ => {}
-        }
-    }
-    Ok(())
-}
-
 /// Writes `scene`'s triangles as OBJ text (one `o`/`usemtl` group per run of triangles
 /// with the same material, explicit triangles, file order kept) and its materials as MTL
 /// text. The OBJ refers to the MTL as `mtl_file_name`. Positions are written with
@@ -588,43 +362,6 @@ pub fn to_obj_mtl(scene: &Scene, mtl_file_name: &str) -> (String, String) {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn prescan_catches_bad_indices_with_line() {
-        let text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 99\n";
-        let e = prescan_obj(text, "m.obj").unwrap_err().to_string();
-        assert_eq!(
-            e,
-            "m.obj:5: face 2 references vertex 99 but the file has 3 vertices"
-        );
-        let e = prescan_obj("v 0 0 0\nf -1 -2 -3\n", "m.obj")
-            .unwrap_err()
-            .to_string();
-        assert!(e.contains("m.obj:2: face 1 references vertex -2"), "{e}");
-        let e = prescan_obj("v 0 0 0\nf 1/1 1/1 1/1\n", "m.obj")
-            .unwrap_err()
-            .to_string();
-        assert!(
-            e.contains("references texcoord 1 but the file has 0"),
-            "{e}"
-        );
-        let e = prescan_obj("v 0 0 0\nf 0 1 1\n", "m.obj")
-            .unwrap_err()
-            .to_string();
-        assert!(e.contains("index 0 is invalid"), "{e}");
-    }
-
-    #[test]
-    fn prescan_catches_non_finite() {
-        let e = prescan_obj("v 0 0 0\nv 1 nan 0\n", "m.obj")
-            .unwrap_err()
-            .to_string();
-        assert!(e.starts_with("m.obj:2: vertex 2 is not finite"), "{e}");
-        let e = prescan_mtl("newmtl a\nKd 0.5\n", "m.mtl")
-            .unwrap_err()
-            .to_string();
-        assert!(e.starts_with("m.mtl:2: Kd needs 3 numbers"), "{e}");
-    }
 
     #[test]
     fn material_mapping() {
