@@ -56,6 +56,20 @@ pub fn run(args: &MergeArgs) -> anyhow::Result<()> {
             "warning: no part is shard {}: the image holds fewer samples than its render asked for",
             names.join(", ")
         );
+    } else {
+        // Shards of renders of different lengths, say: valid, but not what one render
+        // of that many samples would have made.
+        let gaps = merged.record.passes.gaps();
+        if !gaps.is_empty() {
+            let names: Vec<String> = gaps
+                .iter()
+                .map(|g| format!("{}..{}", g.start, g.end))
+                .collect();
+            eprintln!(
+                "warning: no part holds passes {}: the image holds fewer samples than its passes' span",
+                names.join(", ")
+            );
+        }
     }
     println!(
         "wrote {} and {}",

@@ -8,9 +8,10 @@
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use anyhow::{bail, Context};
+use anyhow::{anyhow, bail, Context};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
+use splitray::integrator::cbpt::CameraPaths;
 use splitray::integrator::lvc::Resampling;
 use splitray::integrator::IntegratorKind;
 use splitray::render::{
@@ -285,7 +286,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<ExitCode> {
     if let Some(spec) = &args.frames {
         return frames::run(args, spec);
     }
-    let signals = StopSignals::install()?;
+    let signals = StopSignals::install("the image is written with the samples reached")?;
     let mut timeline = super::timeline::TimelineOutput::start(args.timeline.as_deref())?;
     let job = read_job(args)?;
     let output = output_path(args, &job.scene.name, job.shard)?;
@@ -330,7 +331,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<ExitCode> {
 
 /// What one render makes, read before any output is created.
 struct RenderJob<'a> {
-    /// The scene as given (a name or a path), recorded in checkpoints.
+    /// The scene: a built-in name or a file's absolute path, recorded in checkpoints.
     scene_spec: String,
     scene: Scene,
     shard: Shard,
@@ -352,13 +353,30 @@ fn read_job(args: &RenderArgs) -> anyhow::Result<RenderJob<'_>> {
         (None, Some(c)) => c.header.scene.clone(),
         (None, None) => DEFAULT_SCENE.to_string(),
     };
-    let scene = splitray::scene::load(&scene_spec)?;
+    let scene = splitray::scene::load(&scene_spec).map_err(|e| match (&args.scene, &resume) {
+        (None, Some((_, path))) => anyhow!(
+            "{e} (the scene {} was saved from: give its path as SCENE if it moved)",
+            path.display()
+        ),
+        _ => e.into(),
+    })?;
+    let scene_spec = absolute_scene_path(scene_spec);
     let shard = match (&args.shard, checkpoint) {
         (Some(spec), _) => parse_shard(spec)?,
         (None, Some(c)) => c.header.shard,
         (None, None) => Shard::WHOLE,
     };
     let options = render_options(args, &scene, resume.as_ref())?;
+    let measured_here = options.integrator == IntegratorKind::Cbpt
+        && options.cbpt.camera_paths == CameraPaths::Equation4;
+    if measured_here && !shard.is_whole() {
+        bail!(
+            "--cbpt-nc auto measures the machine it runs on, so shards would render with \
+             populations of their own and not merge: give --cbpt-nc N --cbpt-nl N (the EXR \
+             of a render with auto names what it measured: cbpt_camera_paths, \
+             cbpt_light_paths)"
+        );
+    }
     if !(args.checkpoint_every.is_finite() && args.checkpoint_every >= 0.0) {
         bail!("--checkpoint-every must be a number of seconds, 0 or more");
     }
@@ -369,6 +387,20 @@ fn read_job(args: &RenderArgs) -> anyhow::Result<RenderJob<'_>> {
         options,
         resume,
     })
+}
+
+/// A scene file's absolute path (a built-in's name stays): the checkpoint names its scene
+/// so, and `--resume` finds it from any folder.
+fn absolute_scene_path(spec: String) -> String {
+    let builtin = splitray::scene::builtin_names()
+        .iter()
+        .any(|(name, _)| *name == spec);
+    match builtin {
+        true => spec,
+        false => std::fs::canonicalize(&spec)
+            .map(|p| p.display().to_string())
+            .unwrap_or(spec),
+    }
 }
 
 /// Renders `job` behind a progress bar, saving `checkpoint_file` as it goes and showing

@@ -25,8 +25,9 @@ pub struct StopSignals {
 }
 
 impl StopSignals {
-    /// Handles SIGINT and SIGTERM from here on, on a thread of its own.
-    pub fn install() -> anyhow::Result<Self> {
+    /// Handles SIGINT and SIGTERM from here on, on a thread of its own; the first one
+    /// tells the user `kept`, what stopping keeps.
+    pub fn install(kept: &'static str) -> anyhow::Result<Self> {
         let received = Arc::new(AtomicI32::new(0));
         let mut signals =
             Signals::new([SIGINT, SIGTERM]).context("cannot install the signal handlers")?;
@@ -40,9 +41,8 @@ impl StopSignals {
                         .is_ok()
                     {
                         eprintln!(
-                            "\n{}: stopping after the passes in flight; the image is written \
-                             with the samples reached (send it again to exit at once, \
-                             writing nothing)",
+                            "\n{}: stopping after the passes in flight; {kept} (send it \
+                             again to exit at once, writing nothing)",
                             name(signal)
                         );
                     } else {

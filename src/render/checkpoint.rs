@@ -32,6 +32,7 @@ use super::fingerprint::Fingerprint;
 use super::shard::Shard;
 use super::{FilmSnapshot, RenderError, RenderOptions};
 use crate::film::{AtomicFile, FilmError, FilmSums};
+use crate::integrator::cbpt::options::{CameraPaths, CbptSettings};
 
 /// The first 16 bytes of every checkpoint.
 pub const SIGNATURE: &[u8; 16] = b"\x89splitray-ckpt\r\n";
@@ -114,12 +115,31 @@ impl SavedOptions {
     }
 }
 
+/// `cbpt`'s settings with the populations `--cbpt-nc auto` measured (the render's
+/// `fingerprint` holds them) in place of `auto`: measured again on resuming, they would
+/// differ, and the checkpoint would not match its own render.
+fn measured_populations(cbpt: CbptSettings, fingerprint: &Fingerprint) -> CbptSettings {
+    let measured = |key| fingerprint.setting(key).and_then(|v| v.parse::<u32>().ok());
+    match (
+        cbpt.camera_paths,
+        measured("cbpt_camera_paths"),
+        measured("cbpt_light_paths"),
+    ) {
+        (CameraPaths::Equation4, Some(camera_paths), Some(light_paths)) => CbptSettings {
+            camera_paths: CameraPaths::Fixed(camera_paths),
+            light_paths,
+            ..cbpt
+        },
+        _ => cbpt,
+    }
+}
+
 /// Everything in a checkpoint besides the sums.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CheckpointHeader {
     /// `splitray <version>` that wrote it.
     pub software: String,
-    /// How to load the scene again: a built-in name or the path as it was given.
+    /// How to load the scene again: a built-in name or a path (`render` saves absolute ones).
     pub scene: String,
     pub fingerprint: Fingerprint,
     pub options: SavedOptions,
@@ -153,7 +173,10 @@ impl Checkpoint {
                 software: format!("splitray {}", env!("CARGO_PKG_VERSION")),
                 scene: scene.to_string(),
                 fingerprint: snapshot.fingerprint.clone(),
-                options: SavedOptions::new(options),
+                options: SavedOptions {
+                    cbpt: measured_populations(options.cbpt, snapshot.fingerprint),
+                    ..SavedOptions::new(options)
+                },
                 shard: snapshot.shard,
                 first_pass: snapshot.first_pass,
                 passes: sums.passes,

@@ -100,6 +100,14 @@ impl Fingerprint {
     }
 
     /// The settings as one header value: `key=value;key=value`.
+    /// The value of setting `key`, if the fingerprint has it.
+    pub fn setting(&self, key: &str) -> Option<&str> {
+        self.settings
+            .iter()
+            .find(|(k, _)| k == key)
+            .map(|(_, v)| v.as_str())
+    }
+
     pub fn settings_string(&self) -> String {
         self.settings
             .iter()

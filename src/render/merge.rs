@@ -16,7 +16,9 @@ use super::RenderError;
 use crate::film::{read_exr, Film, FilmSums, RenderMetadata};
 
 /// Header entries a part holds about its own run, left out of the merged header.
-const PER_RUN_KEYS: [&str; 3] = ["passes", "rays_traced", "stopped_early"];
+const PER_RUN_KEYS: [&str; 4] = ["passes", "rays_traced", "stopped_early", KEY_MERGED_PARTS];
+/// How many renders a merged image was merged from: a part merged before counts its own.
+const KEY_MERGED_PARTS: &str = "merged_parts";
 
 /// The merged image.
 pub struct MergedImage {
@@ -228,7 +230,14 @@ fn merged_metadata(parts: &[Part], sums: &FilmSums, record: &PartRecord) -> Rend
         .collect();
     extra.extend(record.extra());
     extra.push(("passes".into(), sums.passes.to_string()));
-    extra.push(("merged_parts".into(), parts.len().to_string()));
+    let renders: u64 = parts
+        .iter()
+        .map(|p| {
+            let merged = p.meta.extra.iter().find(|(k, _)| k == KEY_MERGED_PARTS);
+            merged.and_then(|(_, v)| v.parse().ok()).unwrap_or(1)
+        })
+        .sum();
+    extra.push((KEY_MERGED_PARTS.into(), renders.to_string()));
     RenderMetadata {
         spp: sums.spp().min(u32::MAX as u64) as u32,
         seed: first.seed,

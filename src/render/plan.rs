@@ -90,15 +90,32 @@ pub(super) fn start_film(
             header.shard, plan.shard
         )));
     }
-    if header.first_pass != block.start {
+    // A shard's block depends on the render's length: continued to another length, it
+    // would overlap or leave a gap between its neighbours' blocks. (A whole render may
+    // grow: its block always starts at 0.)
+    let saved_block = plan.shard.passes(header.options.spp.div_ceil(per_pass));
+    if header.first_pass != block.start || (!plan.shard.is_whole() && saved_block != block) {
+        let passes = |r: &std::ops::Range<u32>| format!("passes {}..{}", r.start, r.end);
         return Err(refuse(format!(
-            "its passes start at index {}, where shard {} of {} samples per pixel starts \
-             at {}: continue it with the samples per pixel (or --time) it was started with",
-            header.first_pass, plan.shard, options.spp, block.start
+            "was saved as shard {} of a render of {} ({}); this render's shard {} is {}: \
+             continue it with the samples per pixel (or --time) it was started with",
+            header.shard,
+            spp_or_time(header.options.spp),
+            passes(&saved_block),
+            plan.shard,
+            passes(&block)
         )));
     }
     integrator
         .restore(&resume.checkpoint.sums)
         .map_err(|e| refuse(e.to_string()))?;
     Ok((block.start, resume.checkpoint.sums.passes))
+}
+
+/// A render's length as asked for: samples per pixel, or `--time` (no sample target).
+fn spp_or_time(spp: u32) -> String {
+    match spp {
+        u32::MAX => "a time budget".to_string(),
+        spp => format!("{spp} spp"),
+    }
 }

@@ -161,6 +161,19 @@ impl PassRanges {
         })
     }
 
+    /// The passes before the last one held that these ranges do not hold.
+    pub fn gaps(&self) -> Vec<Range<u32>> {
+        let mut gaps = Vec::new();
+        let mut next = 0;
+        for r in &self.0 {
+            if r.start > next {
+                gaps.push(next..r.start);
+            }
+            next = r.end;
+        }
+        gaps
+    }
+
     /// Adds `range` (which must not overlap these), joining ranges that touch.
     pub fn add(&mut self, range: Range<u32>) {
         if range.is_empty() {
@@ -294,6 +307,15 @@ mod tests {
         assert_eq!("0..8,10..12".parse::<PassRanges>().unwrap(), r);
         assert_eq!(r.overlap(&PassRanges::single(11..20)), Some(11..12));
         assert_eq!(r.overlap(&PassRanges::single(8..10)), None);
+        let gap = |r: &PassRanges| {
+            r.gaps()
+                .iter()
+                .map(|g| (g.start, g.end))
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(gap(&r), [(8, 10)]);
+        assert_eq!(gap(&PassRanges::single(3..5)), [(0, 3)]);
+        assert!(PassRanges::single(0..5).gaps().is_empty());
         for bad in ["0..", "3..3", "a..b", "0..4,2..6"] {
             assert!(bad.parse::<PassRanges>().is_err(), "{bad}");
         }

@@ -174,12 +174,25 @@ fn equation_4_chooses_the_camera_paths() {
     let c = integrator(&gpu, &scene, &o, TracerKind::BruteForce);
     let e = c.equation4().expect("measured");
     eprintln!("{e}");
-    assert_eq!(e.pairs, 2000 * 15);
+    // Steps of the default N_C = 2000, or of a whole pass where a pass holds fewer.
+    assert_eq!(e.pairs, u64::from((W * H * 4).min(2000)) * 15);
     assert!(e.camera_paths as f64 > e.step_seconds / e.pair_seconds);
     assert_eq!(c.setup().camera_paths, e.camera_paths);
     assert_eq!(c.setup().light_paths, e.light_paths);
     let settings = c.settings();
     assert!(settings.contains(&("cbpt_camera_paths".into(), e.camera_paths.to_string())));
+
+    // An 8 × 8 film's pass is one step of 256 camera paths: Equation 4 times the steps
+    // of later passes (not none) and counts the pairs those steps hold.
+    let frame = scene.camera.frame(8, 8);
+    let pt = splitray::integrator::pt::PtScene::new(&scene);
+    let tracer = TracerKind::BruteForce.create(&gpu, &pt.triangles).unwrap();
+    let c = CbptIntegrator::new(&scene, &frame, &o, Some((&gpu, tracer))).unwrap();
+    let e = c.equation4().expect("measured");
+    eprintln!("{e}");
+    assert_eq!(e.pairs, 8 * 8 * 4 * 15);
+    // A step is several dispatches and a readback: far more than 10 µs on any device.
+    assert!(e.step_seconds > 1e-5, "{e}");
     common::assert_clean(&gpu);
 }
 

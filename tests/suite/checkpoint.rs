@@ -250,12 +250,12 @@ fn a_shard_continues_only_its_own_block_of_passes() {
     let scene = builtin("cornell-box").unwrap();
     let opts = common::small_render_options(&scene, IntegratorKind::Ao, 8);
     let shard = Shard::new(1, 2).unwrap();
-    let run = |plan: RenderPlan<'_>, stop_after: u32| {
+    let run_as = |opts: &RenderOptions, plan: RenderPlan<'_>, stop_after: u32| {
         let calls = Cell::new(0);
         render_from(
             &gpu,
             &scene,
-            &opts,
+            opts,
             plan,
             RenderControl {
                 progress: &mut |_| {},
@@ -266,6 +266,7 @@ fn a_shard_continues_only_its_own_block_of_passes() {
             },
         )
     };
+    let run = |plan: RenderPlan<'_>, stop_after: u32| run_as(&opts, plan, stop_after);
     let whole_shard = run(
         RenderPlan {
             shard,
@@ -315,6 +316,45 @@ fn a_shard_continues_only_its_own_block_of_passes() {
         err.contains("shard.ckpt: was saved as shard 1/2, not 0/2"),
         "{err}"
     );
+
+    // Continued to another length, a shard's block would move: shard 0/2 of 8 passes
+    // is 0..4, of 12 passes 0..6 (which its neighbour's 6..12 would not meet).
+    let first = Shard::new(0, 2).unwrap();
+    let part = run(
+        RenderPlan {
+            shard: first,
+            ..Default::default()
+        },
+        2,
+    )
+    .unwrap();
+    let checkpoint = Checkpoint::new("cornell-box", &opts, &part.snapshot());
+    let longer = common::small_render_options(&scene, IntegratorKind::Ao, 12);
+    let resumed = |opts: &RenderOptions| {
+        let resume = Some(Resume {
+            checkpoint: &checkpoint,
+            path,
+        });
+        run_as(
+            opts,
+            RenderPlan {
+                shard: first,
+                resume,
+                ..Default::default()
+            },
+            u32::MAX,
+        )
+    };
+    let err = resumed(&longer).err().unwrap().to_string();
+    assert!(
+        err.contains(
+            "shard.ckpt: was saved as shard 0/2 of a render of 8 spp (passes 0..4); this \
+             render's shard 0/2 is passes 0..6"
+        ),
+        "{err}"
+    );
+    let out = resumed(&opts).unwrap();
+    assert_eq!((out.first_pass, out.sums.passes), (0, 4));
     common::assert_clean(&gpu);
 }
 

@@ -397,6 +397,31 @@ fn shards_rendered_apart_merge_into_one_image() {
         text(&out)
     );
     assert!(!d.join("twice.exr").exists() && temporaries(d).is_empty());
+
+    // A merged image is a part too, first or not; its header counts the renders in it.
+    let out = splitray(&["merge", "part0.exr", "-o", "m0.exr"], d);
+    assert!(out.status.success(), "{}", text(&out));
+    let out = splitray(&["merge", "m0.exr", "part1.exr", "-o", "again.exr"], d);
+    assert!(out.status.success(), "{}", text(&out));
+    let (again, meta) = read_exr(d.join("again.exr")).unwrap();
+    assert_eq!(again.mean_rgb_buffer(), merged.mean_rgb_buffer());
+    let renders = meta.extra.iter().find(|(k, _)| k == "merged_parts");
+    assert_eq!(renders.map(|(_, v)| v.as_str()), Some("2"));
+
+    // Shards of renders of different lengths merge, with a warning for the passes
+    // neither holds: shard 1/2 of 8 spp is passes 4..8, shard 0/2 of 4 spp 0..2.
+    let mut args = vec!["render"];
+    args.extend(&common[..6]);
+    args.extend(["--spp", "8", "--shard", "1/2", "-o", "longer1.exr"]);
+    let out = splitray(&args, d);
+    assert!(out.status.success(), "{}", text(&out));
+    let out = splitray(&["merge", "part0.exr", "longer1.exr", "-o", "gap.exr"], d);
+    assert!(out.status.success(), "{}", text(&out));
+    assert!(
+        text(&out).contains("warning: no part holds passes 2..4"),
+        "{}",
+        text(&out)
+    );
 }
 
 #[test]
@@ -445,4 +470,97 @@ fn bad_checkpoints_and_parts_fail_naming_the_file_and_write_nothing() {
         assert!(!t.contains("panicked"), "{t}");
         assert_eq!(outputs(d), ["plain.exr", "short.ckpt"], "{args:?}");
     }
+}
+
+/// A checkpoint names its scene file by an absolute path: `--resume` finds it from any
+/// folder; where the file has gone, the error says whose scene it was.
+#[test]
+fn a_checkpoint_finds_its_scene_from_another_folder() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::create_dir_all(d.join("scn")).unwrap();
+    std::fs::create_dir_all(d.join("elsewhere")).unwrap();
+    let triangle = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+    std::fs::write(d.join("scn/tri.obj"), triangle).unwrap();
+    let small = ["--integrator", "ao", "--width", "8", "--height", "8"];
+    let mut args = vec![
+        "render",
+        "scn/tri.obj",
+        "--spp",
+        "2",
+        "--checkpoint",
+        "run.ckpt",
+    ];
+    args.extend(small);
+    args.extend(["-o", "a.exr"]);
+    let out = splitray(&args, d);
+    assert!(out.status.success(), "{}", text(&out));
+    let resume = [
+        "render",
+        "--resume",
+        "../run.ckpt",
+        "--spp",
+        "4",
+        "-o",
+        "b.exr",
+    ];
+    let out = splitray(&resume, &d.join("elsewhere"));
+    assert!(out.status.success(), "{}", text(&out));
+
+    std::fs::rename(d.join("scn"), d.join("moved")).unwrap();
+    let out = splitray(&resume, &d.join("elsewhere"));
+    assert_eq!(out.status.code(), Some(1), "{}", text(&out));
+    assert!(
+        text(&out)
+            .contains("(the scene ../run.ckpt was saved from: give its path as SCENE if it moved)"),
+        "{}",
+        text(&out)
+    );
+}
+
+/// `--cbpt-nc auto` measures this machine: its checkpoint keeps what it measured, so the
+/// render resumes as it would have gone on; shards, which would each measure their own
+/// machine, are refused before any work.
+#[test]
+fn cbpt_auto_populations_resume_and_are_refused_for_shards() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let cbpt = [
+        "render",
+        "--integrator",
+        "cbpt",
+        "--cbpt-nc",
+        "auto",
+        "--width",
+        "16",
+        "--height",
+        "8",
+    ];
+    let run = |extra: &[&str]| {
+        let mut args = cbpt.to_vec();
+        args.extend(extra);
+        splitray(&args, d)
+    };
+    let out = run(&["--spp", "4", "--checkpoint", "run.ckpt", "-o", "a.exr"]);
+    assert!(out.status.success(), "{}", text(&out));
+    let checkpoint = Checkpoint::read(d.join("run.ckpt")).unwrap();
+    let measured = checkpoint.header.fingerprint.setting("cbpt_camera_paths");
+    let saved = checkpoint.header.options.cbpt.camera_paths.fixed();
+    assert_eq!(measured, saved.map(|n| n.to_string()).as_deref());
+    let out = splitray(
+        &[
+            "render", "--resume", "run.ckpt", "--spp", "8", "-o", "b.exr",
+        ],
+        d,
+    );
+    assert!(out.status.success(), "{}", text(&out));
+
+    let out = run(&["--spp", "8", "--shard", "0/2", "-o", "s0.exr"]);
+    assert_eq!(out.status.code(), Some(1), "{}", text(&out));
+    assert!(
+        text(&out).contains("--cbpt-nc auto measures the machine it runs on"),
+        "{}",
+        text(&out)
+    );
+    assert!(!d.join("s0.exr").exists());
 }

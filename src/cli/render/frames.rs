@@ -73,7 +73,8 @@ fn refuse_single_image_options(args: &RenderArgs) -> anyhow::Result<()> {
 
 pub(super) fn run(args: &RenderArgs, spec: &str) -> anyhow::Result<ExitCode> {
     refuse_single_image_options(args)?;
-    let signals = StopSignals::install()?;
+    let signals =
+        StopSignals::install("the frame in progress is dropped; the frames written are kept")?;
     let mut timeline = super::super::timeline::TimelineOutput::start(args.timeline.as_deref())?;
     let job = read_sequence(args, spec)?;
     let range = job.range;

@@ -340,15 +340,17 @@ fn equation_4(
         camera_paths,
         light_paths,
     )?;
-    let steps = setup.steps(0..1);
-    let timed = steps.len().min(4) - 1;
+    // Four passes hold four steps at least: one to warm up, three timed (where a pass is
+    // one step, a small film's, the steps of later passes).
+    let steps = setup.steps(0..4);
+    let timed = &steps[1..steps.len().min(4)];
     backend.run(&setup, steps[..1].to_vec(), false)?;
     let t = Instant::now();
-    if timed > 0 {
-        backend.run(&setup, steps[1..=timed].to_vec(), true)?;
-    }
-    let step_seconds = t.elapsed().as_secs_f64() / timed.max(1) as f64;
-    let pairs = camera_paths as u64 * light_paths as u64;
+    backend.run(&setup, timed.to_vec(), true)?;
+    let step_seconds = t.elapsed().as_secs_f64() / timed.len() as f64;
+    // A small film's steps hold fewer camera paths than N_C: the pairs a step holds.
+    let cameras = timed.iter().map(|s| s.cameras.len() as u64).sum::<u64>() / timed.len() as u64;
+    let pairs = cameras * light_paths as u64;
     Ok(Equation4::solve(pair_seconds, step_seconds, pairs))
 }
 
