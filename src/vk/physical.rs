@@ -427,7 +427,9 @@ fn capability_info(
     }
 }
 
-/// Picks a device: `selector` (index or case-insensitive name substring), else the
+/// Picks a device: `selector` (an index, or else a case-insensitive name substring: a
+/// number is always an index, so that a missing device is not mistaken for one whose
+/// name holds that number), else the
 /// `SPLITRAY_DEVICE` environment variable, else discrete > integrated > virtual > CPU
 /// among the devices that meet splitray's requirements.
 pub fn select(
@@ -443,15 +445,16 @@ pub fn select(
     let selector = selector.or(env.as_deref()).filter(|s| !s.is_empty());
     let chosen = match selector {
         Some(sel) => {
-            let by_index = sel.parse::<usize>().ok().and_then(|i| devices.get(i));
-            let lower = sel.to_lowercase();
-            by_index
-                .or_else(|| {
+            let found = match sel.parse::<usize>() {
+                Ok(index) => devices.get(index),
+                Err(_) => {
+                    let lower = sel.to_lowercase();
                     devices
                         .iter()
                         .find(|d| d.name.to_lowercase().contains(&lower))
-                })
-                .ok_or_else(|| VkError::UnknownDevice(sel.to_string()))?
+                }
+            };
+            found.ok_or_else(|| VkError::UnknownDevice(sel.to_string()))?
         }
         None => devices
             .iter()

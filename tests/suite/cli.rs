@@ -38,6 +38,12 @@ fn info_lists_devices_streams_and_validation() {
     let out = splitray(&["info", "--json", "--device", "no-such-gpu"], dir.path());
     assert_eq!(out.status.code(), Some(1), "{}", text(&out));
     assert!(text(&out).contains("--device no-such-gpu: no such device"));
+    // A number past the devices is no device, even where a name holds its digits
+    // (lavapipe's "llvmpipe (LLVM 15.0.6, 256 bits)" holds a 5).
+    let past = devices.len().to_string() + "5";
+    let out = splitray(&["info", "--json", "--device", &past], dir.path());
+    assert_eq!(out.status.code(), Some(1), "{}", text(&out));
+    assert!(text(&out).contains(&format!("--device {past}: no such device")));
     let out = splitray(&["info", "--json", "--device", "0"], dir.path());
     assert!(out.status.success(), "{}", text(&out));
     let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
@@ -475,6 +481,34 @@ fn bad_input_gives_a_clear_error_and_no_output() {
         &["render", "--bdpt-techniques", ".", "-o", "a.exr"],
         &["--bdpt-techniques", "bpt, light, lvc-bdpt or cis-lbdpt"],
     );
+    // An option of other integrators changes nothing: refused, not ignored, also for
+    // the integrator a render takes by default (primary).
+    for (args, expect) in [
+        (
+            &["--integrator", "lvc-bdpt", "--candidates", "4"][..],
+            "--candidates is an option of cis-lbdpt, not of lvc-bdpt",
+        ),
+        (
+            &["--integrator", "pt", "--connections", "3"],
+            "--connections is an option of lvc-bdpt, cis-lbdpt, not of pt",
+        ),
+        (
+            &["--integrator", "bpt", "--strategy", "nee"],
+            "--strategy is an option of pt, not of bpt",
+        ),
+        (
+            &["--integrator", "path", "--max-depth", "3"],
+            "--max-depth is an option of pt, bpt, light, lvc-bdpt, cis-lbdpt, cbpt, not of path",
+        ),
+        (
+            &["--cbpt-nl", "3"],
+            "--cbpt-nl is an option of cbpt, not of primary",
+        ),
+    ] {
+        let mut all = vec!["render", "-o", "a.exr"];
+        all.extend(args);
+        assert_fails(d, &all, &[expect]);
+    }
     // A population this large ran the host out of memory before it was bounded.
     assert_fails(
         d,

@@ -4,6 +4,7 @@
 use std::path::Path;
 
 use anyhow::{anyhow, bail};
+use splitray::integrator::IntegratorKind;
 use splitray::render::{Checkpoint, RenderOptions, Shard};
 use splitray::scene::Scene;
 
@@ -37,6 +38,7 @@ pub(super) fn render_options(
         )?,
         Some((checkpoint, path)) => resumed_options(args, checkpoint, path)?,
     };
+    check_options_apply(args, options.integrator)?;
     if let Some(t) = args.time {
         if !t.is_finite() || t <= 0.0 {
             bail!("--time must be a positive number of seconds");
@@ -91,6 +93,41 @@ pub(super) fn render_options(
         options.bdpt_techniques = true;
     }
     Ok(options)
+}
+
+/// Refuses an option that only some integrators take (as `render --help` says) given for
+/// another: it would change nothing, and the user expects it to.
+fn check_options_apply(args: &RenderArgs, integrator: IntegratorKind) -> anyhow::Result<()> {
+    use IntegratorKind::{Bpt, Cbpt, CisLbdpt, Light, LvcBdpt, Pt};
+    const DEPTH: &[IntegratorKind] = &[Pt, Bpt, Light, LvcBdpt, CisLbdpt, Cbpt];
+    const SORTING: &[IntegratorKind] = &[Pt, LvcBdpt, CisLbdpt];
+    const CACHE: &[IntegratorKind] = &[LvcBdpt, CisLbdpt];
+    let given: [(&str, bool, &[IntegratorKind]); 14] = [
+        ("--max-depth", args.max_depth.is_some(), DEPTH),
+        ("--rr-depth", args.rr_depth.is_some(), DEPTH),
+        ("--sort", args.sort, SORTING),
+        ("--no-sort", args.no_sort, SORTING),
+        ("--strategy", args.strategy.is_some(), &[Pt]),
+        ("--connections", args.connections.is_some(), CACHE),
+        ("--streams", args.streams.is_some(), CACHE),
+        ("--candidates", args.candidates.is_some(), &[CisLbdpt]),
+        ("--resampling", args.resampling.is_some(), &[CisLbdpt]),
+        ("--cbpt-nc", args.cbpt_nc.is_some(), &[Cbpt]),
+        ("--cbpt-nl", args.cbpt_nl.is_some(), &[Cbpt]),
+        ("--cbpt-nt", args.cbpt_nt.is_some(), &[Cbpt]),
+        ("--cbpt-batch", args.cbpt_batch.is_some(), &[Cbpt]),
+        ("--cbpt-combine", args.cbpt_combine.is_some(), &[Cbpt]),
+    ];
+    for (option, given, takers) in given {
+        if given && !takers.contains(&integrator) {
+            let names: Vec<&str> = takers.iter().map(|k| k.name()).collect();
+            bail!(
+                "{option} is an option of {}, not of {integrator}",
+                names.join(", ")
+            );
+        }
+    }
+    Ok(())
 }
 
 /// The checkpoint's options with the command line's on top; without --spp or --time,
