@@ -242,6 +242,11 @@ pub struct RenderControl<'a> {
     /// Asked before every batch: `true` stops the render at that pass boundary (the
     /// image then holds the passes done).
     pub stop: &'a dyn Fn() -> bool,
+    /// Asked within a pass that is long work in parts ([`Integrator::render_passes_or_abandon`]):
+    /// `true` gives the pass up, and the render stops at the boundary before it. A stop
+    /// that cannot wait for a whole pass (a signal) answers both; `&|| false` lets every
+    /// pass finish.
+    pub abandon: &'a dyn Fn() -> bool,
 }
 
 /// A one-line description of the device for logs and file headers.
@@ -264,6 +269,7 @@ pub fn render(
         RenderControl {
             progress,
             stop: &|| false,
+            abandon: &|| false,
         },
     )
 }
@@ -756,11 +762,17 @@ fn run_passes(
             break;
         }
         let count = batch.min(block.end - next);
-        batch = render_batch(integrator, next, count, || {
+        let done;
+        (done, batch) = render_batch(integrator, (next, count), control.abandon, || {
             batch_time_left_s(options.time_limit, start, watched_batch_s)
         })?;
-        next += count;
-        passes += count;
+        next += done;
+        passes += done;
+        if done < count {
+            // A pass given up: the film holds the passes before it.
+            stopped = true;
+            break;
+        }
         let elapsed_s = start.elapsed().as_secs_f64();
         let out_of_time = options.time_limit.is_some_and(|t| elapsed_s >= t);
         let last = next == block.end || out_of_time;
@@ -799,22 +811,24 @@ fn run_passes(
     })
 }
 
-/// Renders passes `first..first + count`; returns the size of the next batch, from the
-/// time per pass just measured and the seconds `time_left_s` leaves it.
+/// Renders passes `first..first + count`, unless `abandon` gives one up; returns the
+/// passes done and the size of the next batch, from the time per pass just measured and
+/// the seconds `time_left_s` leaves it.
 fn render_batch(
     integrator: &mut dyn Integrator,
-    first: u32,
-    count: u32,
+    (first, count): (u32, u32),
+    abandon: &dyn Fn() -> bool,
     time_left_s: impl FnOnce() -> Option<f64>,
-) -> Result<u32, RenderError> {
+) -> Result<(u32, u32), RenderError> {
     let batch_start = Instant::now();
-    integrator.render_passes(first, count)?;
+    let done = integrator.render_passes_or_abandon(first, count, abandon)?;
     let time_left_s = time_left_s();
-    Ok(batch_size(
+    let next = batch_size(
         batch_start.elapsed().as_secs_f64() / count as f64,
         time_left_s,
         integrator.passes_per_call(),
-    ))
+    );
+    Ok((done, next))
 }
 
 /// The most seconds the next batch may last: what the time limit leaves of the render

@@ -388,7 +388,10 @@ impl Contestant {
                 let mut list = setup.steps(*next_pass..*next_pass + 1);
                 list.truncate(steps as usize);
                 *next_pass += 1;
-                backend.run(setup, list, true)?.counters.basic_contributions
+                backend
+                    .run(setup, list, true, &|| false)?
+                    .counters
+                    .basic_contributions
             }
             Self::Bpt(b, pass) => {
                 let before = b.counters().basic_contributions;
@@ -551,7 +554,7 @@ fn backend_run(
     steps: Vec<crate::integrator::cbpt::steps::StepId>,
     pipelined: bool,
 ) -> Result<StepTimes, RenderError> {
-    Ok(backend.run(setup, steps, pipelined)?.times)
+    Ok(backend.run(setup, steps, pipelined, &|| false)?.times)
 }
 
 /// Runs the benchmark (see the module docs).

@@ -96,6 +96,20 @@ pub trait Integrator {
     /// the random numbers of pass `k`, whatever came before it.
     fn render_passes(&mut self, first: u32, count: u32) -> Result<(), IntegratorError>;
 
+    /// [`Integrator::render_passes`] for an integrator whose pass is long work in parts
+    /// (`cbpt`'s steps): between two parts it asks `abandon`, and on `true` gives up the
+    /// pass in progress and those after it. Returns the passes added to the film, the
+    /// first ones of the range; a pass given up adds nothing. The others finish all.
+    fn render_passes_or_abandon(
+        &mut self,
+        first: u32,
+        count: u32,
+        abandon: &dyn Fn() -> bool,
+    ) -> Result<u32, IntegratorError> {
+        let _ = abandon;
+        self.render_passes(first, count).map(|()| count)
+    }
+
     /// The film so far.
     fn sums(&mut self) -> Result<FilmSums, IntegratorError>;
 

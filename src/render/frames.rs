@@ -130,8 +130,9 @@ pub struct Frame {
 pub struct FramesControl<'a> {
     /// Told after every batch of passes, with the frame's index.
     pub progress: &'a mut dyn FnMut(u32, &Progress),
-    /// Asked before every batch: `true` stops the sequence (the frame in progress is
-    /// dropped, the frames done stay done).
+    /// Asked before every batch, and within a long pass ([`RenderControl::abandon`]):
+    /// `true` stops the sequence (the frame in progress is dropped, the frames done stay
+    /// done).
     pub stop: &'a dyn Fn() -> bool,
     /// Given each finished frame, in order (to write it); an error ends the sequence.
     pub frame_done: &'a mut dyn FnMut(Frame) -> Result<(), RenderError>,
@@ -208,6 +209,8 @@ pub fn render_frames(
             RenderControl {
                 progress: &mut |p| (control.progress)(k, p),
                 stop: control.stop,
+                // The frame in progress is dropped anyway.
+                abandon: control.stop,
             },
         )?;
         stats_before = sequence.integrator.stats();

@@ -139,7 +139,10 @@ fn the_cpu_samples_the_next_step_while_the_device_combines() {
         launched: 0,
         overlapped: overlapped.clone(),
     };
-    let out = run_steps(&setup.cpu_side(), &mut device, steps.clone(), true).unwrap();
+    let out = run_steps(&setup.cpu_side(), &mut device, steps.clone(), true, &|| {
+        false
+    })
+    .unwrap();
     assert_eq!(overlapped.load(Ordering::Relaxed), 31);
     assert_eq!(out.times.steps, 32);
 
@@ -147,7 +150,7 @@ fn the_cpu_samples_the_next_step_while_the_device_combines() {
     let mut plain = CpuEvaluator {
         scene: &setup.scene,
     };
-    let reference = run_steps(&setup.cpu_side(), &mut plain, steps, false).unwrap();
+    let reference = run_steps(&setup.cpu_side(), &mut plain, steps, false, &|| false).unwrap();
     assert_eq!(out.passes, reference.passes);
     assert_eq!(out.counters, reference.counters);
 }

@@ -16,7 +16,8 @@ use splitray::integrator::cbpt::steps::ImagePositions;
 use splitray::integrator::cbpt::{
     CameraPaths, CbptIntegrator, CbptOptions, CbptSettings, Combination, Setup,
 };
-use splitray::integrator::Integrator;
+use splitray::integrator::{Integrator, IntegratorKind};
+use splitray::render::RenderControl;
 use splitray::scene::Scene;
 use splitray::trace::TracerKind;
 use splitray::vk::Gpu;
@@ -284,4 +285,56 @@ fn bench_cbpt_checks_and_reports() {
         assert!(row["per_second"].as_f64().unwrap() > 0.0, "{row}");
     }
     assert!(stdout.contains("pipelining:"), "{stdout}");
+}
+
+/// A stop within a pass gives the pass up between two steps: the film holds the passes
+/// before it, bit for bit those of a render of that many passes, and the render reports
+/// that it stopped early.
+#[test]
+fn a_pass_is_given_up_between_its_steps() {
+    let gpu = common::gpu();
+    let scene = splitray::scene::builtin("cornell-box").unwrap();
+    let o = options(7, Combination::Gpu);
+    let mut one = integrator(&gpu, &scene, &o, TracerKind::BruteForce);
+    one.render_passes(0, 1).unwrap();
+    // 24 × 16 × 4 camera paths a pass, 300 a step: six steps a pass.
+    assert_eq!(one.setup().plan.steps, 6);
+
+    let mut c = integrator(&gpu, &scene, &o, TracerKind::BruteForce);
+    let asked = std::cell::Cell::new(0);
+    // Asked after each step is launched: true after the second step of pass 1.
+    let abandon = || {
+        asked.set(asked.get() + 1);
+        asked.get() == 8
+    };
+    let done = c.render_passes_or_abandon(0, 3, &abandon).unwrap();
+    assert_eq!((done, asked.get()), (1, 8));
+    assert!(c.sums().unwrap() == one.sums().unwrap(), "not pass 0 alone");
+
+    // Through the render loop: stopped early, with the passes before the one given up.
+    let mut render_options = common::small_render_options(&scene, IntegratorKind::Cbpt, 12);
+    render_options.cbpt = o.settings;
+    render_options.tracer = TracerKind::BruteForce;
+    let asked = std::cell::Cell::new(0);
+    let out = splitray::render::render_with(
+        &gpu,
+        &scene,
+        &render_options,
+        RenderControl {
+            progress: &mut |_| {},
+            stop: &|| false,
+            abandon: &|| {
+                asked.set(asked.get() + 1);
+                asked.get() == 8
+            },
+        },
+    )
+    .unwrap();
+    assert!(out.stats.stopped_early);
+    assert_eq!(out.sums.passes, 1);
+    assert!(
+        out.sums == one.sums().unwrap(),
+        "the render's film is not pass 0 alone"
+    );
+    common::assert_clean(&gpu);
 }

@@ -31,6 +31,7 @@ fn interrupted(gpu: &Gpu, scene: &Scene, opts: &RenderOptions, batches: u32) -> 
                 calls.set(calls.get() + 1);
                 calls.get() > batches
             },
+            abandon: &|| false,
         },
     )
     .unwrap()
@@ -55,6 +56,7 @@ fn checkpointed(
         RenderControl {
             progress: &mut |_| {},
             stop: &|| false,
+            abandon: &|| false,
         },
     )
     .unwrap()
@@ -93,6 +95,7 @@ fn resumed(
         RenderControl {
             progress: &mut |_| {},
             stop: &|| false,
+            abandon: &|| false,
         },
     )
 }
@@ -263,6 +266,7 @@ fn a_shard_continues_only_its_own_block_of_passes() {
                     calls.set(calls.get() + 1);
                     calls.get() > stop_after
                 },
+                abandon: &|| false,
             },
         )
     };

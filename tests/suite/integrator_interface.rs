@@ -74,6 +74,7 @@ fn the_render_loop_stops_at_a_pass_boundary_when_asked() {
                 calls.set(calls.get() + 1);
                 calls.get() > 3
             },
+            abandon: &|| false,
         },
     )
     .unwrap();

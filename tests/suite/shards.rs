@@ -45,6 +45,7 @@ fn render(gpu: &Gpu, scene: &Scene, opts: &RenderOptions, shard: Shard) -> Rende
         RenderControl {
             progress: &mut |_| {},
             stop: &|| false,
+            abandon: &|| false,
         },
     )
     .unwrap()

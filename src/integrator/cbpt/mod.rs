@@ -103,12 +103,13 @@ impl Backend {
         })
     }
 
-    /// Runs `steps` on this backend.
+    /// Runs `steps` on this backend, until `abandon` says to stop ([`run_steps`]).
     pub fn run(
         &mut self,
         setup: &Setup,
         steps: Vec<StepId>,
         pipelined: bool,
+        abandon: &dyn Fn() -> bool,
     ) -> Result<pipeline::StepsOutput, IntegratorError> {
         let cpu = setup.cpu_side();
         match self {
@@ -116,9 +117,9 @@ impl Backend {
                 let mut evaluator = CpuEvaluator {
                     scene: &setup.scene,
                 };
-                run_steps(&cpu, &mut evaluator, steps, pipelined)
+                run_steps(&cpu, &mut evaluator, steps, pipelined, abandon)
             }
-            Self::Gpu(g) => run_steps(&cpu, g.as_mut(), steps, pipelined),
+            Self::Gpu(g) => run_steps(&cpu, g.as_mut(), steps, pipelined, abandon),
         }
     }
 }
@@ -344,9 +345,9 @@ fn equation_4(
     // one step, a small film's, the steps of later passes).
     let steps = setup.steps(0..4);
     let timed = &steps[1..steps.len().min(4)];
-    backend.run(&setup, steps[..1].to_vec(), false)?;
+    backend.run(&setup, steps[..1].to_vec(), false, &|| false)?;
     let t = Instant::now();
-    backend.run(&setup, timed.to_vec(), true)?;
+    backend.run(&setup, timed.to_vec(), true, &|| false)?;
     let step_seconds = t.elapsed().as_secs_f64() / timed.len() as f64;
     // A small film's steps hold fewer camera paths than N_C: the pairs a step holds.
     let cameras = timed.iter().map(|s| s.cameras.len() as u64).sum::<u64>() / timed.len() as u64;
@@ -369,17 +370,29 @@ impl Integrator for CbptIntegrator {
     }
 
     fn render_passes(&mut self, first: u32, count: u32) -> Result<(), IntegratorError> {
+        self.render_passes_or_abandon(first, count, &|| false)
+            .map(|_| ())
+    }
+
+    /// A pass is 4 spp of the whole film, in steps of N_C camera paths: on a large film
+    /// it lasts long, so a stop request gives up the pass between two steps.
+    fn render_passes_or_abandon(
+        &mut self,
+        first: u32,
+        count: u32,
+        abandon: &dyn Fn() -> bool,
+    ) -> Result<u32, IntegratorError> {
         let _span = tracing::info_span!("cbpt passes", first, count).entered();
         let steps = self.setup.steps(first..first + count);
         let out = self
             .backend
-            .run(&self.setup, steps, self.options.pipelined)?;
+            .run(&self.setup, steps, self.options.pipelined, abandon)?;
         for (_, estimate) in &out.passes {
             self.sums.add_pass(estimate);
         }
         self.counters += out.counters;
         self.times += out.times;
-        Ok(())
+        Ok(out.passes.len() as u32)
     }
 
     fn sums(&mut self) -> Result<FilmSums, IntegratorError> {

@@ -112,12 +112,15 @@ pub struct StepsOutput {
 }
 
 /// Runs `steps` in order, the combination on `evaluator`; the estimates of the passes
-/// whose every step ran come back.
+/// whose every step ran come back. `abandon` is asked after each step is launched: on
+/// `true` no further step starts (the steps under way finish, and a pass they leave
+/// unfinished is dropped).
 pub fn run_steps<E: Evaluator>(
     cpu: &CpuSide,
     evaluator: &mut E,
     steps: Vec<StepId>,
     pipelined: bool,
+    abandon: &dyn Fn() -> bool,
 ) -> Result<StepsOutput, IntegratorError> {
     // Named apart so that a timeline's pipelined stretches can be told from the
     // synchronous ones (tools/timeline_overlap.py --within).
@@ -137,7 +140,7 @@ pub fn run_steps<E: Evaluator>(
                 cpu_loop(cpu, steps, tables_tx, data_rx, pipelined)
             })
             .expect("spawn the CBPT CPU thread");
-        let driven = drive(evaluator, tables_rx, data_tx, pipelined);
+        let driven = drive(evaluator, tables_rx, data_tx, pipelined, abandon);
         let cpu_out = cpu_thread
             .join()
             .unwrap_or_else(|p| std::panic::resume_unwind(p));
@@ -160,6 +163,7 @@ fn drive<E: Evaluator>(
     tables_rx: Receiver<Arc<Tables>>,
     data_tx: SyncSender<CombinationData>,
     pipelined: bool,
+    abandon: &dyn Fn() -> bool,
 ) -> Result<StepTimes, IntegratorError> {
     let mut times = StepTimes::default();
     let finish = |e: &mut E, p: E::Pending, times: &mut StepTimes| {
@@ -189,7 +193,12 @@ fn drive<E: Evaluator>(
         {
             return Ok(times);
         }
+        if abandon() {
+            break;
+        }
     }
+    // Given up or done: the CPU thread's next step has nowhere to go, so it stops.
+    drop(tables_rx);
     if let Some(p) = pending {
         // The CPU thread may have stopped; the data then has nobody to go to.
         let _ = data_tx.send(finish(evaluator, p, &mut times)?);
