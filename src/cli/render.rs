@@ -455,8 +455,8 @@ fn render_watched(
         RenderControl {
             progress: &mut |p| show_progress(&bar, &label, p, pixels, options.time_limit),
             stop: &|| signals.received().is_some() || watching.window_closed(),
-            // A signal cannot wait for a long pass: Slurm's KillWait, for one, is 30 s.
-            abandon: &|| signals.received().is_some(),
+            // Neither waits for a long pass: Slurm's KillWait, for one, is 30 s.
+            abandon: &|| signals.received().is_some() || watching.window_closed(),
         },
     );
     bar.finish_and_clear();

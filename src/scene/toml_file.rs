@@ -201,9 +201,12 @@ impl MaterialToml {
             ("ior", &self.ior),
             ("dissolve", &self.dissolve),
         ] {
-            if let Some(v) = v {
-                let x = Vec3::splat(*v.get_ref());
-                validate::check_finite(x, &at(v.span()), || format!("material '{name}' {what}"))?;
+            if let Some(v) = v.as_ref().filter(|v| !v.get_ref().is_finite()) {
+                return Err(SceneError::NonFinite {
+                    at: at(v.span()),
+                    what: format!("material '{name}' {what}"),
+                    value: v.get_ref().to_string(),
+                });
             }
         }
         Ok(())
