@@ -303,6 +303,14 @@ fn throughput(
     let pending = c.start(tables.clone())?;
     let data = c.finish(pending)?;
     let checked = Check::of(&data, &evaluate(cpu_scene, tables, Kinds::ALL), tables);
+    if checked.visibility_bits > 0 || checked.shading_mismatches > 0 {
+        return Err(crate::vk::VkError::Usage(format!(
+            "bench cbpt: {tracer}: the GPU's combination data differ from the CPU twins' \
+             ({} visibility bits, {} shading tuples); not timing it",
+            checked.visibility_bits, checked.shading_mismatches
+        ))
+        .into());
+    }
     let mut rows = Vec::new();
     for kind in 0..if shading { 3 } else { 1 } {
         let (mut g, mut p) = (Vec::new(), Vec::new());

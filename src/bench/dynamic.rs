@@ -514,6 +514,21 @@ fn check_options(animated: &AnimatedScene, opts: &DynamicBenchOptions) -> BenchR
     if opts.frames == 0 {
         return Err("bench dynamic needs at least one timed frame".into());
     }
+    // The warm-up frame, then the timed ones: all numbered within u32.
+    if opts
+        .first
+        .checked_add(opts.frames)
+        .and_then(|e| e.checked_add(1))
+        .is_none()
+    {
+        return Err(format!(
+            "--first {} --frames {}: frames past {} cannot be numbered",
+            opts.first,
+            opts.frames,
+            u32::MAX
+        )
+        .into());
+    }
     if !(opts.fps.is_finite() && opts.fps > 0.0) {
         return Err(format!("--fps {} must be a positive number", opts.fps).into());
     }

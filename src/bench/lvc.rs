@@ -170,6 +170,33 @@ struct Config {
 }
 
 /// Renders `plan.passes` passes with every configuration, `plan.rounds` times in turns.
+/// Refuses to time configurations whose warm-up passes differ: the stream count and
+/// material sorting never change an integrator's image, bit for bit.
+fn check_configurations_agree(configs: &mut [Config]) -> Result<(), RenderError> {
+    let mut firsts: Vec<(IntegratorKind, String, FilmSums)> = Vec::new();
+    for c in configs.iter_mut() {
+        let sums = c.integrator.sums()?;
+        let name = format!(
+            "{} stream(s), {}",
+            c.streams,
+            if c.sorted { "sorted" } else { "unsorted" }
+        );
+        match firsts.iter().find(|(kind, _, _)| *kind == c.kind) {
+            None => firsts.push((c.kind, name, sums)),
+            Some((_, first, want)) if *want != sums => {
+                return Err(crate::vk::VkError::Usage(format!(
+                    "bench bdpt: {}'s first pass with {name} differs from the one with {first} \
+                     (a bug); not timing it",
+                    c.kind.name()
+                ))
+                .into())
+            }
+            Some(_) => {}
+        }
+    }
+    Ok(())
+}
+
 pub fn equal_spp(
     gpu: &Gpu,
     scene: &Scene,
@@ -197,6 +224,7 @@ pub fn equal_spp(
             log: ProfileLog::default(),
         });
     }
+    check_configurations_agree(&mut configs)?;
     gpu.wait_idle()?;
     let _ = gpu.take_profile();
     let empty = FilmSums::new(base.width, base.height, 1, true);

@@ -357,7 +357,9 @@ struct Bench<'a> {
     total_rays: usize,
 }
 
-/// Runs the benchmark. `dump_hits`: write the primary hits (pixel order) there.
+/// Runs the benchmark. `dump_hits`: once every tracer is verified and timed, write the
+/// primary hits there (pixel order; PDACRT's with its default parameters, which make the
+/// workload's rays).
 pub fn run(
     gpu: &Gpu,
     scene: &Scene,
@@ -365,7 +367,7 @@ pub fn run(
     dump_hits: Option<&Path>,
 ) -> BenchResult<TraceReport> {
     let triangles = scene.gpu_triangles();
-    let batches = workload_batches(gpu, scene, opts, &triangles, dump_hits)?;
+    let (batches, primary_hits) = workload_batches(gpu, scene, opts, &triangles)?;
     let bench = Bench::upload(gpu, opts, triangles, batches)?;
     let samples = bench.oracle_samples()?;
 
@@ -382,30 +384,30 @@ pub fn run(
     // that a change of load on a shared machine hits every tracer alike.
     bench.warm_up(&mut contenders)?;
     bench.time_rounds(&mut contenders)?;
+    if let Some(path) = dump_hits {
+        write_hits(path, &primary_hits)?;
+    }
     Ok(bench.report(scene, contenders))
 }
 
-/// The workload's rays, from PDACRT's primary hits (checked later like every tracer);
-/// writes the primary hits to `dump_hits` first.
+/// The workload's rays, from PDACRT's primary hits (checked later like every tracer),
+/// and those hits.
 fn workload_batches(
     gpu: &Gpu,
     scene: &Scene,
     opts: &TraceBenchOptions,
     triangles: &[GpuTriangle],
-    dump_hits: Option<&Path>,
-) -> BenchResult<Vec<RayBatch>> {
+) -> BenchResult<(Vec<RayBatch>, Vec<Hit>)> {
     let primary = workloads::primary_rays(scene, opts.width, opts.height);
     let mut reference = PdacrtTracer::new(gpu, triangles)?;
     let primary_hits = trace_once(gpu, &mut reference, &primary, Query::ClosestHit)?;
-    if let Some(path) = dump_hits {
-        write_hits(path, &primary_hits)?;
-    }
     if opts.workload == Workload::Primary {
-        return Ok(vec![RayBatch {
+        let batch = RayBatch {
             label: "primary".into(),
             rays: primary,
             query: Query::ClosestHit,
-        }]);
+        };
+        return Ok((vec![batch], primary_hits));
     }
     let mut trace = |rays: &[Ray]| {
         trace_once(gpu, &mut reference, rays, Query::ClosestHit).expect("trace bounce")
@@ -418,7 +420,7 @@ fn workload_batches(
         &primary_hits,
         &mut trace,
     );
-    Ok(batches)
+    Ok((batches, primary_hits))
 }
 
 /// Traces every sample's rays with `tracer`: (rays checked, hits that differ from brute

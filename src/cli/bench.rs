@@ -194,7 +194,9 @@ enum BenchCommand {
         /// Timed frames per tracer (at least 5, after a warm-up frame).
         #[arg(long, default_value_t = 5)]
         frames: usize,
-        /// Write the primary-ray hits in pixel order as little-endian (u32 triangle, f32 t).
+        /// Write the primary-ray hits in pixel order as little-endian (u32 triangle, f32 t),
+        /// once every tracer agreed with brute force (the hits of PDACRT with its default
+        /// parameters, from which the workload's rays start).
         #[arg(long, value_name = "FILE")]
         dump_hits: Option<PathBuf>,
         /// Print PDACRT's per-level statistics.
@@ -336,6 +338,8 @@ enum Inputs {
 
 pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     let mut timeline = super::timeline::TimelineOutput::start(args.timeline.as_deref())?;
+    check_outputs(&args.what)?;
+    check_lists(&args.what)?;
     // Load inputs before opening the device, so bad input fails fast.
     let inputs = load_inputs(&args.what)?;
     let gpu = Gpu::new(&GpuDesc {
@@ -359,6 +363,58 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     }
     if let Some(t) = timeline {
         t.finish(&super::timeline::command_line())?;
+    }
+    Ok(())
+}
+
+/// Fails at once, naming the path, where an output of `what` could not be written at the
+/// end (a missing folder, a folder in its place, no permission): a temporary file is
+/// created there and removed again.
+fn check_outputs(what: &BenchCommand) -> anyhow::Result<()> {
+    let (json, dump_hits) = match what {
+        BenchCommand::Primitives { json, .. }
+        | BenchCommand::Pt { json, .. }
+        | BenchCommand::Bdpt { json, .. }
+        | BenchCommand::Cbpt { json, .. }
+        | BenchCommand::Dynamic { json, .. } => (json, &None),
+        BenchCommand::Trace {
+            json, dump_hits, ..
+        } => (json, dump_hits),
+    };
+    for path in [json, dump_hits].into_iter().flatten() {
+        drop(splitray::film::AtomicFile::create(path)?);
+    }
+    Ok(())
+}
+
+/// Refuses a comma list that names an entry twice: it would be measured twice, beside
+/// itself, for nothing.
+fn check_lists(what: &BenchCommand) -> anyhow::Result<()> {
+    fn shown<T: std::fmt::Display>(list: &[T]) -> Vec<String> {
+        list.iter().map(T::to_string).collect()
+    }
+    let lists: Vec<(&str, Vec<String>)> = match what {
+        BenchCommand::Bdpt { integrators, .. } => vec![("--integrators", shown(integrators))],
+        BenchCommand::Cbpt {
+            tracers, batches, ..
+        } => vec![("--tracers", shown(tracers)), ("--batches", shown(batches))],
+        BenchCommand::Trace { tracers, .. } => vec![("--tracers", shown(tracers))],
+        BenchCommand::Dynamic {
+            workloads, tracers, ..
+        } => {
+            let tracers = tracers.iter().map(|t| t.name().to_string()).collect();
+            vec![("--workloads", shown(workloads)), ("--tracers", tracers)]
+        }
+        BenchCommand::Primitives { .. } | BenchCommand::Pt { .. } => Vec::new(),
+    };
+    for (option, list) in lists {
+        let repeated = list
+            .iter()
+            .enumerate()
+            .find(|(k, x)| list[..*k].contains(x));
+        if let Some((_, twice)) = repeated {
+            anyhow::bail!("{option} names {twice} twice");
+        }
     }
     Ok(())
 }
@@ -438,8 +494,8 @@ fn load_bdpt_inputs(
 
 /// Fails unless `--time` is a positive number of seconds.
 fn check_time(time: f64) -> anyhow::Result<()> {
-    if time.is_nan() || time <= 0.0 {
-        anyhow::bail!("--time must be a positive number of seconds");
+    if !time.is_finite() || time <= 0.0 {
+        anyhow::bail!("--time must be a positive, finite number of seconds");
     }
     Ok(())
 }

@@ -62,10 +62,11 @@ pub enum Command {
     Merge(merge::MergeArgs),
     /// List the built-in scenes (usable as `splitray render NAME`).
     Scenes,
-    /// Measure: `bench primitives` (GPU sort/scan/... vs CPU), `bench trace SCENE`
-    /// (tracers compared on a ray workload), `bench dynamic SCENE` (tracers on an
-    /// animated scene, per frame), `bench pt SCENE` or `bench bdpt SCENE` (integrators
-    /// at equal time).
+    /// Measure, after checking the results: `bench primitives` (GPU sort/scan/... vs
+    /// CPU), `bench trace SCENE` (tracers compared on a ray workload), `bench dynamic
+    /// SCENE` (tracers on an animated scene, per frame), `bench pt SCENE` (material
+    /// sorting on and off), `bench bdpt SCENE…` (integrators at equal time and at equal
+    /// spp) or `bench cbpt SCENE` (CBPT's combination throughput, batches and steps).
     Bench(bench::BenchArgs),
     /// Draw a timeline (`--timeline FILE.json` of `render` or `bench`) as a Gantt chart:
     /// `splitray timeline FILE.json -o timeline.svg` (or .png).

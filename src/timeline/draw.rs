@@ -146,6 +146,13 @@ fn time_window(trace: &Trace, options: &DrawOptions) -> Result<(f64, f64), Timel
         options.from_ms.unwrap_or(t0 as f64 * 1e-6),
         options.to_ms.unwrap_or(t1 as f64 * 1e-6),
     );
+    for (option, bound) in [("--from", window.0), ("--to", window.1)] {
+        if !bound.is_finite() {
+            return Err(TimelineError::Draw(format!(
+                "{option} {bound}: a time window needs finite bounds"
+            )));
+        }
+    }
     if window.1.partial_cmp(&window.0) != Some(std::cmp::Ordering::Greater) {
         return Err(TimelineError::Draw(format!(
             "empty time window {:.3}..{:.3} ms",

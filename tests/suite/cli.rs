@@ -509,6 +509,74 @@ fn bad_input_gives_a_clear_error_and_no_output() {
         all.extend(args);
         assert_fails(d, &all, &[expect]);
     }
+    // Benches: outputs checked before any work, lists without repeats, PDACRT's
+    // parameters within the device's limits, frame numbers within u32.
+    let bench_cases: [(&[&str], &str); 5] = [
+        (
+            &[
+                "bench",
+                "primitives",
+                "--n",
+                "64",
+                "--json",
+                "nowhere/p.json",
+            ],
+            "nowhere",
+        ),
+        (
+            &[
+                "bench",
+                "trace",
+                "cornell-box",
+                "--tracers",
+                "pdacrt,cpu-bvh,pdacrt",
+            ],
+            "--tracers names pdacrt twice",
+        ),
+        (
+            &[
+                "bench",
+                "trace",
+                "cornell-box",
+                "--width",
+                "8",
+                "--height",
+                "8",
+                "--tile-workgroup",
+                "4096",
+            ],
+            "--tile-workgroup 4096 is more than the device's",
+        ),
+        (
+            &[
+                "bench",
+                "trace",
+                "cornell-box",
+                "--width",
+                "8",
+                "--height",
+                "8",
+                "--alpha",
+                "0",
+            ],
+            "α (--alpha) and β (--beta) must be at least 1",
+        ),
+        (
+            &[
+                "bench",
+                "dynamic",
+                "waves",
+                "--first",
+                "4294967295",
+                "--frames",
+                "1",
+            ],
+            "frames past 4294967295 cannot be numbered",
+        ),
+    ];
+    for (args, expect) in bench_cases {
+        assert_fails(d, args, &[expect]);
+    }
     // A population this large ran the host out of memory before it was bounded.
     assert_fails(
         d,
@@ -551,7 +619,13 @@ fn bad_input_gives_a_clear_error_and_no_output() {
     assert_fails(
         d,
         &["bench", "bdpt", "cornell-box", "--time", "-1"],
-        &["--time must be a positive number"],
+        &["--time must be a positive, finite number"],
+    );
+    // An endless budget ran forever.
+    assert_fails(
+        d,
+        &["bench", "bdpt", "cornell-box", "--time", "inf"],
+        &["--time must be a positive, finite number"],
     );
     assert_fails(
         d,

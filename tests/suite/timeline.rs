@@ -593,6 +593,11 @@ fn render_writes_a_timeline_that_timeline_draws_and_bad_input_is_refused() {
             &["timeline", "t.json", "-o", "nowhere/bad.svg"][..],
             "nowhere",
         ),
+        // An endless window drew forever.
+        (
+            &["timeline", "t.json", "-o", "bad.svg", "--to", "inf"][..],
+            "--to inf: a time window needs finite bounds",
+        ),
         (
             &["render", "-o", "bad.exr", "--timeline", "bad.txt"][..],
             ".json",

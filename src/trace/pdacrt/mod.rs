@@ -201,7 +201,7 @@ impl PdacrtTracer {
         triangles: &[GpuTriangle],
         params: PdacrtParams,
     ) -> vk::Result<Self> {
-        params.validate()?;
+        params.validate(&gpu.info().limits)?;
         check_id_range(triangles.len())?;
         if params.flush_reduce == FlushReduce::AtomicMin
             && !gpu.info().capabilities.buffer_int64_atomics

@@ -4,7 +4,14 @@
 use serde::Serialize;
 
 use super::types::MAX_IDS;
-use crate::vk::{self, Gpu};
+use crate::vk::{self, Gpu, LimitsInfo};
+
+/// Shared memory per staged triangle in segmented_intersect.comp: the triangle (48
+/// bytes) and its id.
+pub const STAGED_TRIANGLE_BYTES: u64 = 52;
+/// Shared memory per lane in filter_triangles.comp: its two children's boxes, four vec3s
+/// at a 16-byte stride.
+const LANE_BOUNDS_BYTES: u64 = 64;
 
 /// The default [`PdacrtParams::terminal_cost_min_rays`]: on lavapipe the budget on
 /// every level cost a 64² batch of `lamps`' path rays 1.3–1.6× its time (few nodes
@@ -167,11 +174,11 @@ impl PdacrtParams {
     ///   (primary) and 92–94 → 61–65 ms (shadow), `swarm` 186–194 → 127–134 and 155 →
     ///   110–112, the bunny at 1024² 244–261 → 187–196 and 187–207 → 135–157
     ///   (docs/PERFORMANCE.md).
-    /// - The batch must fit shared memory (48 + 4 bytes per staged triangle).
+    /// - The batch must fit shared memory ([`STAGED_TRIANGLE_BYTES`] per staged triangle).
     pub fn for_device(gpu: &Gpu) -> Self {
         let mut p = Self::default();
-        let shared = gpu.info().limits.max_compute_shared_memory_size;
-        p.batch = p.batch.min(shared / 52);
+        let shared = u64::from(gpu.info().limits.max_compute_shared_memory_size);
+        p.batch = p.batch.min((shared / STAGED_TRIANGLE_BYTES) as u32);
         p.split = LevelSplit::PrefixSums;
         p.tight_boxes = true;
         p.terminal_cost_min_rays = TERMINAL_COST_MIN_RAYS;
@@ -220,23 +227,67 @@ impl PdacrtParams {
         self.intersect_workgroup * 8
     }
 
-    pub(super) fn validate(&self) -> vk::Result<()> {
+    /// Refuses parameters no kernel can run with, or that the device with `limits`
+    /// cannot (its workgroup invocations and shared memory); the message names each
+    /// parameter by its `bench trace` option too.
+    pub(super) fn validate(&self, limits: &LimitsInfo) -> vk::Result<()> {
         let bad = |what: &str| Err(vk::VkError::Usage(format!("PDACRT parameters: {what}")));
         if self.alpha == 0 || self.beta == 0 {
-            return bad("α and β must be at least 1");
+            return bad("α (--alpha) and β (--beta) must be at least 1");
         }
         if self.lambda == 0 || self.lambda > self.eta {
-            return bad("λ must be in 1..=η");
+            return bad("λ (--lambda) must be in 1..=η (--eta)");
         }
         if self.batch == 0
             || self.intersect_workgroup == 0
             || self.tile_workgroup == 0
             || self.max_rays_per_chunk == 0
         {
-            return bad("T, N, the tile workgroup and the chunk size must be at least 1");
+            return bad(
+                "T (--batch), N (--intersect-workgroup), --tile-workgroup and --chunk must be \
+                 at least 1",
+            );
         }
         if self.max_rays_per_chunk >= MAX_IDS {
-            return bad("the chunk size must be below 2^30 rays");
+            return bad("the chunk size (--chunk) must be below 2^30 rays");
+        }
+        // The tile workgroup shapes the kernels of the prefix-sum split alone.
+        let tiles = self.split == LevelSplit::PrefixSums;
+        let invocations = limits.max_compute_work_group_invocations;
+        for (what, size) in [
+            ("N (--intersect-workgroup)", self.intersect_workgroup),
+            (
+                "--tile-workgroup",
+                if tiles { self.tile_workgroup } else { 1 },
+            ),
+        ] {
+            if size > invocations {
+                return bad(&format!(
+                    "{what} {size} is more than the device's {invocations} invocations a workgroup"
+                ));
+            }
+        }
+        let shared = u64::from(limits.max_compute_shared_memory_size);
+        let needs = [
+            // filter_triangles.comp: each lane's two children's boxes.
+            (
+                u64::from(self.tile_workgroup) * LANE_BOUNDS_BYTES * u64::from(tiles),
+                "--tile-workgroup",
+                self.tile_workgroup,
+            ),
+            // segmented_intersect.comp: each staged triangle and its id.
+            (
+                u64::from(self.batch) * STAGED_TRIANGLE_BYTES * u64::from(self.stage_triangles),
+                "T (--batch)",
+                self.batch,
+            ),
+        ];
+        for (bytes, what, value) in needs {
+            if bytes > shared {
+                return bad(&format!(
+                    "{what} {value} needs {bytes} bytes of shared memory; the device has {shared}"
+                ));
+            }
         }
         Ok(())
     }
