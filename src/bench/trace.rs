@@ -151,7 +151,7 @@ impl TraceReport {
             .collect();
         writeln!(
             f,
-            "{:<12} {:>11.2} {:>10.2} {:>10.2} {:>10.2} {:>11.1} {:>11.1} {:>9}  faster than: {}{}",
+            "{:<12} {:>11.2} {:>10.2} {:>10.2} {:>10.2} {:>11.1} {:>11.1} {:>9}{}{}",
             r.tracer,
             r.frame_ms,
             r.min_ms,
@@ -160,7 +160,10 @@ impl TraceReport {
             r.peak_gpu_bytes as f64 / (1 << 20) as f64,
             r.tracer_peak_bytes as f64 / (1 << 20) as f64,
             format!("{}/{}", r.verified_rays - r.mismatches, r.verified_rays),
-            ratios.join(", "),
+            match ratios.is_empty() {
+                true => String::new(),
+                false => format!("  faster than: {}", ratios.join(", ")),
+            },
             if r.subset < 1.0 {
                 format!("  [extrapolated from {:.2}% of the rays]", 100.0 * r.subset)
             } else {

@@ -754,8 +754,14 @@ fn run_trace(gpu: &Gpu, what: &BenchCommand, scene: &Scene) -> anyhow::Result<()
             print!("{}", row.profile.table());
         }
     }
-    if *levels {
-        print_levels(&report.pdacrt_levels);
+    let pdacrt_ran = report
+        .rows
+        .iter()
+        .any(|r| r.tracer == TracerKind::Pdacrt.name());
+    match (*levels, pdacrt_ran) {
+        (true, true) => print_levels(&report.pdacrt_levels),
+        (true, false) => println!("--levels: PDACRT's levels, but pdacrt was not among --tracers"),
+        (false, _) => {}
     }
     write_json(json, &report)
 }

@@ -22,7 +22,8 @@ pub struct ExportArgs {
 }
 
 pub fn run(args: &ExportArgs) -> anyhow::Result<()> {
-    if args.output.extension().and_then(|e| e.to_str()) != Some("json") {
+    let json_file = args.output.extension().and_then(|e| e.to_str());
+    if !json_file.is_some_and(|e| e.eq_ignore_ascii_case("json")) {
         bail!("{}: the output must be a .json file", args.output.display());
     }
     let scene = splitray::scene::load(&args.scene)?;

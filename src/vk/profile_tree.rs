@@ -179,10 +179,14 @@ impl ProfileTree {
             }
         }
         let self_sum: f64 = rows.iter().map(|(_, n)| n.self_ms).sum();
+        // `+ 0.0` turns an empty tree's −0 into 0 for printing.
         let _ = writeln!(
             s,
             "{:<width$}  {:>7}  {:>11.3}  {:>11.3}",
-            "all scopes", "", self.total_ms, self_sum
+            "all scopes",
+            "",
+            self.total_ms + 0.0,
+            self_sum + 0.0
         );
         s
     }

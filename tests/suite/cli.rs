@@ -876,6 +876,13 @@ fn export_scene_writes_the_resolved_scene_or_a_clear_error() {
         ),
         "{metal:?}"
     );
+    // Extensions are matched as scenes' are: in any case.
+    let out = splitray(&["export-scene", "cornell-box", "-o", "BOX.JSON"], d);
+    assert!(
+        out.status.success() && d.join("BOX.JSON").is_file(),
+        "{}",
+        text(&out)
+    );
 
     for (args, expect) in [
         (
@@ -912,7 +919,7 @@ fn export_scene_writes_the_resolved_scene_or_a_clear_error() {
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .collect();
     files.sort();
-    assert_eq!(files, ["glossy.json"]);
+    assert_eq!(files, ["BOX.JSON", "glossy.json"]);
 }
 
 /// The committed Mitsuba reference of `fixture` at 64×64: `NAME_mean.exr`, with its
