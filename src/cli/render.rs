@@ -447,6 +447,7 @@ fn render_watched(
         }),
         watch: publisher.as_mut().map(|p| p as _),
     };
+    let stop_asked = || signals.received().is_some() || watching.window_closed();
     let result = render_from(
         gpu,
         scene,
@@ -454,9 +455,10 @@ fn render_watched(
         plan,
         RenderControl {
             progress: &mut |p| show_progress(&bar, &label, p, pixels, options.time_limit),
-            stop: &|| signals.received().is_some() || watching.window_closed(),
-            // Neither waits for a long pass: Slurm's KillWait, for one, is 30 s.
-            abandon: &|| signals.received().is_some() || watching.window_closed(),
+            stop: &stop_asked,
+            // Neither a signal nor a closed window waits for a long pass: Slurm's
+            // KillWait, for one, is 30 s.
+            abandon: &stop_asked,
         },
     );
     bar.finish_and_clear();
