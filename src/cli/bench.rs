@@ -26,7 +26,7 @@ pub struct BenchArgs {
     #[command(subcommand)]
     what: BenchCommand,
     /// Vulkan device by index or name substring (see `splitray info`).
-    #[arg(long, global = true)]
+    #[arg(long, value_parser = clap::builder::NonEmptyStringValueParser::new(), global = true)]
     device: Option<String>,
     /// Run with the validation layer (slower; for checking, not for figures).
     #[arg(long, global = true)]

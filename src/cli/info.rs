@@ -14,7 +14,7 @@ pub struct InfoArgs {
     #[arg(long)]
     json: bool,
     /// Mark this device (index or name substring) as the one `render` would use.
-    #[arg(long)]
+    #[arg(long, value_parser = clap::builder::NonEmptyStringValueParser::new())]
     device: Option<String>,
 }
 

@@ -115,7 +115,7 @@ pub struct RenderArgs {
     #[arg(long)]
     tracer: Option<TracerKind>,
     /// Vulkan device by index or name substring (see `splitray info`); also SPLITRAY_DEVICE.
-    #[arg(long)]
+    #[arg(long, value_parser = clap::builder::NonEmptyStringValueParser::new())]
     device: Option<String>,
     /// Run with VK_LAYER_KHRONOS_validation; any validation message fails the command.
     #[arg(long)]

@@ -15,7 +15,8 @@ pub enum VkError {
     NoDevice(String),
     #[error("device '{device}' lacks {what}, which splitray requires")]
     MissingFeature { device: String, what: String },
-    #[error("--device {0}: no such device (see `splitray info`)")]
+    /// Carries how the device was named: `--device 7` or `SPLITRAY_DEVICE=7`.
+    #[error("{0}: no such device (see `splitray info`)")]
     UnknownDevice(String),
     /// The message carries the cause, not also a `source` (a chain would repeat it).
     #[error("GPU memory allocation failed for '{name}': {error}")]

@@ -441,10 +441,16 @@ pub fn select(
             " (install mesa-vulkan-drivers for the lavapipe CPU device)".into(),
         ));
     }
+    // An empty SPLITRAY_DEVICE is an unset one, as shells make it easy to leave it so;
+    // the command line refuses an empty `--device`.
     let env = std::env::var("SPLITRAY_DEVICE").ok();
-    let selector = selector.or(env.as_deref()).filter(|s| !s.is_empty());
-    let chosen = match selector {
-        Some(sel) => {
+    let named = match (selector, env.as_deref()) {
+        (Some(sel), _) => Some((sel, format!("--device {sel}"))),
+        (None, Some(sel)) if !sel.is_empty() => Some((sel, format!("SPLITRAY_DEVICE={sel}"))),
+        _ => None,
+    };
+    let chosen = match named {
+        Some((sel, how)) => {
             let found = match sel.parse::<usize>() {
                 Ok(index) => devices.get(index),
                 Err(_) => {
@@ -454,7 +460,7 @@ pub fn select(
                         .find(|d| d.name.to_lowercase().contains(&lower))
                 }
             };
-            found.ok_or_else(|| VkError::UnknownDevice(sel.to_string()))?
+            found.ok_or(VkError::UnknownDevice(how))?
         }
         None => devices
             .iter()

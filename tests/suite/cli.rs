@@ -44,6 +44,24 @@ fn info_lists_devices_streams_and_validation() {
     let out = splitray(&["info", "--json", "--device", &past], dir.path());
     assert_eq!(out.status.code(), Some(1), "{}", text(&out));
     assert!(text(&out).contains(&format!("--device {past}: no such device")));
+    // An empty `--device` names nothing; an empty SPLITRAY_DEVICE is an unset one, and
+    // a device the variable names that does not exist is reported as the variable's.
+    let out = splitray(&["info", "--json", "--device", ""], dir.path());
+    assert_eq!(out.status.code(), Some(2), "{}", text(&out));
+    assert!(text(&out).contains("--device"), "{}", text(&out));
+    let with_env = |value: &str| {
+        let tiny = [
+            "render", "--width", "4", "--height", "4", "--spp", "1", "-o", "t.exr",
+        ];
+        crate::common::cli::command(&tiny, dir.path())
+            .env("SPLITRAY_DEVICE", value)
+            .output()
+            .unwrap()
+    };
+    assert!(with_env("").status.success());
+    let out = with_env("no-such-gpu");
+    assert_eq!(out.status.code(), Some(1), "{}", text(&out));
+    assert!(text(&out).contains("SPLITRAY_DEVICE=no-such-gpu: no such device"));
     let out = splitray(&["info", "--json", "--device", "0"], dir.path());
     assert!(out.status.success(), "{}", text(&out));
     let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();

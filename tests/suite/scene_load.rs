@@ -423,6 +423,11 @@ fn obj_forms_load_as_the_plain_form() {
             "mtllib a.mtl b.mtl\nv 0 0 0 1 0 0 # red\nv 1 0 0\nv 0 1 0 0 1 0\n\
              v 1 1 0 # fourth\nvt 0.5\nusemtl a\nf 1/1 2/1 3/1 # first\nusemtl b\nf 2 4 3\n",
         ),
+        (
+            "lines continued by a backslash, and a comment ending in one",
+            "mtllib a.mtl\nmtllib b.mtl\n# C:\\models\\\nv 0 0 0\nv 1 0 \\\n 0\nv 0 1 0\nv 1 1 0\n\
+             vt 0.5 0\nusemtl a\nf 1/1 \\\n 2/1 \\\n3/1\nusemtl b\nf 2 4 3 \\\n",
+        ),
     ];
     for (what, text) in forms {
         let p = write(dir.path(), "form.obj", text);
@@ -445,6 +450,17 @@ fn obj_forms_load_as_the_plain_form() {
         want,
         "a library named with a space"
     );
+}
+
+#[test]
+fn lines_after_a_continued_line_keep_their_numbers() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(
+        dir.path(),
+        "wrapped.obj",
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 \\\n 2 \\\n 3\nv 0 NaN 0\n",
+    );
+    assert_has(&load_err(&p), &["wrapped.obj:7", "vertex 4 is not finite"]);
 }
 
 #[test]

@@ -14,6 +14,7 @@
 //! MTL mapping: Kd → diffuse, Ks → specular, Ns → shininess, Ni → ior, d (or 1 − Tr) →
 //! dissolve, illum → illum, Ke → emission. Missing parameters take [`Material::default`].
 
+use std::borrow::Cow;
 use std::cell::RefCell;
 use std::collections::HashMap;
 use std::fmt::Write as _;
@@ -64,6 +65,46 @@ fn without_byte_order_mark(text: String) -> String {
     }
 }
 
+/// `text` with each line that ends in a backslash joined to the next (the OBJ
+/// specification's line continuation, used to wrap long faces). The joined line keeps
+/// the first line's number, and empty lines follow it in place of the lines it took in,
+/// so that the lines after it keep their numbers for the pre-scan's messages.
+fn with_continuations_joined(text: &str) -> Cow<'_, str> {
+    if !text.lines().any(|line| continued(line).is_some()) {
+        return Cow::Borrowed(text);
+    }
+    let mut out = String::with_capacity(text.len());
+    let mut taken_in = 0;
+    for line in text.lines() {
+        match continued(line) {
+            Some(head) => {
+                out.push_str(head);
+                out.push(' ');
+                taken_in += 1;
+            }
+            None => {
+                out.push_str(line);
+                out.push('\n');
+                out.extend(std::iter::repeat_n('\n', taken_in));
+                taken_in = 0;
+            }
+        }
+    }
+    // A backslash on the last line continues nothing.
+    out.extend(std::iter::repeat_n('\n', taken_in));
+    Cow::Owned(out)
+}
+
+/// The line without its continuing backslash, if it is continued. A comment ends at
+/// its line: one ending in a backslash (a Windows folder) takes in nothing.
+fn continued(line: &str) -> Option<&str> {
+    let line = line.trim_end();
+    if line.trim_start().starts_with('#') {
+        return None;
+    }
+    line.strip_suffix('\\')
+}
+
 fn label(path: &Path) -> String {
     path.display().to_string()
 }
@@ -101,6 +142,7 @@ pub fn load_obj_scene(path: &Path) -> Result<Scene, SceneError> {
 /// relative to its folder).
 pub fn load_obj_mesh(path: &Path) -> Result<ObjMesh, SceneError> {
     let text = read_text(path)?;
+    let text = with_continuations_joined(&text);
     let file = label(path);
     let scan = prescan_obj(&text, &file)?;
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
