@@ -45,6 +45,7 @@ mod primitives_scan;
 mod primitives_sort;
 mod primitives_sync;
 mod pt_analytic;
+mod pt_kernels;
 mod pt_materials;
 mod pt_mitsuba;
 mod reference_compare;

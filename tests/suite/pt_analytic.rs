@@ -144,6 +144,18 @@ fn furnace_depth_limits_give_partial_sums_for_every_strategy() {
     let gpu = common::gpu();
     let a = 0.5f32;
     let scene = furnace(a, 1.0);
+    // max_depth 0: nothing, not even the emitters around the camera.
+    let out = render(
+        &gpu,
+        &scene,
+        8,
+        TracerKind::BruteForce,
+        opts(2, 0, Strategy::Mis),
+    );
+    assert!(out
+        .sum_rgb
+        .iter()
+        .all(|s| s[..3] == [0.0; 3] && s[3] == 2.0));
     // max_depth 1: only emission seen directly, with no noise at all.
     let out = render(
         &gpu,

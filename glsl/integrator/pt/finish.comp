@@ -2,7 +2,9 @@
 // Stage `finish`: each path's radiance becomes one sample of its pixel: the film sum
 // gets L (w counts samples) and the second-moment sum gets L^2 (for standard errors).
 // One invocation per pixel adds the chunk's samples of that pixel in sample order, so
-// the sums do not depend on scheduling.
+// the sums do not depend on scheduling. A non-finite sample would poison its pixel for
+// good: it is dropped (it counts as a sample of zero, as in pbrt-v4) and
+// counted in counters[0], which the render reports as `non_finite_dropped`.
 #include "grid.glsl"
 #include "pt.glsl"
 
@@ -11,10 +13,12 @@ layout(push_constant) uniform Push {
     BUFFER_REF(PathStatesInRef, paths)
     BUFFER_REF(Vec4sRef, accum)
     BUFFER_REF(Vec4sRef, accum2)
+    BUFFER_REF(UintsRef, counters)
 };
 BUFFER_BINDING(0, readonly, PathState, paths)
 BUFFER_BINDING(1, , vec4, accum)
 BUFFER_BINDING(2, , vec4, accum2)
+BUFFER_BINDING(3, , uint, counters)
 
 void main() {
     uint i = linear_invocation_id();
@@ -24,8 +28,10 @@ void main() {
     vec4 sum2 = accum2.data[pixel];
     for (uint p = i; p < params.path_count; p += params.pixel_count) {
         vec3 l = paths.data[p].radiance.rgb;
-        // A non-finite sample would poison the pixel forever: drop it (counted as zero).
-        if (any(isnan(l)) || any(isinf(l))) l = vec3(0.0);
+        if (any(isnan(l)) || any(isinf(l))) {
+            l = vec3(0.0);
+            atomicAdd(counters.data[0], 1u);
+        }
         sum += vec4(l, 1.0);
         sum2 += vec4(l * l, 0.0);
     }

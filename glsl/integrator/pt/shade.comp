@@ -101,9 +101,10 @@ void main() {
     bool prev_delta = (s.flags & PATH_DELTA) != 0u;
     bool mis = (params.flags & (PT_FLAG_NEE | PT_FLAG_BSDF)) == (PT_FLAG_NEE | PT_FLAG_BSDF);
 
-    // 1. Emission (one-sided: front = geometric normal).
+    // 1. Emission (one-sided: front = geometric normal). max_depth 0 sees nothing, not
+    // even emitters (Mitsuba's meaning).
     float cos_l = -dot(ng, ray.dir);
-    if (m.emission.r + m.emission.g + m.emission.b > 0.0 && cos_l > 0.0) {
+    if (params.max_depth != 0 && m.emission.r + m.emission.g + m.emission.b > 0.0 && cos_l > 0.0) {
         float w = 1.0;
         if (!prev_delta) {
             if ((params.flags & PT_FLAG_BSDF) == 0u) {

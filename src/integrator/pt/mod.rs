@@ -35,11 +35,10 @@ pub mod gpu;
 pub mod lights;
 mod material_sort;
 pub mod materials;
+pub mod twin;
 
 use std::sync::Arc;
 use std::time::Instant;
-
-use glam::Vec3;
 
 use self::gpu::{PathState, PtMaterial, PtParams, FLAG_BSDF, FLAG_NEE, FLAG_NORMALS, FLAG_SORTED};
 pub use self::lights::LightTable;
@@ -153,7 +152,6 @@ impl PtScene {
         } else {
             vec![[0.0; 4]; 3]
         };
-        let _ = Vec3::ZERO;
         Self {
             triangles: scene.gpu_triangles(),
             triangle_material: scene.triangles.iter().map(|t| t.material).collect(),
@@ -176,6 +174,8 @@ pub struct PtOutput {
     pub passes: u32,
     /// Rays cast: path rays plus shadow rays.
     pub rays_traced: u64,
+    /// Samples whose radiance was NaN or infinite: each was added as zero.
+    pub non_finite_dropped: u64,
 }
 
 impl PtOutput {
@@ -231,7 +231,7 @@ impl Pipelines {
             )?,
             nee_accumulate: make(shaders::INTEGRATOR_PT_NEE_ACCUMULATE, 4)?,
             gather: make(shaders::INTEGRATOR_PT_GATHER, 5)?,
-            finish: make(shaders::INTEGRATOR_PT_FINISH, 3)?,
+            finish: make(shaders::INTEGRATOR_PT_FINISH, 4)?,
         })
     }
 }
@@ -349,6 +349,8 @@ pub struct PtIntegrator<'t> {
     /// Per pixel Σ L (rgb) and samples (w): the film, shared with previews.
     accum: Arc<Buffer>,
     accum2: Buffer,
+    /// `finish`'s count of non-finite samples it dropped.
+    counters: Buffer,
     params: PtParams,
     pixels: usize,
     /// Whole passes per chunk when the image is small, else one pass in pixel ranges.
@@ -404,6 +406,7 @@ impl<'t> PtIntegrator<'t> {
             wave: Wavefront::new(gpu, chunk, options.sort)?,
             accum: Arc::new(gpu.zeroed::<[f32; 4]>("pt-accum", pixels)?),
             accum2: gpu.zeroed::<[f32; 4]>("pt-accum2", pixels)?,
+            counters: gpu.zeroed::<u32>("pt-counters", 1)?,
             params,
             pixels,
             passes_per_chunk: passes_per_chunk as u32,
@@ -423,6 +426,7 @@ impl<'t> PtIntegrator<'t> {
             sum_sq: self.accum2.read()?,
             passes: self.passes,
             rays_traced: self.rays_traced,
+            non_finite_dropped: self.counters.read::<u32>()?[0] as u64,
         })
     }
 
@@ -472,6 +476,7 @@ impl<'t> PtIntegrator<'t> {
                 (&self.wave.paths).into(),
                 (&*self.accum).into(),
                 (&self.accum2).into(),
+                (&self.counters).into(),
             ],
             &self.params,
             pixel_count as u64,
@@ -626,10 +631,10 @@ impl Integrator for PtIntegrator<'_> {
     }
 
     fn stats(&self) -> IntegratorStats {
-        IntegratorStats {
-            rays_traced: self.rays_traced,
-            ..Default::default()
-        }
+        // The count is a diagnostic: a device that cannot be read leaves it out.
+        let dropped = self.counters.read::<u32>().map(|c| c[0] as u64);
+        let counters: Vec<_> = dropped.iter().map(|&n| ("non_finite_dropped", n)).collect();
+        IntegratorStats::with_counters(self.rays_traced, &counters)
     }
 
     fn set_frame(&mut self, frame: &SceneFrame<'_>) -> Result<(), IntegratorError> {
