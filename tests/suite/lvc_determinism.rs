@@ -2,7 +2,8 @@
 //! or three, material sorting on or off, a cache that starts too small and grows (the
 //! light pass runs again), camera passes cut into pixel ranges. For CIS-LBDPT,
 //! resampling one connection from one candidate is LVC-BDPT's uniform connection, up to
-//! the rounding of two different shaders. Then: the technique images sum to the image,
+//! the rounding of two different shaders. Lights a power of two brighter scale the image
+//! exactly. Then: the technique images sum to the image,
 //! and a render is free of hazards under synchronization validation with the three
 //! streams on distinct queues where the device has them.
 use crate::common;
@@ -79,6 +80,46 @@ fn streams_sorting_and_cache_growth_leave_the_image_bit_identical() {
         lvc.render_passes(0, PASSES).unwrap();
         assert!(lvc.lvc_counters().cache_regrowths >= 1);
         assert_eq!(lvc.sums().unwrap(), expected, "{variant:?}: grown cache");
+    }
+    common::assert_clean(&gpu);
+}
+
+/// The scene with every emitter `factor` times as bright.
+fn brighter(scene: &Scene, factor: f32) -> Scene {
+    let mut s = scene.clone();
+    for m in &mut s.materials {
+        m.emission *= factor;
+    }
+    for l in &mut s.point_lights {
+        l.intensity *= factor;
+    }
+    s
+}
+
+#[test]
+fn emitters_a_power_of_two_brighter_scale_the_image_exactly() {
+    // Scaling the lights by 2^k scales every estimate by 2^k exactly (light subpaths'
+    // roulette ignores their emitted flux), light tracing's fixed-point splats included:
+    // they are scaled to the scene's brightest emitter, so that splats of lights in any
+    // units keep all their bits (lights of 1e-8 lost 9 % of their light-traced image).
+    let gpu = common::gpu();
+    let scene = scene();
+    for variant in [Variant::LvcBdpt, Variant::CisLbdpt] {
+        let expected = render(&gpu, &scene, &options(variant));
+        for exponent in [-40, 40] {
+            let factor = 2f32.powi(exponent);
+            let got = render(&gpu, &brighter(&scene, factor), &options(variant));
+            let scaled = |sums: &[[f64; 3]], by: f64| -> Vec<[f64; 3]> {
+                sums.iter().map(|p| p.map(|v| v * by)).collect()
+            };
+            let what = format!("{variant:?}, lights × 2^{exponent}");
+            assert_eq!(got.sum, scaled(&expected.sum, factor as f64), "{what}");
+            assert_eq!(
+                got.sum_sq.as_deref().unwrap(),
+                scaled(expected.sum_sq.as_deref().unwrap(), (factor as f64).powi(2)),
+                "{what}: second moments"
+            );
+        }
     }
     common::assert_clean(&gpu);
 }

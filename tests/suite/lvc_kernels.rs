@@ -223,7 +223,7 @@ fn check_case(case: Case) -> usize {
             );
         }
         check_light_tracing(d, &connector, &open, c.light_paths, pixels);
-        check_splat_film(d, pixels);
+        check_splat_film(d, pixels, c.splat_scale);
         if let Some(pt) = &sorted_scene {
             for b in &d.bounces {
                 sorted_keys = sorted_keys.max(check_material_order(b, pt, case.name));
@@ -233,7 +233,7 @@ fn check_case(case: Case) -> usize {
             d, &case, &connector, &cpu_scene, &open, seed, scale, &mut cam,
         );
         // finish: the film gains each pass's radiance plus its splats.
-        let splats = FixedFilm::from_words(&d.splat_film);
+        let splats = FixedFilm::from_words(&d.splat_film, c.splat_scale);
         for q in 0..ch.passes {
             for p in 0..pixels {
                 let r = radiance[(q * pixels + p) as usize];
@@ -377,14 +377,14 @@ fn check_light_tracing(
 }
 
 /// The splat film is the fixed-point sum of the unoccluded contributions, to the bit.
-fn check_splat_film(d: &ChunkDump, pixels: u32) {
-    let mut expected = FixedFilm::new((d.chunk.passes * pixels) as usize);
+fn check_splat_film(d: &ChunkDump, pixels: u32, scale: f32) {
+    let mut expected = FixedFilm::new((d.chunk.passes * pixels) as usize, scale);
     for (c, h) in d.splats.iter().zip(&d.splat_hits) {
         if c.is_some() && h.triangle == MISS {
             expected.add(c.target as usize, c.value);
         }
     }
-    let gpu = FixedFilm::from_words(&d.splat_film[..expected.sums.len() * 6]);
+    let gpu = FixedFilm::from_words(&d.splat_film[..expected.sums.len() * 6], scale);
     assert_eq!(gpu.sums, expected.sums);
 }
 

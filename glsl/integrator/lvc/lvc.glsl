@@ -31,6 +31,11 @@ struct LvcConstants {
     uint flags;          // LVC_FLAG_*
     uint candidates;     // M: candidates per camera vertex (resampling)
     uint connections;    // N: connections per camera vertex
+    float splat_scale;   // the power of two splat-film values are multiplied by
+                         // (src/integrator/lvc/fixed.rs, splat_scale)
+    uint pad0;
+    uint pad1;
+    uint pad2;
 };
 
 const uint LVC_FLAG_SORTED = 1u;    // kernels read their items through the sorted order

@@ -3,8 +3,12 @@
 // atomics would). Each slot is six words: the low words of r, g, b, then the high words.
 // A carry out of a low word goes to its high word; integer addition is associative, so
 // the final 64-bit value is exactly the sum of the parts, however the atomics interleave.
-// Needs `uint fixed_film[]`; kernels that add define LVC_FIXED_ADD and also declare
-// `uint counters[]`. src/integrator/lvc/fixed.rs is the twin.
+// Each part is rounded to the nearest multiple of 2^-32 (ties to even), so that the sum's
+// rounding errors cancel on average instead of all cutting it down. Callers scale
+// values by a power of two that puts the scene's radiance near 1 (LvcConstants'
+// splat_scale), which keeps splats well inside the 2^-32 .. 2^31 range whatever the
+// scene's units. Needs `uint fixed_film[]`; kernels that add define LVC_FIXED_ADD and
+// also declare `uint counters[]`. src/integrator/lvc/fixed.rs is the twin.
 #ifndef SPLITRAY_LVC_FIXED_GLSL
 #define SPLITRAY_LVC_FIXED_GLSL
 
@@ -25,7 +29,8 @@ void fixed_add_channel(uint base, uint channel, float v) {
     }
     float whole = floor(v);
     uint hi = uint(whole);
-    uint lo = uint((v - whole) * FIXED_ONE);
+    // (v - whole) < 1, so the rounded fraction stays below 2^32 (at most 2^32 - 2^8).
+    uint lo = uint(roundEven((v - whole) * FIXED_ONE));
     uint old = atomicAdd(fixed_film[base + channel], lo);
     if (old > 0xFFFFFFFFu - lo) hi += 1u;
     if (hi != 0u) atomicAdd(fixed_film[base + 3u + channel], hi);

@@ -1,8 +1,9 @@
 #version 460
 // Light tracing's splats: each unoccluded contribution is added to its (pass, pixel)
 // slot of the splat film in Q32.32 fixed point with integer atomics (lvc_fixed.glsl), so
-// the film does not depend on the order of the additions. Non-finite values are dropped
-// and counted.
+// the film does not depend on the order of the additions, scaled by the film's power of
+// two so that the scene's radiance sits in the middle of the fixed-point range.
+// Non-finite values are dropped and counted.
 #include "grid.glsl"
 #include "geometry.glsl"
 #include "lvc.glsl"
@@ -12,6 +13,7 @@ layout(std430, set = 0, binding = 0) readonly buffer Contributions { Contributio
 layout(std430, set = 0, binding = 1) readonly buffer ShadowHits { Hit shadow_hits[]; };
 layout(std430, set = 0, binding = 2) buffer FixedFilm { uint fixed_film[]; };
 layout(std430, set = 0, binding = 3) buffer Counters { uint counters[]; };
+layout(std430, set = 0, binding = 4) readonly buffer Constants { LvcConstants C; };
 
 #define LVC_FIXED_ADD
 #include "lvc_fixed.glsl"
@@ -25,5 +27,5 @@ void main() {
         atomicAdd(counters[COUNTER_NON_FINITE], 1u);
         return;
     }
-    fixed_add(c.target, c.value);
+    fixed_add(c.target, c.value * C.splat_scale);
 }

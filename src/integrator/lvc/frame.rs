@@ -42,7 +42,7 @@ impl LvcIntegrator<'_> {
             &self.plan,
             camera,
             frame.scene.bounds().radius(),
-            self.light_table.lights.len(),
+            &self.light_table,
         );
         self.constants_buffer.write(&[self.constants])?;
         self.prepass()

@@ -36,9 +36,13 @@ pub struct LvcConstants {
     pub candidates: u32,
     /// N: connections per camera vertex.
     pub connections: u32,
+    /// The power of two the splat film's values are multiplied by
+    /// ([`super::fixed::splat_scale`]).
+    pub splat_scale: f32,
+    pub pad: [u32; 3],
 }
 
-const _: () = assert!(size_of::<LvcConstants>() == 112);
+const _: () = assert!(size_of::<LvcConstants>() == 128);
 
 /// Kernels read their items through the material-sorted order.
 pub const FLAG_SORTED: u32 = 1;

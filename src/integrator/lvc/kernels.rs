@@ -81,7 +81,7 @@ impl Kernels {
             light_store: lvc(shaders::INTEGRATOR_LVC_LIGHT_STORE, 4)?,
             light_index: lvc(shaders::INTEGRATOR_LVC_LIGHT_INDEX, 3)?,
             light_connect: lvc(shaders::INTEGRATOR_LVC_LIGHT_CONNECT, 6)?,
-            splat: lvc(shaders::INTEGRATOR_LVC_SPLAT, 4)?,
+            splat: lvc(shaders::INTEGRATOR_LVC_SPLAT, 5)?,
             camera_generate: lvc(shaders::INTEGRATOR_LVC_CAMERA_GENERATE, 5)?,
             camera_vertex: lvc(shaders::INTEGRATOR_LVC_CAMERA_VERTEX, 13)?,
             camera_direct: lvc(shaders::INTEGRATOR_LVC_CAMERA_DIRECT, 10)?,

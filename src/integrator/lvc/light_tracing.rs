@@ -70,6 +70,7 @@ pub fn splat_cache(
                 (&w.shadow_hits).into(),
                 splat_film.into(),
                 counters.into(),
+                shared.constants.into(),
             ],
             &push,
             count as u64,

@@ -98,23 +98,24 @@ pub fn lvc_counts(
 }
 
 /// The constants of a render through `camera` before its prepass: the camera, the ray
-/// offset from the scene's extent (`scene_radius`), the light count, N_L of the plan
-/// before the prepass fits it, and provisional counts (the prepass's vertices do not
-/// depend on them).
+/// offset from the scene's extent (`scene_radius`), the light count and the splat
+/// film's scale from its `lights`, N_L of the plan before the prepass fits it, and
+/// provisional counts (the prepass's vertices do not depend on them).
 fn prepass_constants(
     options: &LvcOptions,
     plan: &Plan,
     camera: &CameraFrame,
     scene_radius: f32,
-    light_count: usize,
+    lights: &LightTable,
 ) -> LvcConstants {
     let mut constants = LvcConstants::new(camera);
     constants.ray_epsilon = 1e-4 * scene_radius.max(1e-3);
+    constants.splat_scale = fixed::splat_scale(lights, scene_radius);
     constants.seed = fold_seed(options.seed);
     constants.light_paths = plan.light_paths;
     constants.max_depth = options.max_depth;
     constants.rr_depth = options.rr_depth;
-    constants.light_count = light_count as u32;
+    constants.light_count = lights.lights.len() as u32;
     constants.connections = options.connections;
     constants.candidates = options.candidates;
     constants.flags = if options.sort { FLAG_SORTED } else { 0 }
@@ -236,13 +237,8 @@ impl<'t> LvcIntegrator<'t> {
     ) -> Result<Self, IntegratorError> {
         options.check()?;
         let plan = Plan::new(gpu, camera.width, camera.height, options);
-        let constants = prepass_constants(
-            options,
-            &plan,
-            camera,
-            scene.scene_radius,
-            scene.lights.lights.len(),
-        );
+        let constants =
+            prepass_constants(options, &plan, camera, scene.scene_radius, &scene.lights);
         let pixels = plan.pixels as usize;
         let max_light_paths = plan.chunk_light_paths(plan.passes_per_chunk);
         let mut integrator = Self {
