@@ -676,7 +676,7 @@ fn eye_integrator(
             triangle_material: &triangle_material,
             materials: &materials,
             camera,
-            scene_radius: scene.bounds().radius(),
+            bounds: scene.bounds(),
             light: shadow_light(scene),
         },
         &EyeOptions {

@@ -53,11 +53,10 @@ impl CpuScene {
     }
 
     pub fn from_tables(tables: PtScene) -> Self {
-        let ray_epsilon = 1e-4 * tables.scene_radius.max(1e-3);
         Self {
             bvh: CpuBvh::new(&tables.triangles),
+            ray_epsilon: tables.ray_epsilon,
             tables,
-            ray_epsilon,
         }
     }
 

@@ -12,7 +12,7 @@ use super::{
     check_film_size, Integrator, IntegratorError, IntegratorKind, IntegratorStats, SceneFrame,
 };
 use crate::film::{DeviceFilm, FilmSums};
-use crate::scene::CameraFrame;
+use crate::scene::{Aabb, CameraFrame};
 use crate::shaders;
 use crate::trace::{GpuTriangle, Hit, Query, Ray, Tracer};
 use crate::vk::{
@@ -28,8 +28,9 @@ pub struct EyeInputs<'a> {
     pub triangle_material: &'a [u32],
     pub materials: &'a [GpuMaterial],
     pub camera: CameraFrame,
-    /// Radius of the scene's bounding sphere: scales the AO radius and ray offsets.
-    pub scene_radius: f32,
+    /// The scene's bounds: the AO radius is a fraction of their radius, and rays leave
+    /// surfaces [`Aabb::ray_epsilon`] off them.
+    pub bounds: Aabb,
     /// The shadow integrator's point light: position and intensity (W/sr).
     pub light: glam::Vec4,
 }
@@ -150,15 +151,15 @@ pub struct EyeIntegrator {
 fn set_scene_params(
     frame: &mut FrameParams,
     camera: &CameraFrame,
-    scene_radius: f32,
+    bounds: &Aabb,
     light: glam::Vec4,
     ao_radius_fraction: f32,
 ) {
     let posed = FrameParams::new(camera);
     (frame.origin, frame.forward, frame.right, frame.up) =
         (posed.origin, posed.forward, posed.right, posed.up);
-    frame.ao_radius = ao_radius_fraction * scene_radius;
-    frame.ray_epsilon = 1e-4 * scene_radius.max(1e-3);
+    frame.ao_radius = ao_radius_fraction * bounds.radius();
+    frame.ray_epsilon = bounds.ray_epsilon();
     frame.light = light.into();
 }
 
@@ -190,7 +191,7 @@ impl EyeIntegrator {
         set_scene_params(
             &mut frame,
             &inputs.camera,
-            inputs.scene_radius,
+            &inputs.bounds,
             inputs.light,
             options.ao_radius_fraction,
         );
@@ -330,7 +331,7 @@ impl Integrator for EyeIntegrator {
         set_scene_params(
             &mut self.frame,
             &frame.camera,
-            frame.scene.bounds().radius(),
+            &frame.scene.bounds(),
             crate::render::shadow_light(frame.scene),
             self.ao_radius_fraction,
         );

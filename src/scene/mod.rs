@@ -338,6 +338,19 @@ impl Aabb {
         self.extent().length() * 0.5
     }
 
+    /// How far a ray that leaves a surface inside these bounds starts off it (along the
+    /// geometric normal), so that it does not hit that surface again: 1e-4 of the
+    /// radius, a scale-free fraction that holds for scenes in any units, and at least
+    /// 32 float steps of the largest coordinate, so that the offset clears the rounding
+    /// of hit points far from the origin. Always positive.
+    pub fn ray_epsilon(&self) -> f32 {
+        const FLOAT_STEPS: f32 = 32.0 * f32::EPSILON;
+        let farthest = self.min.abs().max(self.max.abs()).max_element();
+        (1e-4 * self.radius())
+            .max(FLOAT_STEPS * farthest)
+            .max(f32::MIN_POSITIVE)
+    }
+
     pub fn contains(&self, p: Vec3) -> bool {
         p.cmpge(self.min).all() && p.cmple(self.max).all()
     }
@@ -446,7 +459,8 @@ impl Scene {
 pub fn framing_camera(bounds: &Aabb) -> Camera {
     let fov_y: f32 = 40.0;
     let center = bounds.center();
-    let r = bounds.radius().max(1e-3);
+    // A scene of any size fits; a single point gets a unit sphere.
+    let r = Some(bounds.radius()).filter(|&r| r > 0.0).unwrap_or(1.0);
     let d = 1.05 * r / (fov_y.to_radians() * 0.5).sin();
     Camera {
         position: center + Vec3::new(0.0, 0.0, d),

@@ -41,7 +41,7 @@ impl LvcIntegrator<'_> {
             &self.options,
             &self.plan,
             camera,
-            frame.scene.bounds().radius(),
+            &frame.scene.bounds(),
             &self.light_table,
         );
         self.constants_buffer.write(&[self.constants])?;

@@ -58,7 +58,7 @@ use crate::integrator::pt::{LightTable, PtScene, SceneBuffers};
 use crate::integrator::{
     check_film_size, Integrator, IntegratorError, IntegratorStats, NamedImage, SceneFrame,
 };
-use crate::scene::CameraFrame;
+use crate::scene::{Aabb, CameraFrame};
 use crate::trace::Tracer;
 use crate::vk::{self, Buffer, Gpu, Recorder};
 
@@ -98,19 +98,19 @@ pub fn lvc_counts(
 }
 
 /// The constants of a render through `camera` before its prepass: the camera, the ray
-/// offset from the scene's extent (`scene_radius`), the light count and the splat
-/// film's scale from its `lights`, N_L of the plan before the prepass fits it, and
-/// provisional counts (the prepass's vertices do not depend on them).
+/// offset and the splat film's scale from the scene's `bounds` and `lights`, the light
+/// count, N_L of the plan before the prepass fits it, and provisional counts (the
+/// prepass's vertices do not depend on them).
 fn prepass_constants(
     options: &LvcOptions,
     plan: &Plan,
     camera: &CameraFrame,
-    scene_radius: f32,
+    bounds: &Aabb,
     lights: &LightTable,
 ) -> LvcConstants {
     let mut constants = LvcConstants::new(camera);
-    constants.ray_epsilon = 1e-4 * scene_radius.max(1e-3);
-    constants.splat_scale = fixed::splat_scale(lights, scene_radius);
+    constants.ray_epsilon = bounds.ray_epsilon();
+    constants.splat_scale = fixed::splat_scale(lights, bounds.radius());
     constants.seed = fold_seed(options.seed);
     constants.light_paths = plan.light_paths;
     constants.max_depth = options.max_depth;
@@ -237,8 +237,7 @@ impl<'t> LvcIntegrator<'t> {
     ) -> Result<Self, IntegratorError> {
         options.check()?;
         let plan = Plan::new(gpu, camera.width, camera.height, options);
-        let constants =
-            prepass_constants(options, &plan, camera, scene.scene_radius, &scene.lights);
+        let constants = prepass_constants(options, &plan, camera, &scene.bounds, &scene.lights);
         let pixels = plan.pixels as usize;
         let max_light_paths = plan.chunk_light_paths(plan.passes_per_chunk);
         let mut integrator = Self {

@@ -43,11 +43,10 @@ pub fn uniform_index(index: u32, sample: u32, dimension: u32, seed: u32, size: u
 
 /// The scene's tables without occluders: every connection is visible.
 pub fn unoccluded(tables: PtScene) -> CpuScene {
-    let ray_epsilon = 1e-4 * tables.scene_radius.max(1e-3);
     CpuScene {
         bvh: CpuBvh::new(&[]),
+        ray_epsilon: tables.ray_epsilon,
         tables,
-        ray_epsilon,
     }
 }
 

@@ -107,7 +107,7 @@ impl PtIntegrator<'_> {
         let p = &mut self.params;
         (p.origin, p.forward, p.right, p.up) = (posed.origin, posed.forward, posed.right, posed.up);
         p.light_count = lights.lights.len() as u32;
-        p.ray_epsilon = 1e-4 * scene.bounds().radius().max(1e-3);
+        p.ray_epsilon = scene.bounds().ray_epsilon();
         self.nee_on = self.options.strategy != Strategy::Bsdf && !lights.lights.is_empty();
         self.light_table = lights;
         Ok(())

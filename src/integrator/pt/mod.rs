@@ -48,7 +48,7 @@ use crate::bsdf::BsdfParams;
 use crate::film::{DeviceFilm, FilmSums};
 use crate::primitives::compact::Kept;
 use crate::primitives::{Compact, Tuning};
-use crate::scene::{CameraFrame, Scene};
+use crate::scene::{Aabb, CameraFrame, Scene};
 use crate::shaders;
 use crate::trace::{GpuTriangle, Hit, Query, Ray, Tracer};
 use crate::vk::{self, Buffer, ComputePipeline, Gpu, MemoryKind, StreamKind, TimelinePoint};
@@ -133,8 +133,10 @@ pub struct PtScene {
     /// Three per triangle: shading normals, w = 1 where the triangle has them.
     pub normals: Vec<[f32; 4]>,
     pub lights: LightTable,
-    /// Radius of the scene's bounding sphere (scales ray offsets).
-    pub scene_radius: f32,
+    /// The scene's bounds.
+    pub bounds: Aabb,
+    /// How far rays leaving a surface start off it ([`Aabb::ray_epsilon`]).
+    pub ray_epsilon: f32,
 }
 
 impl PtScene {
@@ -159,7 +161,8 @@ impl PtScene {
             bsdfs,
             normals,
             lights: LightTable::new(scene),
-            scene_radius: scene.bounds().radius(),
+            bounds: scene.bounds(),
+            ray_epsilon: scene.bounds().ray_epsilon(),
         }
     }
 }
@@ -383,7 +386,7 @@ impl<'t> PtIntegrator<'t> {
         params.max_depth = options.max_depth;
         params.rr_depth = options.rr_depth;
         params.light_count = scene.lights.lights.len() as u32;
-        params.ray_epsilon = 1e-4 * scene.scene_radius.max(1e-3);
+        params.ray_epsilon = scene.ray_epsilon;
         params.flags = match options.strategy {
             Strategy::Mis => FLAG_NEE | FLAG_BSDF,
             Strategy::Nee => FLAG_NEE,

@@ -51,3 +51,20 @@ pub fn tricky_cornell_box() -> Scene {
     });
     scene
 }
+
+/// The scene `factor` times as large (a power of two, so every length scales exactly):
+/// triangles, camera and point lights move; a point light's intensity scales by
+/// factor² so that the light reaching each surface stays the same.
+pub fn scaled(scene: &Scene, factor: f32) -> Scene {
+    let mut s = scene.clone();
+    for t in &mut s.triangles {
+        t.p = t.p.map(|p| p * factor);
+    }
+    s.camera.position *= factor;
+    s.camera.look_at *= factor;
+    for l in &mut s.point_lights {
+        l.position *= factor;
+        l.intensity *= factor * factor;
+    }
+    s
+}
