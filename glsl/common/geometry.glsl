@@ -56,7 +56,10 @@ float intersect_triangle(vec3 o, vec3 d, float tmin, float tmax, vec3 v0, vec3 e
     float inv_det = 1.0 / det;
     vec3 s = o - v0;
     u = dot(s, p) * inv_det;
-    if (u < 0.0 || u > 1.0) return 1.0 / 0.0;
+    // Written as the Rust twin's `!(0.0..=1.0).contains(&u)` so that a NaN u misses too:
+    // a ray with an infinite direction component makes det infinite, inv_det 0, u NaN
+    // and t 0, a hit at t = 0 wherever tmin < 0 if NaN slipped through.
+    if (!(u >= 0.0 && u <= 1.0)) return 1.0 / 0.0;
     vec3 q = cross(s, e1);
     v = dot(d, q) * inv_det;
     if (v < 0.0 || u + v > 1.0) return 1.0 / 0.0;
