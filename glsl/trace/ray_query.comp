@@ -25,6 +25,13 @@ layout(push_constant) uniform Push {
 BUFFER_BINDING(0, readonly, Ray, rays)
 BUFFER_BINDING(1, writeonly, Hit, hits)
 
+// Whether no component is infinite or NaN, by the exponent bits: a compiler may assume
+// that floats are neither (SPIR-V without SignedZeroInfNanPreserve) and fold isinf and
+// isnan away, but not integer tests.
+bool finite(vec3 v) {
+    return all(lessThan(floatBitsToUint(v) & 0x7F800000u, uvec3(0x7F800000u)));
+}
+
 void main() {
     uint ray_index = linear_invocation_id();
     if (ray_index >= pc.ray_count) return;
@@ -37,7 +44,12 @@ void main() {
     float tmin = max(ray.tmin, 0.0);
     float tmax = min(ray.tmax, 3.402823466e38);
     Hit hit = Hit(1.0 / 0.0, MISS, 0.0, 0.0);
-    if (tmax > tmin) {
+    // Rays that meet nothing in every tracer never reach the driver, for which they are
+    // undefined (VUID-RuntimeSpirv-OpRayQueryInitializeKHR-06348 to -06351): an empty
+    // segment, tested before the clamps above, which may turn a NaN bound into the
+    // other operand (GLSL's min and max on NaN); and a NaN or infinite origin or
+    // direction component.
+    if (!ray_is_empty(ray) && finite(ray.origin) && finite(ray.dir) && tmax > tmin) {
         rayQueryEXT query;
         rayQueryInitializeEXT(query, scene, flags, 0xFF, ray.origin, tmin, ray.dir, tmax);
         while (rayQueryProceedEXT(query)) {
