@@ -5,12 +5,13 @@ use crate::common;
 use glam::Vec3;
 use splitray::shaders;
 use splitray::trace::{cpu, BruteForceTracer, GpuTriangle, Hit, Query, Ray};
-use splitray::vk::{ComputePipeline, PipelineDesc, StreamKind};
+use splitray::vk::{ComputePipeline, Gpu, PipelineDesc, StreamKind};
 
 #[test]
 fn brute_force_matches_cpu_on_random_triangle_soups() {
     let gpu = common::gpu();
-    for (triangles, rays, seed) in common::RANDOM_SOUPS {
+    // And a scene without triangles: every ray misses.
+    for (triangles, rays, seed) in common::RANDOM_SOUPS.into_iter().chain([(0, 10, 6)]) {
         let soup = common::triangle_soup(triangles, seed);
         let rays = common::random_rays(rays, seed + 100);
         let mut tracer = BruteForceTracer::new(&gpu, &soup).unwrap();
@@ -70,6 +71,151 @@ fn results_do_not_depend_on_batching() {
             &expected,
             &format!("wg {workgroup_size}, batch {batch}"),
         );
+    }
+    common::assert_clean(&gpu);
+}
+
+/// The brute-force tracer on `rays`, with the default tuning and with workgroups and
+/// batches of awkward sizes: closest hits against the CPU twin (the rays flagged in
+/// `misses` exactly `Hit::NONE`, bit for bit) and occlusion as `cpu::occluded` says.
+fn assert_like_the_cpu_twin(
+    gpu: &Gpu,
+    triangles: &[GpuTriangle],
+    rays: &[Ray],
+    misses: &[bool],
+    what: &str,
+) {
+    use splitray::trace::brute_force::BruteForceTuning;
+    let want = cpu::closest_hits(rays, triangles);
+    for (i, r) in rays.iter().enumerate().filter(|(i, _)| misses[*i]) {
+        assert_eq!(
+            want[i],
+            Hit::NONE,
+            "{what}: the CPU twin hits with ray {i} {r:?}"
+        );
+        assert!(
+            !cpu::occluded(r, triangles),
+            "{what}: CPU occlusion of ray {i}"
+        );
+    }
+    let tunings = [
+        None,
+        Some(BruteForceTuning {
+            workgroup_size: 8,
+            batch: 7,
+        }),
+    ];
+    for tuning in tunings {
+        let mut tracer = match tuning {
+            None => BruteForceTracer::new(gpu, triangles),
+            Some(t) => BruteForceTracer::with_tuning(gpu, triangles, t),
+        }
+        .unwrap();
+        let what = format!("{what}, {tuning:?}");
+        let hits = common::trace_hits(gpu, &mut tracer, rays, Query::ClosestHit);
+        common::assert_same_hits(&hits, &want, &what);
+        let occ = common::trace_hits(gpu, &mut tracer, rays, Query::Occlusion);
+        for (i, r) in rays.iter().enumerate() {
+            if misses[i] {
+                assert_eq!(
+                    bytemuck::bytes_of(&hits[i]),
+                    bytemuck::bytes_of(&Hit::NONE),
+                    "{what}: ray {i} {r:?} gave {:?}",
+                    hits[i]
+                );
+            }
+            assert_eq!(
+                occ[i].is_hit(),
+                cpu::occluded(r, triangles),
+                "{what}: occlusion of ray {i} {r:?}"
+            );
+        }
+    }
+}
+
+/// Rays with a NaN or infinite origin or direction, empty or NaN bounds and zero
+/// directions (`common::rays_that_miss`) among good rays, unit and of odd lengths,
+/// bounded and not: the bad ones miss, the good ones hit as on the CPU.
+#[test]
+fn nan_infinite_and_zero_rays_miss_like_the_cpu_twin() {
+    let gpu = common::gpu();
+    let soup = common::triangle_soup(700, 71);
+    let mut good = common::random_rays(1500, 72);
+    good.extend(common::rays_of_odd_lengths_and_bounds(
+        &common::random_rays(600, 73),
+    ));
+    let (rays, misses) = common::with_rays_that_miss(&good, 23);
+    assert_like_the_cpu_twin(&gpu, &soup, &rays, &misses, "bad rays among good");
+    common::assert_clean(&gpu);
+}
+
+/// A thousand copies of one triangle after a soup, staged across many batches (of 7 and
+/// of the default size): equal t goes to the first copy whichever batch finds it.
+#[test]
+fn coincident_triangles_resolve_to_the_smallest_index() {
+    let gpu = common::gpu();
+    let tri = GpuTriangle::new([
+        Vec3::new(0.1, 0.1, 0.5),
+        Vec3::new(0.9, 0.1, 0.5),
+        Vec3::new(0.5, 0.9, 0.5),
+    ]);
+    let mut tris = common::triangle_soup(500, 11);
+    let first = tris.len() as u32;
+    tris.extend(std::iter::repeat_n(tri, 1000));
+    let mut rays: Vec<Ray> = (0..400)
+        .map(|i| {
+            let (x, y) = (0.3 + 0.001 * i as f32, 0.3 + 0.0005 * (i % 7) as f32);
+            let dir = if i % 2 == 0 { Vec3::Z } else { -Vec3::Z };
+            Ray::new(Vec3::new(x, y, 0.5 - dir.z * 1.5), dir, 0.0, f32::INFINITY)
+        })
+        .collect();
+    let want = cpu::closest_hits(&rays, &tris);
+    let soup_hits = cpu::closest_hits(&rays, &tris[..first as usize]);
+    for (i, (h, s)) in want.iter().zip(&soup_hits).enumerate() {
+        // Either a soup triangle in front of the copies, or the first copy.
+        assert!(
+            h.triangle == first || (s.is_hit() && s.t <= 1.5 && h == s),
+            "ray {i}: the CPU twin hit {h:?}"
+        );
+    }
+    rays.extend(common::random_rays(1000, 12));
+    assert_like_the_cpu_twin(&gpu, &tris, &rays, &vec![false; rays.len()], "copies");
+    common::assert_clean(&gpu);
+}
+
+/// A soup shrunk to 1e-6, grown to 1e6 and moved far from the origin, t compared at the
+/// original scale.
+#[test]
+fn tiny_huge_and_far_offset_scenes_match_the_cpu_twin() {
+    let gpu = common::gpu();
+    let soup = common::triangle_soup(1000, 41);
+    let rays = common::random_rays(3000, 42);
+    for (scale, offset) in [
+        (1e-6f32, Vec3::ZERO),
+        (1e6, Vec3::ZERO),
+        (1.0, Vec3::new(300.0, -200.0, 100.0)),
+    ] {
+        let tris = common::scale_scene(&soup, scale, offset);
+        let scaled_rays = common::scale_rays(&rays, scale, offset);
+        let what = format!("scale {scale}, offset {offset}");
+        let want = cpu::closest_hits(&scaled_rays, &tris);
+        let hits = want.iter().filter(|h| h.is_hit()).count();
+        assert!(hits > rays.len() / 20, "{what}: only {hits} hits");
+        let mut tracer = BruteForceTracer::new(&gpu, &tris).unwrap();
+        let got = common::trace_hits(&gpu, &mut tracer, &scaled_rays, Query::ClosestHit);
+        common::assert_same_hits(
+            &common::unscale_hits(&got, scale),
+            &common::unscale_hits(&want, scale),
+            &what,
+        );
+        let occ = common::trace_hits(&gpu, &mut tracer, &scaled_rays, Query::Occlusion);
+        for (i, (o, r)) in occ.iter().zip(&scaled_rays).enumerate() {
+            assert_eq!(
+                o.is_hit(),
+                cpu::occluded(r, &tris),
+                "{what}: occlusion of ray {i}"
+            );
+        }
     }
     common::assert_clean(&gpu);
 }

@@ -74,32 +74,6 @@ fn assert_exact(bvh: &CpuBvh, rays: &[Ray], tris: &[GpuTriangle], what: &str) ->
     want.iter().filter(|h| h.is_hit()).count()
 }
 
-fn scale_scene(tris: &[GpuTriangle], s: f32, offset: Vec3) -> Vec<GpuTriangle> {
-    tris.iter()
-        .map(|t| {
-            let v0 = t.v0();
-            GpuTriangle::new([
-                v0 * s + offset,
-                (v0 + t.e1()) * s + offset,
-                (v0 + t.e2()) * s + offset,
-            ])
-        })
-        .collect()
-}
-
-fn scale_rays(rays: &[Ray], s: f32, offset: Vec3) -> Vec<Ray> {
-    rays.iter()
-        .map(|r| {
-            Ray::new(
-                Vec3::from(r.origin) * s + offset,
-                Vec3::from(r.dir),
-                r.tmin * s,
-                r.tmax * s,
-            )
-        })
-        .collect()
-}
-
 /// Incoherent rays from points on random triangles (nudged off the surface or exactly
 /// on it) in random directions: what a path tracer's bounces look like.
 fn surface_rays(tris: &[GpuTriangle], n: usize, seed: u64, nudge: f32) -> Vec<Ray> {
@@ -460,8 +434,8 @@ fn tiny_huge_and_far_offset_coordinates() {
         (1.0, Vec3::new(3e4, -2e4, 1e4)),
         (1e-3, Vec3::splat(1e3)),
     ] {
-        let tris = scale_scene(&soup, scale, offset);
-        let rays = scale_rays(&rays, scale, offset);
+        let tris = common::scale_scene(&soup, scale, offset);
+        let rays = common::scale_rays(&rays, scale, offset);
         let bvh = CpuBvh::new(&tris);
         let what = format!("scale {scale}, offset {offset}");
         let hits = assert_exact(&bvh, &rays, &tris, &what);
@@ -505,7 +479,7 @@ fn coincident_triangles_resolve_to_the_smallest_index() {
 #[test]
 fn rebuild_replaces_the_geometry() {
     let a = common::triangle_soup(400, 51);
-    let b = scale_scene(&common::triangle_soup(700, 52), 2.0, Vec3::splat(-0.5));
+    let b = common::scale_scene(&common::triangle_soup(700, 52), 2.0, Vec3::splat(-0.5));
     let rays = common::random_rays(3000, 53);
     let mut bvh = CpuBvh::new(&a);
     assert_exact(&bvh, &rays, &a, "before");

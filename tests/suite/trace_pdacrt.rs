@@ -6,8 +6,8 @@ use crate::common;
 use glam::Vec3;
 use splitray::scene;
 use splitray::trace::{
-    BruteForceTracer, FlushReduce, GpuTriangle, Hit, LevelSplit, PdacrtParams, PdacrtTracer, Query,
-    Ray,
+    cpu, BruteForceTracer, FlushReduce, GpuTriangle, Hit, LevelSplit, PdacrtParams, PdacrtTracer,
+    Query, Ray,
 };
 use splitray::vk::{BufferAccess, Gpu};
 
@@ -45,6 +45,198 @@ fn check(gpu: &Gpu, triangles: &[GpuTriangle], rays: &[Ray], params: PdacrtParam
     for (i, (o, e)) in occluded.iter().zip(&expected).enumerate() {
         assert_eq!(o.is_hit(), e.is_hit(), "{what}: occlusion of ray {i}");
     }
+}
+
+/// [`check`] for each of `variants`, and against the CPU twin as well: the rays
+/// flagged in `misses` miss exactly (`Hit::NONE`, bit for bit, and not occluded), as
+/// `cpu::closest_hits` and `cpu::occluded` say they do; the others hit what
+/// `cpu::closest_hits` hits. Returns each variant's closest hits.
+fn check_with_cpu(
+    gpu: &Gpu,
+    triangles: &[GpuTriangle],
+    rays: &[Ray],
+    misses: &[bool],
+    variants: &[(PdacrtParams, &str)],
+) -> Vec<Vec<Hit>> {
+    let want = cpu::closest_hits(rays, triangles);
+    let occluded: Vec<bool> = rays.iter().map(|r| cpu::occluded(r, triangles)).collect();
+    for (i, r) in rays.iter().enumerate().filter(|(i, _)| misses[*i]) {
+        assert_eq!(want[i], Hit::NONE, "the CPU twin hits with ray {i} {r:?}");
+        assert!(!occluded[i], "CPU occlusion of ray {i} {r:?}");
+    }
+    let oracle = brute_force(gpu, triangles, rays);
+    let mut all_hits = vec![];
+    for &(params, what) in variants {
+        let mut tracer = PdacrtTracer::with_params(gpu, triangles, params).unwrap();
+        let hits = common::trace_hits(gpu, &mut tracer, rays, Query::ClosestHit);
+        common::assert_same_hits(&hits, &oracle, what);
+        common::assert_same_hits(&hits, &want, &format!("{what}: against the CPU twin"));
+        let occ = common::trace_hits(gpu, &mut tracer, rays, Query::Occlusion);
+        for (i, r) in rays.iter().enumerate() {
+            if misses[i] {
+                assert_eq!(
+                    bytemuck::bytes_of(&hits[i]),
+                    bytemuck::bytes_of(&Hit::NONE),
+                    "{what}: ray {i} {r:?} gave {:?}",
+                    hits[i]
+                );
+            }
+            assert_eq!(
+                occ[i].is_hit(),
+                occluded[i],
+                "{what}: occlusion of ray {i} {r:?}"
+            );
+        }
+        all_hits.push(hits);
+    }
+    all_hits
+}
+
+/// The two ways through PDACRT's kernels: the paper's (sort by key, sort by ray, halves
+/// of the parent's box, staged triangles) in a deep hierarchy, and the device's defaults
+/// (prefix sums, atomic flush where the device has it, tight boxes).
+fn both_ways(gpu: &Gpu) -> [(PdacrtParams, &'static str); 2] {
+    [
+        (
+            PdacrtParams {
+                stage_triangles: true,
+                ..deep()
+            },
+            "deep",
+        ),
+        (PdacrtParams::for_device(gpu), "defaults"),
+    ]
+}
+
+/// Rays with a NaN or infinite origin or direction, empty or NaN bounds and zero
+/// directions (`common::rays_that_miss`), mixed in among good rays, unit and of odd
+/// lengths, bounded and not: a bad ray may pass or fail any box test (its slab distances
+/// are NaN), but must reach no hit and disturb no other ray's.
+#[test]
+fn nan_infinite_and_zero_rays_miss_like_brute_force() {
+    let gpu = common::gpu();
+    let soup = common::triangle_soup(600, 71);
+    let mut good = common::random_rays(1000, 72);
+    good.extend(common::rays_of_odd_lengths_and_bounds(
+        &common::random_rays(300, 73),
+    ));
+    let (rays, misses) = common::with_rays_that_miss(&good, 13);
+    assert!(misses.iter().filter(|&&m| m).count() > 2000);
+    let hits = check_with_cpu(&gpu, &soup, &rays, &misses, &both_ways(&gpu));
+    let count = hits[0].iter().filter(|h| h.is_hit()).count();
+    assert!(count > good.len() / 4, "only {count} hits");
+    common::assert_clean(&gpu);
+}
+
+/// A thousand copies of one triangle after a soup: wherever the hierarchy sends one copy
+/// it sends all of them, so no split ever separates them and every terminal node holding
+/// one tests a thousand hits at equal t. A ray through them must report the first copy,
+/// in either flush reduction, also when the copies' hits reach the closest hit over
+/// several flushes (a small η flushes at every level).
+#[test]
+fn coincident_triangles_resolve_to_the_smallest_index() {
+    let gpu = common::gpu();
+    let tri = GpuTriangle::new([
+        Vec3::new(0.1, 0.1, 0.5),
+        Vec3::new(0.9, 0.1, 0.5),
+        Vec3::new(0.5, 0.9, 0.5),
+    ]);
+    let mut tris = common::triangle_soup(500, 11);
+    let first = tris.len() as u32;
+    tris.extend(std::iter::repeat_n(tri, 1000));
+    let mut rays: Vec<Ray> = (0..400)
+        .map(|i| {
+            let (x, y) = (0.3 + 0.001 * i as f32, 0.3 + 0.0005 * (i % 7) as f32);
+            let dir = if i % 2 == 0 { Vec3::Z } else { -Vec3::Z };
+            Ray::new(Vec3::new(x, y, 0.5 - dir.z * 1.5), dir, 0.0, f32::INFINITY)
+        })
+        .collect();
+    rays.extend(common::random_rays(500, 12));
+    let through = 400;
+    let soup_hits = cpu::closest_hits(&rays[..through], &tris[..first as usize]);
+    let mut variants = both_ways(&gpu).to_vec();
+    variants.push((
+        PdacrtParams {
+            eta: 64,
+            lambda: 64,
+            ..deep()
+        },
+        "deep, a flush every level",
+    ));
+    let all_hits = check_with_cpu(&gpu, &tris, &rays, &vec![false; rays.len()], &variants);
+    for ((_, name), hits) in variants.iter().zip(&all_hits) {
+        let firsts = hits.iter().filter(|h| h.triangle == first).count();
+        assert!(
+            firsts > through / 2,
+            "{name}: {firsts} hits of the first copy"
+        );
+        for (i, (h, s)) in hits[..through].iter().zip(&soup_hits).enumerate() {
+            // Either a soup triangle in front of the copies, or the first copy.
+            assert!(
+                h.triangle == first || (s.is_hit() && s.t <= 1.5 && h.triangle == s.triangle),
+                "{name}: ray {i} {:?} hit {h:?}",
+                rays[i]
+            );
+        }
+    }
+    common::assert_clean(&gpu);
+}
+
+/// A soup shrunk to 1e-6, grown to 1e6 and moved far from the origin: the box padding
+/// follows the scene's size and position (`scene_box`), so no hit is lost to rounding
+/// in the box tests; t is compared at the original scale.
+#[test]
+fn tiny_huge_and_far_offset_scenes_match_the_cpu_twin() {
+    let gpu = common::gpu();
+    let soup = common::triangle_soup(600, 41);
+    let rays = common::random_rays(2000, 42);
+    let want = cpu::closest_hits(&rays, &soup);
+    for (scale, offset) in [
+        (1e-6f32, Vec3::ZERO),
+        (1e6, Vec3::ZERO),
+        (1.0, Vec3::new(300.0, -200.0, 100.0)),
+    ] {
+        let tris = common::scale_scene(&soup, scale, offset);
+        let scaled_rays = common::scale_rays(&rays, scale, offset);
+        let what = format!("scale {scale}, offset {offset}");
+        let expected = cpu::closest_hits(&scaled_rays, &tris);
+        let hits = expected.iter().filter(|h| h.is_hit()).count();
+        assert!(hits > rays.len() / 20, "{what}: only {hits} hits");
+        if offset == Vec3::ZERO {
+            // Scaling by a power of ten rounds the vertices, so a ray near an edge may
+            // change triangles; most keep theirs.
+            let kept = common::unscale_hits(&expected, scale)
+                .iter()
+                .zip(&want)
+                .filter(|(a, b)| cpu::same_hit(a, b, 1e-4, false))
+                .count();
+            assert!(kept > rays.len() * 99 / 100, "{what}: {kept} hits kept");
+        }
+        for (params, name) in both_ways(&gpu) {
+            let mut tracer = PdacrtTracer::with_params(&gpu, &tris, params).unwrap();
+            let got = common::trace_hits(&gpu, &mut tracer, &scaled_rays, Query::ClosestHit);
+            common::assert_same_hits(
+                &common::unscale_hits(&got, scale),
+                &common::unscale_hits(&expected, scale),
+                &format!("{what}, {name}"),
+            );
+            let occluded = common::trace_hits(&gpu, &mut tracer, &scaled_rays, Query::Occlusion);
+            for (i, (o, e)) in occluded.iter().zip(&expected).enumerate() {
+                assert_eq!(
+                    o.is_hit(),
+                    e.is_hit(),
+                    "{what}, {name}: occlusion of ray {i}"
+                );
+            }
+        }
+        let oracle = brute_force(&gpu, &tris, &scaled_rays);
+        common::assert_same_hits(
+            &common::unscale_hits(&oracle, scale),
+            &common::unscale_hits(&expected, scale),
+            &format!("{what}: brute force"),
+        );
+    }
+    common::assert_clean(&gpu);
 }
 
 #[test]

@@ -413,12 +413,35 @@ fn ray_query_gpu() -> Option<common::TestGpu> {
     None
 }
 
+/// `rays` with every seventh one (from the fourth, so that a batch of one ray keeps a
+/// real one) made an empty segment starting on a triangle (tmin =
+/// tmax, tmin > tmax, NaN tmax), which must miss: ray queries take (tmin, tmax) as a
+/// closed interval with tmin ≤ tmax, so the tracer must turn such rays away itself.
+fn with_empty_segments(soup: &[GpuTriangle], rays: Vec<Ray>) -> Vec<Ray> {
+    if soup.is_empty() {
+        return rays;
+    }
+    rays.into_iter()
+        .enumerate()
+        .map(|(i, r)| {
+            let on = soup[i % soup.len()].v0();
+            let dir = Vec3::from(r.dir);
+            match (i % 7, (i / 7) % 3) {
+                (3, 0) => Ray::new(on, dir, 0.0, 0.0),
+                (3, 1) => Ray::new(on, dir, 0.5, 0.25),
+                (3, _) => Ray::new(on, dir, 0.0, f32::NAN),
+                _ => r,
+            }
+        })
+        .collect()
+}
+
 #[test]
 fn ray_query_matches_brute_force_on_random_soups() {
     let Some(gpu) = ray_query_gpu() else { return };
     for (triangles, rays, seed) in common::RANDOM_SOUPS.into_iter().chain([(0, 10, 6)]) {
         let soup = common::triangle_soup(triangles, seed);
-        let rays = common::random_rays(rays, seed + 100);
+        let rays = with_empty_segments(&soup, common::random_rays(rays, seed + 100));
         let mut tracer = RayQueryTracer::new(&gpu, &soup).unwrap();
         let expected = cpu::closest_hits(&rays, &soup);
         let hits = common::trace_hits(&gpu, &mut tracer, &rays, Query::ClosestHit);
@@ -430,6 +453,43 @@ fn ray_query_matches_brute_force_on_random_soups() {
         for (i, (h, r)) in occ.iter().zip(&rays).enumerate() {
             assert_eq!(h.is_hit(), cpu::occluded(r, &soup), "occlusion of ray {i}");
         }
+    }
+    common::assert_clean(&gpu);
+}
+
+/// Rays with a NaN or infinite origin or direction, empty or NaN bounds and zero
+/// directions (`common::rays_that_miss`) among good ones miss, as in the CPU twin: the
+/// tracer keeps them from the driver, for which most of them are undefined.
+#[test]
+fn ray_query_misses_nan_infinite_and_zero_rays() {
+    let Some(gpu) = ray_query_gpu() else { return };
+    let soup = common::triangle_soup(500, 71);
+    let (rays, misses) = common::with_rays_that_miss(&common::random_rays(1000, 72), 13);
+    let expected = cpu::closest_hits(&rays, &soup);
+    let mut tracer = RayQueryTracer::new(&gpu, &soup).unwrap();
+    let hits = common::trace_hits(&gpu, &mut tracer, &rays, Query::ClosestHit);
+    let n = assert_close(&hits, &expected, 1.0, "bad rays among good");
+    assert!(n > rays.len() / 10, "too few hits to be a test");
+    let occ = common::trace_hits(&gpu, &mut tracer, &rays, Query::Occlusion);
+    for (i, r) in rays.iter().enumerate() {
+        if misses[i] {
+            assert_eq!(
+                expected[i],
+                Hit::NONE,
+                "the CPU twin hits with ray {i} {r:?}"
+            );
+            assert_eq!(
+                bytemuck::bytes_of(&hits[i]),
+                bytemuck::bytes_of(&Hit::NONE),
+                "ray {i} {r:?} gave {:?}",
+                hits[i]
+            );
+        }
+        assert_eq!(
+            occ[i].is_hit(),
+            cpu::occluded(r, &soup),
+            "occlusion of ray {i} {r:?}"
+        );
     }
     common::assert_clean(&gpu);
 }

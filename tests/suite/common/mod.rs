@@ -196,6 +196,132 @@ pub fn random_rays(n: usize, seed: u64) -> Vec<splitray::trace::Ray> {
         .collect()
 }
 
+/// `tris` scaled by `s` about the origin, then moved by `offset`.
+pub fn scale_scene(
+    tris: &[splitray::trace::GpuTriangle],
+    s: f32,
+    offset: glam::Vec3,
+) -> Vec<splitray::trace::GpuTriangle> {
+    tris.iter()
+        .map(|t| {
+            let v0 = t.v0();
+            splitray::trace::GpuTriangle::new([
+                v0 * s + offset,
+                (v0 + t.e1()) * s + offset,
+                (v0 + t.e2()) * s + offset,
+            ])
+        })
+        .collect()
+}
+
+/// `rays` following [`scale_scene`]: origins and (tmin, tmax) scaled by `s`, directions
+/// kept, so each ray meets the scaled scene where it met the original (at t × `s`).
+pub fn scale_rays(
+    rays: &[splitray::trace::Ray],
+    s: f32,
+    offset: glam::Vec3,
+) -> Vec<splitray::trace::Ray> {
+    rays.iter()
+        .map(|r| {
+            splitray::trace::Ray::new(
+                glam::Vec3::from(r.origin) * s + offset,
+                glam::Vec3::from(r.dir),
+                r.tmin * s,
+                r.tmax * s,
+            )
+        })
+        .collect()
+}
+
+/// Hits of a scene scaled by `s` ([`scale_scene`]) brought back to the original's t, so
+/// that [`assert_same_hits`] compares them at the scale its tolerances are made for
+/// (its absolute floor near the origin would otherwise swallow every t of a tiny scene).
+pub fn unscale_hits(hits: &[splitray::trace::Hit], s: f32) -> Vec<splitray::trace::Hit> {
+    hits.iter()
+        .map(|h| splitray::trace::Hit { t: h.t / s, ..*h })
+        .collect()
+}
+
+/// Rays that must meet nothing, made from `good`: NaN, +inf or −inf in one component of
+/// its origin or of its direction; a NaN, +inf or −inf bound that leaves no segment
+/// (tmin NaN or +inf, tmax NaN or −inf); a zero direction (+0 and −0), over every t
+/// and over (−inf, 1); and every field NaN. No tracer may hit with them, whatever it
+/// makes of their NaN slab distances and box tests.
+pub fn rays_that_miss(good: splitray::trace::Ray) -> Vec<splitray::trace::Ray> {
+    use splitray::trace::Ray;
+    let mut rays = Vec::new();
+    for bad in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
+        for k in 0..3 {
+            let mut r = good;
+            r.origin[k] = bad;
+            rays.push(r);
+            let mut r = good;
+            r.dir[k] = bad;
+            rays.push(r);
+        }
+    }
+    for (tmin, tmax) in [
+        (f32::NAN, good.tmax),
+        (good.tmin, f32::NAN),
+        (f32::INFINITY, good.tmax),
+        (good.tmin, f32::NEG_INFINITY),
+        (f32::NEG_INFINITY, f32::NEG_INFINITY),
+    ] {
+        rays.push(Ray { tmin, tmax, ..good });
+    }
+    let o = glam::Vec3::from(good.origin);
+    for zero in [glam::Vec3::ZERO, glam::Vec3::splat(-0.0)] {
+        rays.push(Ray::new(o, zero, 0.0, f32::INFINITY));
+        rays.push(Ray::new(o, zero, f32::NEG_INFINITY, 1.0));
+    }
+    rays.push(Ray::new(
+        glam::Vec3::NAN,
+        glam::Vec3::NAN,
+        f32::NAN,
+        f32::NAN,
+    ));
+    rays
+}
+
+/// `good` rays with the [`rays_that_miss`] variants of every `every`th one inserted
+/// after it, so that the bad rays share workgroups, nodes and segments with good ones.
+/// Returns the rays and, for each, whether it is one of the bad variants.
+pub fn with_rays_that_miss(
+    good: &[splitray::trace::Ray],
+    every: usize,
+) -> (Vec<splitray::trace::Ray>, Vec<bool>) {
+    let mut rays = Vec::new();
+    let mut bad = Vec::new();
+    for (i, r) in good.iter().enumerate() {
+        rays.push(*r);
+        bad.push(false);
+        if i % every == 0 {
+            let variants = rays_that_miss(*r);
+            bad.extend(std::iter::repeat_n(true, variants.len()));
+            rays.extend(variants);
+        }
+    }
+    (rays, bad)
+}
+
+/// Good rays with directions far from unit length (×1e12 and ×1e-12) and with the
+/// unbounded segment (−inf, +inf): t is then no distance, and boxes are entered at t far
+/// from the scene's own scale.
+pub fn rays_of_odd_lengths_and_bounds(rays: &[splitray::trace::Ray]) -> Vec<splitray::trace::Ray> {
+    rays.iter()
+        .enumerate()
+        .map(|(i, r)| {
+            let d = glam::Vec3::from(r.dir);
+            let o = glam::Vec3::from(r.origin);
+            match i % 3 {
+                0 => splitray::trace::Ray::new(o, d * 1e12, 0.0, f32::INFINITY),
+                1 => splitray::trace::Ray::new(o, d * 1e-12, 0.0, f32::INFINITY),
+                _ => splitray::trace::Ray::new(o, d, f32::NEG_INFINITY, f32::INFINITY),
+            }
+        })
+        .collect()
+}
+
 /// Primary rays through the pixel centres of a `width` × `height` image of `camera`.
 pub fn camera_rays(
     camera: &splitray::scene::Camera,
