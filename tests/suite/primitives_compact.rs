@@ -188,7 +188,9 @@ fn gather_and_scatter_match_cpu() {
             let what = format!("{} n = {n}", tuning.describe());
             let src = common::random_u32s(n, 1);
             // A permutation; for gather a few indices past the source, for scatter a
-            // few past the output (n + 4 words), which both must skip.
+            // few past the output (n + 4 words), which both must skip: just past the
+            // end, and near the top of u32 (u32::MAX, 0xFFFF_FFF0), where a bounds
+            // test on index + 1, index + 16 or on byte offsets would wrap around.
             let r = common::random_u32s(n, 2);
             let mut perm: Vec<u32> = (0..n as u32).collect();
             for i in (1..n).rev() {
@@ -196,9 +198,14 @@ fn gather_and_scatter_match_cpu() {
             }
             let mut wild_gather = perm.clone();
             let mut wild_scatter = perm.clone();
-            for i in (0..n).step_by(97) {
-                wild_gather[i] = n as u32 + (i as u32 % 3);
-                wild_scatter[i] = n as u32 + 4 + (i as u32 % 3);
+            for (k, i) in (0..n).step_by(97).enumerate() {
+                let (gather_past, scatter_past) = match k % 4 {
+                    0 | 1 => (n as u32 + (i as u32 % 3), n as u32 + 4 + (i as u32 % 3)),
+                    2 => (u32::MAX, u32::MAX),
+                    _ => (0xFFFF_FFF0, 0xFFFF_FFF0),
+                };
+                wild_gather[i] = gather_past;
+                wild_scatter[i] = scatter_past;
             }
             let sb = gpu.upload("src", &src).unwrap();
             for (dir, idx) in [

@@ -168,20 +168,22 @@ fn reduce_by_key_adversarial_keys() {
     common::assert_clean(&gpu);
 }
 
-#[test]
-fn reduce_by_key_arg_min_ties_pick_the_smaller_id() {
-    let gpu = common::gpu();
-    let rbk = ReduceByKey::new(&gpu, &Tuning::for_device(gpu.info())).unwrap();
-    // One run; equal smallest t (and -0 below +0) at several ids.
-    let keys = vec![3u32; 6];
-    let t = [1.0f32, 0.0, -0.0, 5.0, -0.0, 2.0];
-    let ids = [10u32, 1, 7, 0, 4, 2];
-    let kb = gpu.upload("keys", &keys).unwrap();
-    let tb = gpu.upload("t", &t).unwrap();
-    let ib = gpu.upload("ids", &ids).unwrap();
-    let o = outs(&gpu, 6);
+/// Arg-min of `t` (with `ids`) per run of `keys` on the GPU: (unique keys, f32 bits of
+/// the smallest t, its id).
+fn argmin_on_gpu(
+    gpu: &Gpu,
+    rbk: &ReduceByKey,
+    keys: &[u32],
+    t: &[f32],
+    ids: &[u32],
+) -> (Vec<u32>, Vec<u32>, Vec<u32>) {
+    let n = keys.len();
+    let kb = gpu.upload("keys", keys).unwrap();
+    let tb = gpu.upload("t", t).unwrap();
+    let ib = gpu.upload("ids", ids).unwrap();
+    let o = outs(gpu, n);
     let scratch = gpu
-        .create_buffer("scratch", rbk.scratch_bytes(6), MemoryKind::Device)
+        .create_buffer("scratch", rbk.scratch_bytes(n as u32), MemoryKind::Device)
         .unwrap();
     let mut rec = gpu.recorder(StreamKind::Main).unwrap();
     let out = RunOutputs {
@@ -192,7 +194,7 @@ fn reduce_by_key_arg_min_ties_pick_the_smaller_id() {
     };
     rbk.record(
         &mut rec,
-        6,
+        n as u32,
         (&kb).into(),
         Reduction::ArgMin {
             t: (&tb).into(),
@@ -203,9 +205,118 @@ fn reduce_by_key_arg_min_ties_pick_the_smaller_id() {
     )
     .unwrap();
     gpu.wait(&rec.submit(&[]).unwrap()).unwrap();
-    assert_eq!(o.count.read::<u32>().unwrap()[0], 1);
-    assert_eq!(o.a.read::<f32>().unwrap()[0].to_bits(), (-0.0f32).to_bits());
-    assert_eq!(o.b.read::<u32>().unwrap()[0], 4);
+    let r = o.count.read::<u32>().unwrap()[0] as usize;
+    assert!(r <= n, "{r} runs for {n} items");
+    let read = |b: &Buffer| b.read::<u32>().unwrap()[..r].to_vec();
+    (read(&o.keys), read(&o.a), read(&o.b))
+}
+
+/// The arg-min orders t by `f32::total_cmp` (−NaN < −inf < … < −0 < +0 < … < +inf <
+/// +NaN), then the smaller id, on the general path and on segments that runs cross:
+/// equal t at several ids, signed zeros and NaNs, infinities and a subnormal (1e-40,
+/// which a float comparison flushing subnormals would tie with 0).
+#[test]
+fn reduce_by_key_arg_min_ties_pick_the_smaller_id() {
+    let gpu = common::gpu();
+    // One run; equal smallest t (and -0 below +0) at several ids.
+    let rbk = ReduceByKey::new(&gpu, &Tuning::for_device(gpu.info())).unwrap();
+    let (keys, t, ids) = argmin_on_gpu(
+        &gpu,
+        &rbk,
+        &[3u32; 6],
+        &[1.0f32, 0.0, -0.0, 5.0, -0.0, 2.0],
+        &[10u32, 1, 7, 0, 4, 2],
+    );
+    assert_eq!(
+        (keys, t, ids),
+        (vec![3], vec![(-0.0f32).to_bits()], vec![4])
+    );
+
+    let neg_nan = f32::from_bits(f32::NAN.to_bits() | 0x8000_0000);
+    assert!(neg_nan.is_nan() && neg_nan.is_sign_negative());
+    // In increasing total order.
+    let specials = [
+        neg_nan,
+        f32::NEG_INFINITY,
+        f32::MIN,
+        -1.0,
+        -1e-40,
+        -0.0,
+        0.0,
+        1e-40,
+        f32::MIN_POSITIVE,
+        1.0,
+        f32::MAX,
+        f32::INFINITY,
+        f32::NAN,
+    ];
+    // First one run per special: it at id 9, every special above it, then it again at
+    // id 2 twice (a tie of t and of id), so the run's minimum is (it, 2).
+    let (mut keys, mut t, mut ids) = (vec![], vec![], vec![]);
+    for (k, &s) in specials.iter().enumerate() {
+        let run: Vec<f32> = [s]
+            .into_iter()
+            .chain(specials[k + 1..].iter().copied())
+            .chain([s, s])
+            .collect();
+        keys.extend(std::iter::repeat_n(k as u32, run.len()));
+        ids.extend(
+            [9].into_iter()
+                .chain(std::iter::repeat_n(0, run.len() - 3))
+                .chain([2, 2]),
+        );
+        t.extend(run);
+    }
+    let (_, designed_t, designed_ids) = cpu::reduce_by_key_argmin(&keys, &t, &ids);
+    assert_eq!(
+        designed_t.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
+        specials.map(f32::to_bits),
+        "the CPU twin orders t by total_cmp"
+    );
+    assert_eq!(designed_ids, vec![2; specials.len()]);
+    // Then runs of 1 to 40 items, each drawing t from four specials of its own (ties in
+    // most runs) with ids that repeat.
+    let n = 5000;
+    let r = common::random_u32s(3 * n, 81);
+    let mut key = specials.len() as u32;
+    while keys.len() < n {
+        let len = (r[keys.len()] % 40 + 1) as usize;
+        for _ in 0..len.min(n - keys.len()) {
+            let i = keys.len();
+            let pick = (key as usize + (r[n + i] % 4) as usize * 3) % specials.len();
+            keys.push(key);
+            t.push(specials[pick]);
+            ids.push(r[2 * n + i] % 64);
+        }
+        key += 1 + r[keys.len() - 1] % 2;
+    }
+    for (segment, tuning) in common::segment_tunings(&gpu) {
+        let rbk = ReduceByKey::new(&gpu, &tuning).unwrap();
+        for m in [1usize, 7, 100, n] {
+            let (k, gt, gi) = argmin_on_gpu(&gpu, &rbk, &keys[..m], &t[..m], &ids[..m]);
+            let (ck, ct, ci) = cpu::reduce_by_key_argmin(&keys[..m], &t[..m], &ids[..m]);
+            let ct: Vec<u32> = ct.iter().map(|x| x.to_bits()).collect();
+            let what = format!("segment {segment}, n = {m}");
+            assert_eq!(k, ck, "{what}: keys");
+            let bad: Vec<_> = (0..k.len())
+                .filter(|&j| gt[j] != ct[j] || gi[j] != ci[j])
+                .take(4)
+                .map(|j| {
+                    (
+                        j,
+                        f32::from_bits(gt[j]),
+                        gi[j],
+                        f32::from_bits(ct[j]),
+                        ci[j],
+                    )
+                })
+                .collect();
+            assert!(
+                bad.is_empty(),
+                "{what}: (run, gpu t, id, cpu t, id) {bad:?}"
+            );
+        }
+    }
     common::assert_clean(&gpu);
 }
 

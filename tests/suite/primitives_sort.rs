@@ -23,6 +23,15 @@ fn patterns(n: usize) -> Vec<(&'static str, Vec<u32>)> {
             r.iter().map(|k| k & 0xF000_0000).collect(),
         ),
         ("low bits only", r.iter().map(|k| k & 0x3).collect()),
+        // The largest key in every digit (a histogram's last bucket takes everything),
+        // and alternating with the smallest (two buckets, every item moving).
+        ("all u32::MAX", vec![u32::MAX; n]),
+        (
+            "u32::MAX and 0 alternating",
+            (0..n)
+                .map(|i| if i % 2 == 0 { u32::MAX } else { 0 })
+                .collect(),
+        ),
         ("random", r),
     ]
 }
