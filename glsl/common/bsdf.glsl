@@ -128,6 +128,8 @@ float bsdf_shading_correction(vec3 wo, vec3 wi, vec3 ns, vec3 ng, uint mode) {
 bool same_hemisphere(vec3 wo, vec3 wi) { return wo.z * wi.z > 0.0; }
 
 float fresnel_dielectric(float cos_i, float eta) {
+    // No interface reflects nothing, exactly (src/bsdf/specular.rs).
+    if (eta == 1.0) return 0.0;
     cos_i = clamp(cos_i, -1.0, 1.0);
     if (cos_i < 0.0) {
         eta = 1.0 / eta;
@@ -153,6 +155,12 @@ vec3 bsdf_reflect(vec3 w, vec3 n) { return -w + n * (2.0 * dot(w, n)); }
 // Refraction of w (pointing away) through normal n, eta = eta(-n side) / eta(n side).
 // Returns false under total internal reflection; etap = eta_t / eta_i of the crossing.
 bool bsdf_refract(vec3 w, vec3 n, float eta, out vec3 wt, out float etap) {
+    // No interface bends nothing, exactly.
+    if (eta == 1.0) {
+        wt = -w;
+        etap = 1.0;
+        return true;
+    }
     float cos_i = dot(w, n);
     if (cos_i < 0.0) {
         eta = 1.0 / eta;
@@ -355,6 +363,8 @@ float mf_fresnel_pair(float eta, vec3 wo, vec3 wi, vec3 wm, float etap) {
 }
 
 vec3 mf_dielectric_eval(vec3 tint, uint dist, float a, float eta, vec3 wo, vec3 wi, uint mode) {
+    // eta = 1: a delta lobe only (src/bsdf/microfacet.rs).
+    if (eta == 1.0) return vec3(0.0);
     vec3 wm;
     float etap;
     bool refl;
@@ -370,6 +380,7 @@ vec3 mf_dielectric_eval(vec3 tint, uint dist, float a, float eta, vec3 wo, vec3 
 }
 
 float mf_dielectric_pdf(uint dist, float a, float eta, vec3 wo, vec3 wi) {
+    if (eta == 1.0) return 0.0;
     vec3 wm;
     float etap;
     bool refl;
@@ -433,6 +444,25 @@ float layer_pdf(BsdfLayer l, vec3 wo, vec3 wi) {
     return 0.0;
 }
 
+// The smooth dielectric (src/bsdf/specular.rs dielectric_sample): reflects with
+// probability R = F(cos theta_o), else refracts; uc makes the choice.
+BsdfSample dielectric_sample(vec3 tint, float eta, vec3 wo, float uc, uint mode) {
+    if (wo.z == 0.0) return bsdf_no_sample();
+    float r = fresnel_dielectric(wo.z, eta);
+    float t = 1.0 - r;
+    vec3 wi;
+    if (uc < r) {
+        wi = vec3(-wo.x, -wo.y, wo.z);
+        return bsdf_make_sample(tint * (r / abs(wi.z)), wi, r, BSDF_REFLECTION | BSDF_SPECULAR, 1.0);
+    }
+    float etap;
+    if (!bsdf_refract(wo, vec3(0.0, 0.0, 1.0), eta, wi, etap)) return bsdf_no_sample();
+    if (wi.z == 0.0 || t <= 0.0) return bsdf_no_sample();
+    float ft = t / abs(wi.z);
+    if (mode == TRANSPORT_RADIANCE) ft /= etap * etap;
+    return bsdf_make_sample(tint * ft, wi, t, BSDF_TRANSMISSION | BSDF_SPECULAR, etap);
+}
+
 // Samples the layer's direction. For delta kinds f and pdf are set; for the others only
 // wi, flags and eta (the caller evaluates f and pdf, as src/bsdf/mod.rs Bsdf::sample).
 BsdfSample layer_sample_direction(BsdfLayer l, vec3 wo, vec3 u, uint mode) {
@@ -448,26 +478,15 @@ BsdfSample layer_sample_direction(BsdfLayer l, vec3 wo, vec3 u, uint mode) {
         wi = vec3(-wo.x, -wo.y, wo.z);
         return bsdf_make_sample(rgb / abs(wi.z), wi, 1.0, BSDF_REFLECTION | BSDF_SPECULAR, 1.0);
     }
-    if (BSDF_HAS(BSDF_KIND_DIELECTRIC) && l.kind == BSDF_KIND_DIELECTRIC) {
-        if (wo.z == 0.0) return bsdf_no_sample();
-        float r = fresnel_dielectric(wo.z, l.ior);
-        float t = 1.0 - r;
-        if (u.x < r) {
-            wi = vec3(-wo.x, -wo.y, wo.z);
-            return bsdf_make_sample(rgb * (r / abs(wi.z)), wi, r, BSDF_REFLECTION | BSDF_SPECULAR, 1.0);
-        }
-        float etap;
-        if (!bsdf_refract(wo, vec3(0.0, 0.0, 1.0), l.ior, wi, etap)) return bsdf_no_sample();
-        if (wi.z == 0.0 || t <= 0.0) return bsdf_no_sample();
-        float ft = t / abs(wi.z);
-        if (mode == TRANSPORT_RADIANCE) ft /= etap * etap;
-        return bsdf_make_sample(rgb * ft, wi, t, BSDF_TRANSMISSION | BSDF_SPECULAR, etap);
-    }
+    if (BSDF_HAS(BSDF_KIND_DIELECTRIC) && l.kind == BSDF_KIND_DIELECTRIC)
+        return dielectric_sample(rgb, l.ior, wo, u.x, mode);
     if (BSDF_HAS(BSDF_KIND_MICROFACET_REFLECTION) && l.kind == BSDF_KIND_MICROFACET_REFLECTION) {
         if (!mf_reflection_sample_wi(l.distribution, l.roughness, wo, u.y, u.z, wi)) return bsdf_no_sample();
         return bsdf_make_sample(vec3(0.0), wi, 0.0, BSDF_REFLECTION | BSDF_GLOSSY, 1.0);
     }
     if (BSDF_HAS(BSDF_KIND_MICROFACET_DIELECTRIC) && l.kind == BSDF_KIND_MICROFACET_DIELECTRIC) {
+        // No interface: straight through, the smooth dielectric of eta 1.
+        if (l.ior == 1.0) return dielectric_sample(rgb, l.ior, wo, u.x, mode);
         uint flags;
         float etap;
         if (!mf_dielectric_sample_wi(l.distribution, l.roughness, l.ior, wo, u, wi, flags, etap))

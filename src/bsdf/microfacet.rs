@@ -14,6 +14,11 @@
 //!   albedo 1.27 at n = 1.125, θo = 87°; ≤ 1 for n ≥ 20; `tests/bsdf_chi2.rs`).
 //! - **Sampling**: m ~ D(m)|cos θm| (not visible normals); samples whose microfacet faces
 //!   away from `wo` are rejected (the pdf then integrates to less than 1, consistently).
+//! - **η = 1**: a rough dielectric of η exactly 1 is no interface. Light passes straight
+//!   through whatever the microfacet normal, so the lobe is a delta the microfacet BTDF
+//!   cannot represent (its half vector wi + wo vanishes, and in f32 is a rounding
+//!   residue pointing anywhere): as in pbrt-v4, it is the smooth dielectric of η 1, eval
+//!   and pdf 0, every sample straight through with the tint (`Bsdf::sample_direction`).
 //! - **Fresnel**: microfacet reflection uses Schlick with F0 = the layer's rgb (a tinted
 //!   conductor-like lobe, F0 = 1 is a lossless white reflector); the rough dielectric uses
 //!   the exact unpolarized dielectric Fresnel and chooses reflection with probability F.
@@ -300,6 +305,10 @@ pub fn dielectric_eval(
     wi: Vec3,
     mode: TransportMode,
 ) -> Vec3 {
+    // η = 1: a delta lobe only (see the module docs).
+    if eta == 1.0 {
+        return Vec3::ZERO;
+    }
     let Some((wm, etap, reflect)) = dielectric_half(eta, wo, wi) else {
         return Vec3::ZERO;
     };
@@ -318,6 +327,9 @@ pub fn dielectric_eval(
 }
 
 pub fn dielectric_pdf(dist: Distribution, a: f32, eta: f32, wo: Vec3, wi: Vec3) -> f32 {
+    if eta == 1.0 {
+        return 0.0;
+    }
     let Some((wm, etap, reflect)) = dielectric_half(eta, wo, wi) else {
         return 0.0;
     };
@@ -331,7 +343,8 @@ pub fn dielectric_pdf(dist: Distribution, a: f32, eta: f32, wo: Vec3, wi: Vec3) 
 }
 
 /// The sampled direction only (f and pdf come from eval and pdf): m ~ D cos, then
-/// reflection with probability F(wo·m), else refraction through m.
+/// reflection with probability F(wo·m), else refraction through m. Not for η = 1, which
+/// samples the smooth dielectric (see the module docs).
 pub fn dielectric_sample_wi(
     dist: Distribution,
     a: f32,

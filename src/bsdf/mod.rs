@@ -174,7 +174,8 @@ pub enum Bsdf {
         distribution: Distribution,
         roughness: f32,
     },
-    /// Rough dielectric (Walter et al. 2007): microfacet reflection and transmission.
+    /// Rough dielectric (Walter et al. 2007): microfacet reflection and transmission;
+    /// of η exactly 1, no interface: the smooth dielectric's straight line through.
     MicrofacetDielectric {
         tint: Vec3,
         distribution: Distribution,
@@ -259,9 +260,14 @@ impl Bsdf {
         BsdfParams::new(&[self.layer(1.0)])
     }
 
-    /// Whether every lobe is a Dirac delta (eval and pdf are then always 0).
+    /// Whether every lobe is a Dirac delta (eval and pdf are then always 0): a rough
+    /// dielectric of η exactly 1 is one too (see [`microfacet`]).
     pub fn is_delta(&self) -> bool {
-        matches!(self, Bsdf::Mirror { .. } | Bsdf::Dielectric { .. })
+        match *self {
+            Bsdf::Mirror { .. } | Bsdf::Dielectric { .. } => true,
+            Bsdf::MicrofacetDielectric { eta, .. } => eta == 1.0,
+            _ => false,
+        }
     }
 
     /// f(wo, wi), local frame (0 for delta BSDFs).
@@ -338,6 +344,11 @@ impl Bsdf {
             }
             Bsdf::Mirror { tint } => specular::mirror_sample(tint, wo)?,
             Bsdf::Dielectric { tint, eta } => {
+                specular::dielectric_sample(tint, eta, wo, u[0], mode)?
+            }
+            // No interface: straight through, the smooth dielectric of η 1 (see
+            // [`microfacet`]).
+            Bsdf::MicrofacetDielectric { tint, eta, .. } if eta == 1.0 => {
                 specular::dielectric_sample(tint, eta, wo, u[0], mode)?
             }
             Bsdf::MicrofacetReflection {

@@ -7,8 +7,12 @@ use glam::Vec3;
 /// Unpolarized Fresnel reflectance of a dielectric interface for cos θ of the incident
 /// direction against the normal of the +z side; η = η_inside / η_outside. Negative
 /// `cos_i` means incidence from inside (η is then inverted). 1 under total internal
-/// reflection.
+/// reflection. 0 for η = 1, exactly: no interface reflects nothing (the formula would
+/// leave a rounding residue of cos θt against cos θi).
 pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> f32 {
+    if eta == 1.0 {
+        return 0.0;
+    }
     let mut cos_i = cos_i.clamp(-1.0, 1.0);
     let mut eta = eta;
     if cos_i < 0.0 {
@@ -40,8 +44,12 @@ pub fn reflect(w: Vec3, n: Vec3) -> Vec3 {
 
 /// Refraction of `w` (pointing away) through the interface with normal `n` and
 /// η = η_(−n side) / η_(n side). Returns the refracted direction and the relative index
-/// η' = η_t / η_i of the crossing, or `None` under total internal reflection.
+/// η' = η_t / η_i of the crossing, or `None` under total internal reflection. For η = 1
+/// exactly `-w`, whatever `n`: no interface bends nothing.
 pub fn refract(w: Vec3, n: Vec3, eta: f32) -> Option<(Vec3, f32)> {
+    if eta == 1.0 {
+        return Some((-w, 1.0));
+    }
     let mut cos_i = w.dot(n);
     let mut eta = eta;
     let mut n = n;
