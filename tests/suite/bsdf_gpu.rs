@@ -10,8 +10,8 @@ use splitray::bsdf::chi2::{self, Chi2Settings};
 use splitray::bsdf::key::{key_id, key_type};
 use splitray::bsdf::sampling::uniform_sphere;
 use splitray::bsdf::{
-    kernel_constants, kind, layer_kinds, material_key, Bsdf, BsdfLayer, BsdfParams, BsdfSample,
-    Distribution, MaterialType, TransportMode,
+    kernel_constants, kind, layer_kinds, material_key, Bsdf, BsdfFlags, BsdfLayer, BsdfParams,
+    BsdfSample, Distribution, MaterialType, TransportMode,
 };
 use splitray::shaders;
 use splitray::vk::{Buffer, ComputePipeline, Gpu, PipelineDesc, StreamKind};
@@ -735,5 +735,300 @@ fn gpu_frame_and_shading_correction_match_cpu() {
             o[1][3]
         );
     }
+    common::assert_clean(&gpu);
+}
+
+/// BSDF records at the edges of their parameters: near-mirror roughness (α = 1e-3 and
+/// 1e-4, the Blinn–Phong exponent of the same α) for every distribution, reflecting and
+/// refracting from both sides; rough and smooth dielectrics of η exactly 1 (no
+/// interface); stacks with a layer of weight 0, and with every weight 0; and the other
+/// kinds for reference.
+fn degenerate_params() -> Vec<(String, BsdfParams)> {
+    let tint = Vec3::new(0.9, 0.6, 0.3);
+    let mut cases: Vec<(String, BsdfParams)> = vec![];
+    for alpha in [1e-3f32, 1e-4] {
+        for distribution in [
+            Distribution::BlinnPhong,
+            Distribution::Beckmann,
+            Distribution::Ggx,
+        ] {
+            let roughness = if distribution == Distribution::BlinnPhong {
+                splitray::bsdf::microfacet::blinn_phong_exponent(alpha)
+            } else {
+                alpha
+            };
+            let name = format!("{distribution:?} α {alpha}");
+            cases.push((
+                format!("reflection, {name}"),
+                Bsdf::MicrofacetReflection {
+                    f0: tint,
+                    distribution,
+                    roughness,
+                }
+                .params(),
+            ));
+            for eta in [1.5, 1.0 / 1.5] {
+                cases.push((
+                    format!("rough dielectric η {eta}, {name}"),
+                    Bsdf::MicrofacetDielectric {
+                        tint,
+                        distribution,
+                        roughness,
+                        eta,
+                    }
+                    .params(),
+                ));
+            }
+        }
+    }
+    for (distribution, roughness) in [
+        (Distribution::Ggx, 0.3),
+        (Distribution::Beckmann, 0.05),
+        (Distribution::BlinnPhong, 40.0),
+    ] {
+        cases.push((
+            format!("rough dielectric η 1, {distribution:?} {roughness}"),
+            Bsdf::MicrofacetDielectric {
+                tint,
+                distribution,
+                roughness,
+                eta: 1.0,
+            }
+            .params(),
+        ));
+    }
+    cases.push((
+        "smooth dielectric η 1".into(),
+        Bsdf::Dielectric { tint, eta: 1.0 }.params(),
+    ));
+    let ggx = Bsdf::MicrofacetReflection {
+        f0: tint,
+        distribution: Distribution::Ggx,
+        roughness: 0.2,
+    };
+    let lambert = Bsdf::Lambert { albedo: tint };
+    let mirror = Bsdf::Mirror { tint };
+    cases.push((
+        "a layer of weight 0 between two".into(),
+        BsdfParams::layered(&[(lambert, 0.5), (ggx, 0.0), (mirror, 0.5)]),
+    ));
+    cases.push((
+        "first and last layers of weight 0".into(),
+        BsdfParams::layered(&[(mirror, 0.0), (ggx, 0.7), (lambert, 0.0)]),
+    ));
+    cases.push((
+        "every layer of weight 0".into(),
+        BsdfParams::layered(&[(lambert, 0.0), (ggx, 0.0)]),
+    ));
+    for (name, b) in [
+        ("lambert", lambert),
+        (
+            "oren-nayar",
+            Bsdf::OrenNayar {
+                albedo: tint,
+                sigma: 0.4,
+            },
+        ),
+        ("mirror", mirror),
+        (
+            "smooth dielectric η 1.5",
+            Bsdf::Dielectric { tint, eta: 1.5 },
+        ),
+    ] {
+        cases.push((name.into(), b.params()));
+    }
+    cases
+}
+
+/// Outgoing directions at the edges: the normal from both sides, in the tangent plane
+/// (z exactly 0, and −0), and two ordinary ones, above and below.
+fn degenerate_wo() -> Vec<Vec3> {
+    vec![
+        Vec3::Z,
+        -Vec3::Z,
+        Vec3::X,
+        Vec3::new(0.0, 1.0, -0.0),
+        Vec3::new(0.6, 0.0, 0.8),
+        Vec3::new(0.0, -0.6, -0.8),
+    ]
+}
+
+/// Incident directions that make the half vectors degenerate: −wo (wo + wi = 0, and
+/// straight through), wo itself, wo mirrored about the normal, and the poles and a
+/// tangent direction.
+fn degenerate_wi(wo: Vec3) -> Vec<Vec3> {
+    vec![
+        -wo,
+        wo,
+        Vec3::new(-wo.x, -wo.y, wo.z),
+        Vec3::Z,
+        -Vec3::Z,
+        Vec3::new(-1.0, 0.0, 0.0),
+    ]
+}
+
+/// Eval, pdf and sample on [`degenerate_params`] × [`degenerate_wo`] × (for eval)
+/// [`degenerate_wi`] × (for sample) random numbers at 0, ½ and just below 1, both
+/// transport modes: the GPU agrees with the CPU as in [`gpu_eval_and_pdf_match_cpu`] and
+/// [`gpu_sample_matches_cpu`], and nothing is NaN or infinite — a sample may have pdf 0
+/// or no direction, never a NaN weight.
+#[test]
+fn gpu_eval_and_sample_match_cpu_on_degenerate_inputs() {
+    let gpu = common::gpu();
+    let cases = degenerate_params();
+    let params: Vec<BsdfParams> = cases.iter().map(|c| c.1).collect();
+    let finite = |v: &[f32]| v.iter().all(|x| x.is_finite());
+    let us = [0.0f32, 0.5, splitray::bsdf::sampling::ONE_MINUS_EPSILON];
+    let (mut eval_queries, mut sample_queries) = (vec![], vec![]);
+    for p in 0..params.len() as u32 {
+        for wo in degenerate_wo() {
+            for mode in [0, 1] {
+                for wi in degenerate_wi(wo) {
+                    eval_queries.push(EvalQuery {
+                        wo: wo.into(),
+                        params: p,
+                        wi: wi.into(),
+                        mode,
+                    });
+                }
+                for u in us
+                    .iter()
+                    .flat_map(|&a| us.iter().flat_map(move |&b| us.map(|c| [a, b, c])))
+                {
+                    sample_queries.push(SampleQuery {
+                        wo: wo.into(),
+                        params: p,
+                        u,
+                        mode,
+                    });
+                }
+            }
+        }
+    }
+
+    let evals: Vec<[f32; 4]> = run_kernel(&gpu, shaders::BSDF_EVAL_TEST, &params, &eval_queries);
+    let mut bad = vec![];
+    let mut nonzero = 0;
+    for (q, g) in eval_queries.iter().zip(&evals) {
+        let (name, p) = &cases[q.params as usize];
+        let (wo, wi, mode) = (Vec3::from(q.wo), Vec3::from(q.wi), mode_of(q.mode));
+        let (f, pdf) = (p.eval(wo, wi, mode), p.pdf(wo, wi, mode));
+        let c = [f.x, f.y, f.z, pdf];
+        nonzero += (pdf > 0.0) as usize;
+        let sound = finite(g) && finite(&c) && g.iter().chain(&c).all(|x| *x >= 0.0);
+        if (!sound || !g.iter().zip(&c).all(|(g, c)| agree(*g, *c))) && bad.len() < 8 {
+            bad.push(format!(
+                "{name} wo {wo} wi {wi} {mode:?}: gpu {g:?} cpu {c:?}"
+            ));
+        }
+    }
+    assert!(
+        bad.is_empty(),
+        "eval on degenerate inputs:\n{}",
+        bad.join("\n")
+    );
+    assert!(nonzero > eval_queries.len() / 10, "{nonzero} nonzero pdfs");
+
+    let samples: Vec<SampleResult> =
+        run_kernel(&gpu, shaders::BSDF_SAMPLE_TEST, &params, &sample_queries);
+    let mut valid = 0;
+    for (q, g) in sample_queries.iter().zip(&samples) {
+        let (name, p) = &cases[q.params as usize];
+        let (wo, mode) = (Vec3::from(q.wo), mode_of(q.mode));
+        let c = p.sample(wo, q.u, mode);
+        let what = format!("{name} wo {wo} u {:?} {mode:?}: gpu {g:?} cpu {c:?}", q.u);
+        let gd = discrete(g.valid != 0, g.flags, g.layer);
+        let cd = match &c {
+            Some(s) => discrete(true, s.flags.0, s.layer),
+            None => discrete(false, 0, 0),
+        };
+        if gd != cd {
+            bad.push(what);
+            continue;
+        }
+        let gf = [g.f[0], g.f[1], g.f[2], g.pdf, g.eta];
+        let Some(c) = c else {
+            // No sample: whatever the record holds must still be harmless.
+            if !finite(&gf) || !finite(&g.wi) {
+                bad.push(format!("not finite: {what}"));
+            }
+            continue;
+        };
+        valid += 1;
+        let cf = [c.f.x, c.f.y, c.f.z, c.pdf, c.eta];
+        let sound = finite(&gf)
+            && finite(&cf)
+            && finite(&g.wi)
+            && gf[..4].iter().chain(&cf[..4]).all(|x| *x >= 0.0);
+        if !sound {
+            bad.push(format!("not finite: {what}"));
+            continue;
+        }
+        let dir_err = (Vec3::from(g.wi) - c.wi).abs().max_element();
+        // As in gpu_sample_matches_cpu: a glossy sample's f and pdf are compared with the
+        // CPU's at the GPU's direction, since a peaked lobe turns the rounding of the
+        // direction into large changes of f.
+        let (cf, cpdf) = if c.flags.is_specular() {
+            (c.f, c.pdf)
+        } else {
+            let gwi = Vec3::from(g.wi);
+            (p.eval(wo, gwi, mode), p.pdf(wo, gwi, mode))
+        };
+        let pairs = [
+            (g.f[0], cf.x),
+            (g.f[1], cf.y),
+            (g.f[2], cf.z),
+            (g.pdf, cpdf),
+            (g.eta, c.eta),
+        ];
+        if dir_err > 1e-5 || !pairs.iter().all(|&(a, b)| agree(a, b)) {
+            bad.push(format!("|Δwi| {dir_err:.1e}: {what}"));
+        }
+    }
+    bad.truncate(8);
+    assert!(
+        bad.is_empty(),
+        "samples on degenerate inputs:\n{}",
+        bad.join("\n")
+    );
+    assert!(valid > sample_queries.len() / 10, "{valid} valid samples");
+
+    // η exactly 1 is no interface: whatever the roughness, light goes straight through
+    // with its tint, a delta lobe (eval and pdf 0) that every sample takes, on the GPU
+    // as on the CPU; the microfacet half vector wi + wo would be a rounding residue.
+    let index_matched = |name: &str| name.contains("η 1,") || name.ends_with("η 1");
+    for (q, g) in eval_queries.iter().zip(&evals) {
+        let name = &cases[q.params as usize].0;
+        if index_matched(name) {
+            assert_eq!(*g, [0.0; 4], "{name}: eval {q:?}");
+        }
+    }
+    let mut through = 0;
+    for (q, g) in sample_queries.iter().zip(&samples) {
+        let (name, p) = &cases[q.params as usize];
+        let wo = Vec3::from(q.wo);
+        if !index_matched(name) || wo.z == 0.0 {
+            continue;
+        }
+        let c = p.sample(wo, q.u, mode_of(q.mode));
+        let c = c.unwrap_or_else(|| panic!("{name}: no sample for {q:?}"));
+        let tint = Vec3::from_slice(&p.layers[0].tint_weight[..3]);
+        assert_eq!(
+            c.flags,
+            BsdfFlags::TRANSMISSION | BsdfFlags::SPECULAR,
+            "{name}: {q:?}"
+        );
+        assert_eq!((c.wi, c.eta), (-wo, 1.0), "{name}: {q:?}");
+        let weight = c.f * c.wi.z.abs() / c.pdf;
+        assert!(
+            (weight - tint).abs().max_element() < 1e-6,
+            "{name}: weight {weight}"
+        );
+        assert_eq!(g.valid, 1, "{name}: GPU {q:?}");
+        let gpu_sample = (Vec3::from(g.wi), g.eta, g.flags);
+        assert_eq!(gpu_sample, (-wo, 1.0, c.flags.0), "{name}: GPU {q:?}");
+        through += 1;
+    }
+    assert!(through > 0);
     common::assert_clean(&gpu);
 }
