@@ -42,12 +42,18 @@ pub fn validate_camera(camera: &Camera, at: &Location) -> Result<(), SceneError>
             camera.look_at, camera.position
         )));
     }
-    if distance2 <= f32::MIN_POSITIVE
-        || forward.length() <= 1e-6 * camera.position.abs().max_element()
-    {
+    if distance2 <= f32::MIN_POSITIVE {
         return Err(err(format!(
             "look_at {} is the same point as position",
             camera.look_at
+        )));
+    }
+    // Within about eight float steps of position, the view direction is mostly rounding.
+    if forward.length() <= 1e-6 * camera.position.abs().max_element() {
+        return Err(err(format!(
+            "look_at {} is too close to position {} for 32-bit floating point so far \
+             from the origin: move it farther along the view direction",
+            camera.look_at, camera.position
         )));
     }
     if camera.up.length_squared() <= f32::MIN_POSITIVE {

@@ -267,6 +267,11 @@ fn camera_and_film_errors_name_the_file() {
             "same point as position",
         ),
         (
+            "look_at  = [0.5, 0.5, 0.0]",
+            "look_at  = [0.5, 0.5, 2.9999995]",
+            "too close to position",
+        ),
+        (
             "up       = [0.0, 1.0, 0.0]",
             "up       = [0.0, 0.0, 0.0]",
             "up is the zero vector",
