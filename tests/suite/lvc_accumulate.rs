@@ -4,13 +4,21 @@
 //! contributions absent, occluded, unoccluded, NaN and infinite. The radiance sums, the
 //! non-finite count and the tally must be the twin's exactly (the kernel only adds, in
 //! the twin's order).
+//!
+//! `splat` against `fixed::FixedFilm` on synthetic light-tracing contributions crowded
+//! into a few slots of a film that already holds sums, so that low words carry into high
+//! words at almost every addition: values just under 1, with a half, past the clamp,
+//! negative, negative zero, denormal, NaN and infinite, absent and occluded, at splat
+//! scales 1 and 2^-20. The film's words and the non-finite and clamp counters must be
+//! the twin's exactly (integer sums do not depend on the atomics' order).
 
 use crate::common;
 
 use bytemuck::Zeroable;
+use splitray::integrator::lvc::fixed::{FixedFilm, FIXED_MAX, FIXED_WORDS};
 use splitray::integrator::lvc::gpu::{
     Contribution, LvcConstants, LvcPush, VisibilityTally, CONTRIBUTION_NONE, COUNTERS,
-    COUNTER_NON_FINITE,
+    COUNTER_CLAMPED, COUNTER_NON_FINITE,
 };
 use splitray::integrator::lvc::kernels::{AccumulateTally, Kernels};
 use splitray::integrator::lvc::twin::{accumulate, BounceRecords};
@@ -206,6 +214,168 @@ fn accumulation_and_tally_match_the_twin() {
                     connections,
                     17 * k as u64 + connections as u64,
                 );
+            }
+        }
+    }
+    common::assert_clean(&gpu);
+}
+
+/// Splat slots the contributions crowd into: few, so that every slot takes thousands of
+/// additions and its low words carry often.
+const SPLAT_SLOTS: usize = 3;
+
+/// One channel of a synthetic splat, drawn from one random word. 0.9999999 has low
+/// word 2^32 − 2^9, so nearly every addition after the first carries; 1.5 carries every
+/// other time; 2 × FIXED_MAX is clamped at scale 1; −1, −0 and 1e-40 (denormal, flushed or
+/// not) add nothing; NaN and ±∞ drop the whole contribution.
+fn splat_channel(word: u32) -> f32 {
+    match word % 16 {
+        0..=5 => 0.999_999_9,
+        6..=9 => 1.5,
+        10 => 2.0 * FIXED_MAX,
+        11 => -1.0,
+        12 => -0.0,
+        13 => 1e-40,
+        14 => f32::NAN,
+        _ if word & 0x100 == 0 => f32::INFINITY,
+        _ => f32::NEG_INFINITY,
+    }
+}
+
+/// Light-tracing contributions, their shadow hits (a third occluded) and a splat film
+/// that already holds sums.
+struct Splats {
+    contributions: Vec<Contribution>,
+    shadow_hits: Vec<Hit>,
+    film: Vec<u32>,
+}
+
+impl Splats {
+    fn new(count: usize, seed: u64) -> Self {
+        let words = common::random_u32s(5 * count, seed);
+        let contributions = (0..count)
+            .map(|k| {
+                let w = &words[5 * k..5 * k + 5];
+                Contribution {
+                    value: [w[0], w[1], w[2]].map(splat_channel),
+                    // One in eight absent, whatever its value.
+                    code: if w[3] % 8 == 0 {
+                        CONTRIBUTION_NONE
+                    } else {
+                        1 | 1 << 16
+                    },
+                    weight: 1.0,
+                    target: w[4] % SPLAT_SLOTS as u32,
+                    pad: [0; 2],
+                }
+            })
+            .collect();
+        let shadow_hits = words
+            .iter()
+            .skip(3)
+            .step_by(5)
+            .map(|&w| hit(w >> 8))
+            .collect();
+        Self {
+            contributions,
+            shadow_hits,
+            film: common::random_u32s(SPLAT_SLOTS * FIXED_WORDS, seed + 1),
+        }
+    }
+
+    /// `splat.comp` on the CPU: absent and occluded contributions skipped, those with
+    /// a non-finite channel counted and dropped whole (before scaling, as the kernel
+    /// tests them), the rest added by the fixed-point twin. Returns the film and the
+    /// non-finite count.
+    fn twin(&self, scale: f32) -> (FixedFilm, u32) {
+        let mut film = FixedFilm::from_words(&self.film, scale);
+        let mut non_finite = 0;
+        for (c, h) in self.contributions.iter().zip(&self.shadow_hits) {
+            if !c.is_some() || h.triangle != MISS {
+                continue;
+            }
+            if c.value.iter().any(|v| !v.is_finite()) {
+                non_finite += 1;
+                continue;
+            }
+            film.add(c.target as usize, c.value);
+        }
+        (film, non_finite)
+    }
+
+    /// The film's words and the counters after `splat` at `scale`.
+    fn on_gpu(&self, gpu: &Gpu, kernels: &Kernels, scale: f32) -> (Vec<u32>, Vec<u32>) {
+        let constants = LvcConstants {
+            splat_scale: scale,
+            ..Zeroable::zeroed()
+        };
+        // A buffer of at least one element (no contribution: nothing is read).
+        let contributions = if self.contributions.is_empty() {
+            gpu.upload("contributions", &[Contribution::zeroed()])
+        } else {
+            gpu.upload("contributions", &self.contributions)
+        }
+        .unwrap();
+        let shadow_hits = if self.shadow_hits.is_empty() {
+            gpu.upload("shadow-hits", &[Hit::zeroed()])
+        } else {
+            gpu.upload("shadow-hits", &self.shadow_hits)
+        }
+        .unwrap();
+        let film = gpu.upload("splat-film", &self.film).unwrap();
+        let counters = gpu.zeroed::<u32>("counters", COUNTERS).unwrap();
+        let constants = gpu.upload("constants", &[constants]).unwrap();
+        let push = LvcPush {
+            active_count: self.contributions.len() as u32,
+            ..Default::default()
+        };
+        let mut rec = gpu.recorder(StreamKind::Main).unwrap();
+        rec.dispatch_items(
+            &kernels.splat,
+            &[
+                (&contributions).into(),
+                (&shadow_hits).into(),
+                (&film).into(),
+                (&counters).into(),
+                (&constants).into(),
+            ],
+            &push,
+            self.contributions.len() as u64,
+        )
+        .unwrap();
+        gpu.wait(&rec.submit(&[]).unwrap()).unwrap();
+        (film.read().unwrap(), counters.read().unwrap())
+    }
+}
+
+#[test]
+fn splat_matches_the_fixed_point_twin() {
+    let gpu = common::gpu();
+    let kernels = Kernels::new(&gpu, &LvcOptions::new(Variant::LvcBdpt, false), u32::MAX).unwrap();
+    for (k, &count) in [0usize, 1, 64, 65, 100_003].iter().enumerate() {
+        let splats = Splats::new(count, 101 + k as u64);
+        for scale in [1.0, 2f32.powi(-20)] {
+            let what = format!("{count} contributions at scale {scale}");
+            let (want, want_non_finite) = splats.twin(scale);
+            let (words, counters) = splats.on_gpu(&gpu, &kernels, scale);
+            assert_eq!(
+                FixedFilm::from_words(&words, scale).sums,
+                want.sums,
+                "{what}: film"
+            );
+            assert_eq!(
+                counters[COUNTER_NON_FINITE], want_non_finite,
+                "{what}: non-finite count"
+            );
+            assert_eq!(
+                counters[COUNTER_CLAMPED] as u64, want.clamped,
+                "{what}: clamp count"
+            );
+            if count > 1000 {
+                // The mix leaves something in every count to compare.
+                assert!(want_non_finite > 0, "{what}: no non-finite splat");
+                assert_eq!(want.clamped > 0, scale == 1.0, "{what}: clamps");
+                assert_ne!(want.sums, FixedFilm::from_words(&splats.film, scale).sums);
             }
         }
     }
