@@ -32,6 +32,7 @@ use splitray::bidir::random::{fold_seed, random01, PathSampler};
 use splitray::bidir::{Connector, CpuScene, PinholeCamera, WalkSettings};
 use splitray::integrator::lvc::fixed::FixedFilm;
 use splitray::integrator::lvc::gpu::{dims, Contribution, LvcVertex, VERTEX_CONNECTIBLE};
+use splitray::integrator::lvc::options::{MAX_CANDIDATES, MAX_CONNECTIONS};
 use splitray::integrator::lvc::{twin, LvcOptions, Resampling, Variant, Visibility};
 use splitray::integrator::pt::PtScene;
 use splitray::integrator::Integrator;
@@ -727,6 +728,35 @@ fn cornell_box_resampled_systematically() {
         options: o,
         passes: 2,
     });
+}
+
+/// The largest M and N the options accept: every camera vertex fills all its candidate
+/// and connection slots, so an index past a vertex's stride would land in its
+/// neighbour's records. Both ways of drawing, one pass each to keep the run short.
+#[test]
+fn cornell_box_resampled_at_the_largest_candidates_and_connections() {
+    for (name, resampling) in [
+        (
+            "cornell-box M = N = max, independent",
+            Resampling::Independent,
+        ),
+        (
+            "cornell-box M = N = max, systematic",
+            Resampling::Systematic,
+        ),
+    ] {
+        let mut o = options(Variant::CisLbdpt, MAX_CONNECTIONS, -1);
+        o.candidates = MAX_CANDIDATES;
+        o.resampling = resampling;
+        check_case(Case {
+            name,
+            scene: builtin("cornell-box").unwrap(),
+            width: 5,
+            height: 5,
+            options: o,
+            passes: 1,
+        });
+    }
 }
 
 #[test]
