@@ -28,6 +28,7 @@ mod cli;
 mod cli_long_renders;
 mod display_server;
 mod display_tonemap;
+mod eye_kernels;
 mod film_io;
 mod integrator_interface;
 mod lvc_accumulate;

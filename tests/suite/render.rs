@@ -11,7 +11,8 @@ use splitray::render::{render, RenderOptions};
 use splitray::scene::{self, Scene, Triangle};
 use splitray::trace::{cpu, BruteForceTracer, GpuTriangle, Hit, Query, Ray, Tracer};
 
-fn options(
+/// The scene's settings at `width` × `height`, `spp` samples, seed 1 and `integrator`.
+pub(crate) fn options(
     scene: &Scene,
     width: u32,
     height: u32,
