@@ -21,6 +21,8 @@ use splitray::trace::pdacrt::LevelStats;
 use splitray::trace::{FlushReduce, LevelSplit, PdacrtParams, TracerKind};
 use splitray::vk::{Gpu, GpuDesc, InstanceDesc};
 
+use super::paths::{refuse_clashing_paths, Role};
+
 #[derive(Debug, Args)]
 pub struct BenchArgs {
     #[command(subcommand)]
@@ -337,8 +339,8 @@ enum Inputs {
 }
 
 pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
+    check_outputs(args)?;
     let mut timeline = super::timeline::TimelineOutput::start(args.timeline.as_deref())?;
-    check_outputs(&args.what)?;
     check_lists(&args.what)?;
     // Load inputs before opening the device, so bad input fails fast.
     let inputs = load_inputs(&args.what)?;
@@ -367,20 +369,38 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Fails at once, naming the path, where an output of `what` could not be written at the
-/// end (a missing folder, a folder in its place, no permission): a temporary file is
-/// created there and removed again.
-fn check_outputs(what: &BenchCommand) -> anyhow::Result<()> {
-    let (json, dump_hits) = match what {
+/// Fails at once, naming the path, where the outputs would overwrite one another or a
+/// reference read, or where one could not be written at the end (a missing folder, a
+/// folder in its place, no permission): a temporary file is created there and removed
+/// again.
+fn check_outputs(args: &BenchArgs) -> anyhow::Result<()> {
+    let (json, dump_hits, references) = match &args.what {
         BenchCommand::Primitives { json, .. }
         | BenchCommand::Pt { json, .. }
-        | BenchCommand::Bdpt { json, .. }
-        | BenchCommand::Cbpt { json, .. }
-        | BenchCommand::Dynamic { json, .. } => (json, &None),
+        | BenchCommand::Dynamic { json, .. } => (json, &None, &[][..]),
+        BenchCommand::Bdpt {
+            json, reference, ..
+        } => (json, &None, reference.as_slice()),
+        BenchCommand::Cbpt {
+            json, reference, ..
+        } => (json, &None, reference.as_slice()),
         BenchCommand::Trace {
             json, dump_hits, ..
-        } => (json, dump_hits),
+        } => (json, dump_hits, &[][..]),
     };
+    let outputs: Vec<Role> = [
+        ("--json", json),
+        ("--dump-hits", dump_hits),
+        ("--timeline", &args.timeline),
+    ]
+    .into_iter()
+    .filter_map(|(what, path)| path.as_deref().map(|p| Role::file(what, p)))
+    .collect();
+    let inputs: Vec<Role> = references
+        .iter()
+        .map(|r| Role::file("--reference", r))
+        .collect();
+    refuse_clashing_paths(&outputs, &inputs)?;
     for path in [json, dump_hits].into_iter().flatten() {
         drop(splitray::film::AtomicFile::create(path)?);
     }

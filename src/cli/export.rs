@@ -2,9 +2,10 @@
 
 use std::path::PathBuf;
 
-use anyhow::{bail, Context};
 use clap::Args;
 use splitray::scene::{validate, FilmSize, Location};
+
+use super::paths::check_output;
 
 #[derive(Debug, Args)]
 pub struct ExportArgs {
@@ -22,10 +23,7 @@ pub struct ExportArgs {
 }
 
 pub fn run(args: &ExportArgs) -> anyhow::Result<()> {
-    let json_file = args.output.extension().and_then(|e| e.to_str());
-    if !json_file.is_some_and(|e| e.eq_ignore_ascii_case("json")) {
-        bail!("{}: the output must be a .json file", args.output.display());
-    }
+    check_output(&args.output, &["json"], "a .json file")?;
     let scene = splitray::scene::load(&args.scene)?;
     let film = FilmSize {
         width: args.width.unwrap_or(scene.film.width),
@@ -35,8 +33,8 @@ pub fn run(args: &ExportArgs) -> anyhow::Result<()> {
     let export = splitray::scene_export::export(&scene, film);
     let mut json = serde_json::to_vec_pretty(&export)?;
     json.push(b'\n');
-    splitray::film::atomic::write_bytes_atomically(&args.output, &json)
-        .with_context(|| format!("cannot write {}", args.output.display()))?;
+    // The error names the file.
+    splitray::film::atomic::write_bytes_atomically(&args.output, &json)?;
     println!(
         "{}: {} triangles, {} materials, {} point lights, film {}x{} -> {}",
         export.name,

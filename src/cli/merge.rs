@@ -3,10 +3,11 @@
 
 use std::path::PathBuf;
 
-use anyhow::bail;
 use clap::Args;
 use splitray::film::ImageFiles;
 use splitray::render::merge::merge_parts;
+
+use super::paths::{check_output, refuse_clashing_paths, Role};
 
 #[derive(Debug, Args)]
 pub struct MergeArgs {
@@ -20,12 +21,8 @@ pub struct MergeArgs {
 
 pub fn run(args: &MergeArgs) -> anyhow::Result<()> {
     let output = &args.output;
-    if output.extension().and_then(|e| e.to_str()) != Some("exr") {
-        bail!("{}: the output must be an .exr file", output.display());
-    }
-    if args.parts.contains(output) {
-        bail!("{}: the output is one of the parts", output.display());
-    }
+    check_output(output, &["exr"], "an .exr file")?;
+    refuse_clashes(args)?;
     // Created before the parts are read: an output that cannot be written fails first.
     let files = ImageFiles::create(output)?;
     let merged = merge_parts(&args.parts)?;
@@ -77,4 +74,21 @@ pub fn run(args: &MergeArgs) -> anyhow::Result<()> {
         written.png.display()
     );
     Ok(())
+}
+
+/// Refuses an output, or the PNG preview written beside it, that is one of the parts
+/// however the two paths are written (`./p.exr`, an absolute path): merging would
+/// overwrite a part it read.
+fn refuse_clashes(args: &MergeArgs) -> anyhow::Result<()> {
+    let png = args.output.with_extension("png");
+    let outputs = [
+        Role::file("the output", &args.output),
+        Role::file("its PNG preview", &png),
+    ];
+    let parts: Vec<Role> = args
+        .parts
+        .iter()
+        .map(|part| Role::file("a part", part))
+        .collect();
+    refuse_clashing_paths(&outputs, &parts)
 }

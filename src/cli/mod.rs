@@ -5,6 +5,7 @@ mod bench;
 mod export;
 mod info;
 mod merge;
+mod paths;
 mod render;
 mod render_files;
 mod signals;

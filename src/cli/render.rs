@@ -11,6 +11,7 @@ use std::process::ExitCode;
 use anyhow::{anyhow, bail, Context};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
+use splitray::integrator::bpt::technique_images;
 use splitray::integrator::cbpt::CameraPaths;
 use splitray::integrator::lvc::Resampling;
 use splitray::integrator::IntegratorKind;
@@ -22,7 +23,8 @@ use splitray::scene::Scene;
 use splitray::trace::TracerKind;
 use splitray::vk::{Gpu, GpuDesc, InstanceDesc};
 
-use super::render_files::{refuse_clashing_paths, write_stats, CheckpointFile, RenderFiles, Role};
+use super::paths::{check_output, refuse_clashing_paths, same_file, Role};
+use super::render_files::{write_stats, CheckpointFile, RenderFiles};
 use super::signals::{self, StopSignals};
 use options::{parse_shard, render_options};
 
@@ -237,20 +239,7 @@ fn output_path(args: &RenderArgs, scene_name: &str, shard: Shard) -> anyhow::Res
             PathBuf::from("out").join(format!("{stem}{suffix}.exr"))
         }
     };
-    if path.extension().and_then(|e| e.to_str()) != Some("exr") {
-        bail!("{}: the output must be an .exr file", path.display());
-    }
-    let parent = path
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    if !parent.is_dir() {
-        bail!(
-            "{}: the folder {} does not exist",
-            path.display(),
-            parent.display()
-        );
-    }
+    check_output(&path, &["exr"], "an .exr file")?;
     Ok(path)
 }
 
@@ -279,7 +268,37 @@ fn refuse_clashes<'a>(args: &'a RenderArgs, exr: &'a Path) -> anyhow::Result<()>
     .into_iter()
     .flatten()
     .collect();
-    refuse_clashing_paths(&outputs, &inputs)
+    refuse_clashing_paths(&outputs, &inputs)?;
+    match &args.bdpt_techniques {
+        Some(dir) => refuse_technique_clashes(outputs.iter().chain(&inputs), dir),
+        None => Ok(()),
+    }
+}
+
+/// Refuses a file of the render that a technique image of `--bdpt-techniques DIR` would
+/// replace: `DIR/s{S}_t{T}.exr` or `DIR/longer.exr`, written after the render.
+fn refuse_technique_clashes<'a>(
+    files: impl Iterator<Item = &'a Role<'a>>,
+    dir: &Path,
+) -> anyhow::Result<()> {
+    for file in files {
+        let Some(name) = file.path.file_name().and_then(|n| n.to_str()) else {
+            continue;
+        };
+        let technique = name
+            .strip_suffix(".exr")
+            .is_some_and(technique_images::is_image_name);
+        if technique && same_file(file.path, &dir.join(name)) {
+            bail!(
+                "{}: {} and a technique image of --bdpt-techniques {} name the same file: \
+                 it would be written over",
+                file.path.display(),
+                file.what,
+                dir.display()
+            );
+        }
+    }
+    Ok(())
 }
 
 pub fn run(args: &RenderArgs) -> anyhow::Result<ExitCode> {

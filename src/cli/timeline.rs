@@ -4,49 +4,14 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use anyhow::{bail, Context};
+use anyhow::Context;
 use clap::Args;
 use splitray::film::atomic::write_bytes_atomically;
 use splitray::film::AtomicFile;
 use splitray::timeline::{self, draw::DrawOptions, Capture, ClockAlignment};
 use splitray::vk::Gpu;
 
-/// The folder of `path` (the current one for a bare file name).
-fn folder_of(path: &Path) -> &Path {
-    path.parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(Path::new("."))
-}
-
-/// Checks an output path before any work: its extension is one of `extensions` and its
-/// folder exists. Returns the extension.
-fn check_output(path: &Path, extensions: &[&str]) -> anyhow::Result<String> {
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase)
-        .unwrap_or_default();
-    if !extensions.contains(&ext.as_str()) {
-        bail!(
-            "{}: the output must be a {} file",
-            path.display(),
-            extensions
-                .iter()
-                .map(|e| format!(".{e}"))
-                .collect::<Vec<_>>()
-                .join(" or ")
-        );
-    }
-    let folder = folder_of(path);
-    if !folder.is_dir() {
-        bail!(
-            "{}: the folder {} does not exist",
-            path.display(),
-            folder.display()
-        );
-    }
-    Ok(ext)
-}
+use super::paths::check_output;
 
 /// A timeline being recorded for `--timeline FILE.json`.
 pub struct TimelineOutput {
@@ -62,7 +27,7 @@ impl TimelineOutput {
         let Some(path) = path else {
             return Ok(None);
         };
-        check_output(path, &["json"])?;
+        check_output(path, &["json"], "a .json file")?;
         Ok(Some(Self {
             file: AtomicFile::create(path)?,
             capture: Capture::start()?,
@@ -119,7 +84,7 @@ pub struct TimelineArgs {
 }
 
 pub fn run(args: &TimelineArgs) -> anyhow::Result<()> {
-    let ext = check_output(&args.output, &["svg", "png"])?;
+    let ext = check_output(&args.output, &["svg", "png"], "a .svg or .png file")?;
     let text = std::fs::read_to_string(&args.input)
         .with_context(|| format!("cannot read {}", args.input.display()))?;
     let trace =
@@ -134,8 +99,8 @@ pub fn run(args: &TimelineArgs) -> anyhow::Result<()> {
     } else {
         timeline::draw::svg(&trace, &options)?.into_bytes()
     };
-    write_bytes_atomically(&args.output, &bytes)
-        .with_context(|| format!("cannot write {}", args.output.display()))?;
+    // The error names the file.
+    write_bytes_atomically(&args.output, &bytes)?;
     print!("{}", trace.summary());
     println!("wrote {}", args.output.display());
     Ok(())

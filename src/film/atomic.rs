@@ -62,7 +62,8 @@ pub fn discard_all_temporaries() -> TemporariesDiscarded {
 /// dropped uncommitted.
 ///
 /// The temporary file lives in the target's directory (so the rename cannot cross file
-/// systems) and is named `.<file name>.tmp-<pid>-<n>`.
+/// systems) and is named `.<file name>.tmp-<pid>-<n>` (`.splitray.tmp-<pid>-<n>` for a
+/// target whose name is too long for that).
 #[derive(Debug)]
 pub struct AtomicFile {
     target: PathBuf,
@@ -70,12 +71,34 @@ pub struct AtomicFile {
     writer: Option<BufWriter<File>>,
 }
 
+/// The longest file name most file systems take, in bytes (Linux's `NAME_MAX`).
+const MAX_NAME_BYTES: usize = 255;
+
+/// The name of a new temporary file for the target named `file_name`:
+/// `.<file name>.tmp-<pid>-<n>`, or `.splitray.tmp-<pid>-<n>` where that would be too
+/// long a name (a target whose name is near the limit is still a legal output).
+fn temp_name(file_name: &std::ffi::OsStr) -> std::ffi::OsString {
+    let suffix = format!(
+        ".tmp-{}-{}",
+        std::process::id(),
+        TEMP_COUNTER.fetch_add(1, Ordering::Relaxed)
+    );
+    let mut name = std::ffi::OsString::from(".");
+    if 1 + file_name.len() + suffix.len() <= MAX_NAME_BYTES {
+        name.push(file_name);
+    } else {
+        name.push("splitray");
+    }
+    name.push(suffix);
+    name
+}
+
 impl AtomicFile {
     /// Creates the temporary file for `target`.
     ///
-    /// Fails with [`FilmError::MissingDirectory`] when the target's folder does not exist,
-    /// and with [`FilmError::Io`] naming the target when the temporary file cannot be
-    /// created (e.g. the folder is not writable).
+    /// Fails with [`FilmError::MissingDirectory`] when the target's folder does not exist
+    /// or is not a folder, and with [`FilmError::Io`] naming the target when the temporary
+    /// file cannot be created (e.g. the folder is not writable).
     pub fn create(target: impl AsRef<Path>) -> Result<Self, FilmError> {
         let target = target.as_ref().to_path_buf();
         let file_name = target
@@ -95,14 +118,7 @@ impl AtomicFile {
         if target.is_dir() {
             return Err(FilmError::invalid(&target, "is a folder, not a file"));
         }
-        let mut temp_name = std::ffi::OsString::from(".");
-        temp_name.push(file_name);
-        temp_name.push(format!(
-            ".tmp-{}-{}",
-            std::process::id(),
-            TEMP_COUNTER.fetch_add(1, Ordering::Relaxed)
-        ));
-        let temp = dir.join(temp_name);
+        let temp = dir.join(temp_name(file_name));
         let mut live = live_temporaries();
         let file = OpenOptions::new()
             .write(true)
@@ -272,6 +288,26 @@ mod tests {
         let err = write_bytes_atomically(missing.join("x.bin"), b"x").unwrap_err();
         assert!(matches!(&err, FilmError::MissingDirectory { folder, .. } if *folder == missing));
         assert!(err.to_string().contains("no-such-dir"), "{err}");
+    }
+
+    #[test]
+    fn a_file_name_near_the_limit_gets_a_short_temporary_name() {
+        let dir = tempfile::tempdir().unwrap();
+        let name = format!("{}.exr", "n".repeat(MAX_NAME_BYTES - 4));
+        let target = dir.path().join(&name);
+        let f = AtomicFile::create(&target).unwrap();
+        let temp = f.temp_path().file_name().unwrap().to_str().unwrap();
+        assert!(temp.starts_with(".splitray.tmp-"), "{temp}");
+        f.commit().unwrap();
+        assert_eq!(entries(dir.path()), [name]);
+    }
+
+    #[test]
+    fn a_file_in_place_of_the_folder_is_named_as_such() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("plain"), "").unwrap();
+        let err = AtomicFile::create(dir.path().join("plain/x.exr")).unwrap_err();
+        assert!(err.to_string().ends_with("plain is not a folder"), "{err}");
     }
 
     #[test]

@@ -7,8 +7,9 @@ use std::path::PathBuf;
 /// Every variant that concerns a file names that file's path.
 #[derive(Debug, thiserror::Error)]
 pub enum FilmError {
-    /// The folder an output should be written into does not exist (or is not a folder).
-    #[error("{}: the folder {} does not exist", .path.display(), .folder.display())]
+    /// The folder an output should be written into does not exist (or something else,
+    /// a file, is in its place: the message says which).
+    #[error("{}: {}", .path.display(), folder_problem(.folder))]
     MissingDirectory {
         /// The output file.
         path: PathBuf,
@@ -71,6 +72,16 @@ pub enum FilmError {
         /// Film height.
         height: u32,
     },
+}
+
+/// What is wrong with `folder`, an output's missing folder: a file in its place, or
+/// nothing there. Decided when the error is shown (the variant is the same for both), so
+/// a user is never told that a file they can see does not exist.
+fn folder_problem(folder: &std::path::Path) -> String {
+    match folder.exists() {
+        true => format!("{} is not a folder", folder.display()),
+        false => format!("the folder {} does not exist", folder.display()),
+    }
 }
 
 impl FilmError {

@@ -1000,3 +1000,198 @@ fn a_reference_with_unusable_standard_errors_is_refused() {
         assert!(!dir.path().join("img.exr").exists());
     }
 }
+
+/// Renders shard `shard` of two of a tiny image to `name` in `dir`.
+fn tiny_shard(dir: &Path, shard: &str, name: &str) {
+    let args = [
+        "render", "--width", "8", "--height", "8", "--spp", "2", "--shard", shard, "-o", name,
+    ];
+    let out = splitray(&args, dir);
+    assert!(out.status.success(), "{}", text(&out));
+}
+
+/// `merge` refuses an output, or the PNG beside it, that is one of its parts however the
+/// path is written, and leaves the parts as they were; an upper-case `.EXR` is an EXR.
+#[test]
+fn merge_refuses_to_overwrite_a_part_however_its_path_is_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    tiny_shard(d, "0/2", "p0.exr");
+    tiny_shard(d, "1/2", "p1.exr");
+    std::fs::copy(d.join("p1.png"), d.join("q.png")).unwrap();
+    let before: Vec<_> = ["p0.exr", "p1.exr", "q.png"]
+        .map(|f| std::fs::read(d.join(f)).unwrap())
+        .into();
+    let absolute = d.join("p1.exr");
+    let cases: [(&[&str], &str); 3] = [
+        (
+            &["./p0.exr", "p1.exr", "-o", "p0.exr"],
+            "the output and a part",
+        ),
+        (
+            &["p0.exr", "p1.exr", "-o", absolute.to_str().unwrap()],
+            "the output and a part",
+        ),
+        (
+            &["p0.exr", "q.png", "-o", "q.exr"],
+            "its PNG preview and a part",
+        ),
+    ];
+    for (args, expect) in cases {
+        let out = splitray(&[&["merge"][..], args].concat(), d);
+        let t = text(&out);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {t}");
+        assert!(
+            t.contains(expect) && t.contains("name the same file"),
+            "{t}"
+        );
+    }
+    let after: Vec<_> = ["p0.exr", "p1.exr", "q.png"]
+        .map(|f| std::fs::read(d.join(f)).unwrap())
+        .into();
+    assert!(before == after, "a refused merge changed a part");
+    let out = splitray(&["merge", "p0.exr", "p1.exr", "-o", "m.EXR"], d);
+    assert!(out.status.success(), "{}", text(&out));
+    assert!(d.join("m.EXR").is_file() && d.join("m.png").is_file());
+}
+
+/// A bench's outputs may not name one file, nor a reference it reads: refused before
+/// any work.
+#[test]
+fn bench_outputs_that_would_overwrite_one_another_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("ref.exr"), "kept").unwrap();
+    let trace = "bench trace cornell-box --width 8 --height 8";
+    for (args, expect) in [
+        (
+            "bench primitives --n 64 --json x.json --timeline x.json".to_string(),
+            "--json and --timeline name the same file",
+        ),
+        (
+            format!("{trace} --json x.json --dump-hits ./x.json"),
+            "--json and --dump-hits name the same file",
+        ),
+        (
+            format!("{trace} --dump-hits hits.bin --timeline hits.bin"),
+            "--dump-hits and --timeline name the same file",
+        ),
+        (
+            "bench cbpt cornell-box --reference ref.exr --json ref.exr".to_string(),
+            "--json and --reference name the same file",
+        ),
+        (
+            "bench bdpt cornell-box --reference ref.exr --timeline ./ref.exr".to_string(),
+            "--timeline and --reference name the same file",
+        ),
+    ] {
+        let args: Vec<&str> = args.split_whitespace().collect();
+        let out = splitray(&args, d);
+        let t = text(&out);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {t}");
+        assert!(t.contains(expect), "{args:?}: {t}");
+    }
+    let mut names: Vec<_> = std::fs::read_dir(d)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(names, ["ref.exr"]);
+    assert_eq!(std::fs::read(d.join("ref.exr")).unwrap(), b"kept");
+}
+
+/// A file of the render that a technique image of `--bdpt-techniques DIR` would replace
+/// is refused before the render; names that no technique image takes are not.
+#[test]
+fn technique_images_may_not_replace_another_file_of_the_render() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::create_dir(d.join("td")).unwrap();
+    let small = [
+        "render",
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "--spp",
+        "1",
+        "--integrator",
+        "bpt",
+    ];
+    let render = |extra: &[&str]| splitray(&[&small[..], extra].concat(), d);
+    for (args, expect) in [
+        (
+            &["-o", "td/s1_t2.exr", "--bdpt-techniques", "td"][..],
+            "td/s1_t2.exr: the image and a technique image",
+        ),
+        (
+            &[
+                "-o",
+                "a.exr",
+                "--stats",
+                "td/longer.exr",
+                "--bdpt-techniques",
+                "./td/",
+            ],
+            "--stats and a technique image",
+        ),
+        (
+            &[
+                "-o",
+                "a.exr",
+                "--checkpoint",
+                "td/s0_t3.exr",
+                "--bdpt-techniques",
+                "td",
+            ],
+            "--checkpoint and a technique image",
+        ),
+    ] {
+        let out = render(args);
+        let t = text(&out);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {t}");
+        assert!(t.contains(expect), "{args:?}: {t}");
+    }
+    assert_eq!(std::fs::read_dir(d.join("td")).unwrap().count(), 0);
+    // A path of 9 segments has no image of its own (it is in longer.exr).
+    let out = render(&["-o", "td/s1_t9.exr", "--bdpt-techniques", "td"]);
+    assert!(out.status.success(), "{}", text(&out));
+    assert!(d.join("td/s1_t9.exr").is_file() && d.join("td/s1_t2.exr").is_file());
+}
+
+/// Output paths: an extension in any case, a file name near the file system's limit, a
+/// file where the folder should be, and write errors that name the path once.
+#[test]
+fn output_paths_are_taken_or_refused_as_they_should_be() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let tiny = ["render", "--width", "8", "--height", "8", "--spp", "1"];
+    let render = |extra: &[&str]| splitray(&[&tiny[..], extra].concat(), d);
+    let out = render(&["-o", "upper.EXR", "--timeline", "trace.JSON"]);
+    assert!(out.status.success(), "{}", text(&out));
+    assert!(d.join("upper.EXR").is_file() && d.join("upper.png").is_file());
+    // 246 bytes, a legal name: its temporary file's would not be.
+    let long = format!("{}.exr", "n".repeat(242));
+    let out = render(&["-o", &long]);
+    assert!(out.status.success(), "{}", text(&out));
+    assert!(d.join(&long).is_file());
+    std::fs::write(d.join("plain"), "").unwrap();
+    let out = render(&["-o", "plain/x.exr"]);
+    let t = text(&out);
+    assert_eq!(out.status.code(), Some(1), "{t}");
+    assert!(t.contains("plain/x.exr: plain is not a folder"), "{t}");
+    // An output that cannot be written, named once in the error.
+    std::fs::create_dir(d.join("taken.json")).unwrap();
+    std::fs::create_dir(d.join("taken.svg")).unwrap();
+    for args in [
+        &["export-scene", "cornell-box", "-o", "taken.json"][..],
+        &["timeline", "trace.JSON", "-o", "taken.svg"],
+    ] {
+        let out = splitray(args, d);
+        let t = text(&out);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {t}");
+        let error = t.lines().find(|l| l.starts_with("error: ")).unwrap();
+        assert_eq!(error.matches("taken.").count(), 1, "{error}");
+        assert!(error.contains("is a folder"), "{error}");
+    }
+}

@@ -14,6 +14,27 @@ pub const MAX_SEGMENTS: u32 = 8;
 /// The key of the image of paths longer than [`MAX_SEGMENTS`].
 const LONGER: (u16, u16) = (u16::MAX, u16::MAX);
 
+/// Whether `name` is the name of an image [`TechniqueImages::images`] may make:
+/// `s{s}_t{t}` for a path of at most [`MAX_SEGMENTS`] segments, or `longer`.
+pub fn is_image_name(name: &str) -> bool {
+    if name == "longer" {
+        return true;
+    }
+    let Some((s, t)) = name
+        .strip_prefix('s')
+        .and_then(|rest| rest.split_once("_t"))
+    else {
+        return false;
+    };
+    match (s.parse::<u16>(), t.parse::<u16>()) {
+        // Spelled as `images` spells it: no sign, no leading zero.
+        (Ok(s), Ok(t)) => {
+            format!("s{s}_t{t}") == name && u32::from(s) + u32::from(t) <= MAX_SEGMENTS + 1
+        }
+        _ => false,
+    }
+}
+
 /// Per-technique sums of the pass estimates.
 pub struct TechniqueImages {
     width: u32,
@@ -73,5 +94,28 @@ impl TechniqueImages {
                 rgb: sum.iter().map(|v| v.map(|x| (x / n) as f32)).collect(),
             })
             .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn image_names_are_those_the_images_get() {
+        for name in ["s0_t2", "s1_t1", "s2_t7", "s8_t1", "longer"] {
+            assert!(is_image_name(name), "{name}");
+        }
+        for name in [
+            "s1_t9",
+            "s01_t2",
+            "s1_t+2",
+            "s1-t2",
+            "s1_t2.exr",
+            "longer2",
+            "image",
+        ] {
+            assert!(!is_image_name(name), "{name}");
+        }
     }
 }
