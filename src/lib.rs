@@ -6,7 +6,8 @@
 //! - [`shaders`]: SPIR-V compiled from `glsl/` at build time.
 //! - [`primitives`]: GPU scan, radix sort, reduce-by-key, compaction, gather/scatter.
 //! - [`bsdf`]: BSDFs and layered materials, with GLSL twins in `glsl/common/bsdf.glsl`.
-//! - [`scene`], [`film`]: scene input and image output (CPU only).
+//! - [`scene`], [`film`]: scene input and image output (CPU only); [`input`]: opening
+//!   the files a command reads (regular files only).
 //! - [`trace`]: the `Tracer` interface and its implementations.
 //! - [`integrator`]: what is computed along the rays; [`bidir`]: the CPU bidirectional
 //!   path tracer's machinery (vertices, walks, connections, MIS and its oracle).
@@ -22,6 +23,7 @@ pub mod bidir;
 pub mod bsdf;
 pub mod display;
 pub mod film;
+pub mod input;
 pub mod integrator;
 #[cfg(x11_preview)]
 pub mod preview;

@@ -85,7 +85,7 @@ pub struct TimelineArgs {
 
 pub fn run(args: &TimelineArgs) -> anyhow::Result<()> {
     let ext = check_output(&args.output, &["svg", "png"], "a .svg or .png file")?;
-    let text = std::fs::read_to_string(&args.input)
+    let text = splitray::input::read_to_string(&args.input)
         .with_context(|| format!("cannot read {}", args.input.display()))?;
     let trace =
         timeline::json::from_json(&text).with_context(|| format!("{}", args.input.display()))?;

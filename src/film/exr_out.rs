@@ -241,7 +241,7 @@ pub fn read_exr(path: impl AsRef<Path>) -> Result<(Film, RenderMetadata), FilmEr
 type ExrImage = Image<Layers<AnyChannels<FlatSamples>>>;
 
 fn read_exr_image(path: &Path) -> Result<ExrImage, FilmError> {
-    let file = std::fs::File::open(path).map_err(|e| FilmError::io(path, "open", e))?;
+    let file = crate::input::open(path).map_err(|e| FilmError::io(path, "open", e))?;
     exr::prelude::read()
         .no_deep_data()
         .largest_resolution_level()

@@ -222,7 +222,7 @@ impl Checkpoint {
     }
 
     fn read_at(path: &Path) -> Result<Self, RenderError> {
-        let bytes = std::fs::read(path).map_err(|e| FilmError::io(path, "read", e))?;
+        let bytes = crate::input::read(path).map_err(|e| FilmError::io(path, "read", e))?;
         let header_start = SIGNATURE.len() + 8;
         if !bytes.starts_with(SIGNATURE) {
             let what = if bytes.is_empty() {

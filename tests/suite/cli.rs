@@ -1159,6 +1159,83 @@ fn technique_images_may_not_replace_another_file_of_the_render() {
     assert!(d.join("td/s1_t9.exr").is_file() && d.join("td/s1_t2.exr").is_file());
 }
 
+/// Runs `splitray ARGS` in `dir`, failing the test unless it exits within 60 s.
+fn splitray_within_a_minute(args: &[&str], dir: &Path) -> Output {
+    let mut child = crate::common::cli::command(args, dir)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("start splitray");
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(60);
+    while child.try_wait().unwrap().is_none() {
+        if std::time::Instant::now() > deadline {
+            child.kill().unwrap();
+            panic!("{args:?} still runs after 60 s");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    child.wait_with_output().unwrap()
+}
+
+/// A FIFO given as an input is refused at once, naming it, rather than waiting forever
+/// in open() for a writer.
+#[test]
+fn a_fifo_given_as_an_input_is_refused_at_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let fifos = [
+        "scene.toml",
+        "mesh.obj",
+        "run.ckpt",
+        "part.exr",
+        "trace.json",
+    ];
+    for name in fifos {
+        let made = std::process::Command::new("mkfifo")
+            .arg(d.join(name))
+            .status()
+            .expect("run mkfifo");
+        assert!(made.success());
+    }
+    tiny_shard(d, "1/2", "p1.exr");
+    std::fs::write(d.join("mesh.toml"), "[[mesh]]\npath = \"mesh.obj\"\n").unwrap();
+    let tiny = ["--width", "8", "--height", "8", "--spp", "1"];
+    for (args, fifo) in [
+        (&["render", "scene.toml", "-o", "a.exr"][..], "scene.toml"),
+        (&["render", "mesh.obj", "-o", "a.exr"], "mesh.obj"),
+        (&["render", "mesh.toml", "-o", "a.exr"], "mesh.obj"),
+        (
+            &["render", "--resume", "run.ckpt", "-o", "a.exr"],
+            "run.ckpt",
+        ),
+        (
+            &[
+                &["render", "--reference", "part.exr", "-o", "a.exr"][..],
+                &tiny,
+            ]
+            .concat(),
+            "part.exr",
+        ),
+        (&["merge", "part.exr", "p1.exr", "-o", "m.exr"], "part.exr"),
+        (&["timeline", "trace.json", "-o", "t.svg"], "trace.json"),
+        (
+            &["export-scene", "scene.toml", "-o", "s.json"],
+            "scene.toml",
+        ),
+    ] {
+        let out = splitray_within_a_minute(args, d);
+        let t = text(&out);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {t}");
+        assert!(
+            t.contains(fifo) && t.contains("it is a FIFO, not a regular file"),
+            "{args:?}: {t}"
+        );
+        for output in ["a.exr", "m.exr", "t.svg", "s.json"] {
+            assert!(!d.join(output).exists(), "{args:?} wrote {output}");
+        }
+    }
+}
+
 /// Output paths: an extension in any case, a file name near the file system's limit, a
 /// file where the folder should be, and write errors that name the path once.
 #[test]

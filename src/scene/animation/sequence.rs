@@ -11,7 +11,7 @@ use std::path::Path;
 
 use glam::Vec3;
 
-use crate::scene::obj::{load_obj_mesh, ObjMesh};
+use crate::scene::obj::{check_referenced_file, load_obj_mesh, ObjMesh};
 use crate::scene::{Location, SceneError, Triangle};
 
 /// A file name with one frame number in it: `{}` (the number as is) or `{:0N}` (zero-
@@ -165,15 +165,7 @@ pub fn load_sequence(
     // Every file must exist before any is parsed: a missing one is named at once.
     let files: Vec<String> = (first..=last).map(|n| pattern.file(n)).collect();
     for name in &files {
-        let full = dir.join(name);
-        if !full.is_file() {
-            return Err(SceneError::MissingReference {
-                at: at.clone(),
-                what: "mesh sequence file",
-                name: name.clone(),
-                path: full,
-            });
-        }
+        check_referenced_file(&dir.join(name), at, "mesh sequence file", name)?;
     }
     let mut first_mesh: Option<ObjMesh> = None;
     let mut shapes = Vec::with_capacity(files.len());

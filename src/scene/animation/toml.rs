@@ -10,7 +10,7 @@ use toml::Spanned;
 
 use super::sequence::{load_sequence, SequencePattern};
 use super::{pose_keyed, Keyframes, MeshMotion, Motion, Transform};
-use crate::scene::obj::{load_obj_mesh, ObjMesh};
+use crate::scene::obj::{check_referenced_file, load_obj_mesh, ObjMesh};
 use crate::scene::{validate, Camera, Location, SceneError};
 
 /// Maps a byte range of the scene file to its place (file:line:col).
@@ -209,14 +209,7 @@ impl MeshToml {
             }
             (None, None) => {
                 let full = dir.join(rel);
-                if !full.is_file() {
-                    return Err(SceneError::MissingReference {
-                        at: path_at,
-                        what: "mesh",
-                        name: rel.clone(),
-                        path: full,
-                    });
-                }
+                check_referenced_file(&full, &path_at, "mesh", rel)?;
                 (load_obj_mesh(&full)?, None)
             }
         };

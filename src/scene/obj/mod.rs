@@ -50,12 +50,36 @@ pub struct ObjMesh {
 /// at its start (a BOM is no part of the text: left in, it would hide the first
 /// keyword).
 pub(crate) fn read_text(path: &Path) -> Result<String, SceneError> {
-    std::fs::read_to_string(path)
+    crate::input::read_to_string(path)
         .map(without_byte_order_mark)
         .map_err(|error| SceneError::Io {
             path: path.to_path_buf(),
             error,
         })
+}
+
+/// Fails unless the file `name` that `at` refers to as a `what` (a mesh, a mesh sequence
+/// file), looked for at `full`, can be read: a missing file is named as the reference
+/// that is missing, one that is not a regular file (a FIFO, a folder) as such.
+pub(crate) fn check_referenced_file(
+    full: &Path,
+    at: &Location,
+    what: &'static str,
+    name: &str,
+) -> Result<(), SceneError> {
+    match crate::input::check_regular_file(full) {
+        Ok(()) => Ok(()),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Err(SceneError::MissingReference {
+            at: at.clone(),
+            what,
+            name: name.to_string(),
+            path: full.to_path_buf(),
+        }),
+        Err(error) => Err(SceneError::Io {
+            path: full.to_path_buf(),
+            error,
+        }),
+    }
 }
 
 fn without_byte_order_mark(text: String) -> String {
@@ -245,7 +269,7 @@ fn mtllib_location(libraries: &[Library], file: &str, name: &str) -> Location {
 
 /// The text of the MTL file `full` (named at `at` as `name`), pre-scanned.
 fn read_mtl(full: &Path, at: Location, name: String) -> Result<String, SceneError> {
-    match std::fs::read_to_string(full).map(without_byte_order_mark) {
+    match crate::input::read_to_string(full).map(without_byte_order_mark) {
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => Err(SceneError::MissingReference {
             at,
             what: "material library",
