@@ -855,7 +855,8 @@ fn error_against(
 
 impl PassLoop<'_, '_, '_> {
     /// Hands the film to the checkpoint hook, if there is one and its interval has passed
-    /// since the film was last saved at `saved_at`; returns when the film was last saved.
+    /// since the film was last handed to it at `saved_at`; returns when it last was (a
+    /// save that failed is tried again an interval later, as one that succeeded).
     fn save_checkpoint_if_due(
         &mut self,
         integrator: &mut dyn Integrator,
@@ -865,13 +866,22 @@ impl PassLoop<'_, '_, '_> {
         if let Some(hook) = &mut self.checkpoint {
             if elapsed_s - saved_at >= hook.every_s {
                 let sums = integrator.sums()?;
-                (hook.save)(&FilmSnapshot {
+                let saved = (hook.save)(&FilmSnapshot {
                     sums: &sums,
                     fingerprint: self.fingerprint,
                     shard: self.shard,
                     first_pass: self.first_pass,
                     render_time_s: self.previous_time_s + elapsed_s,
-                })?;
+                });
+                // A checkpoint that cannot be saved (a full disk, say) is a warning, not
+                // the end of the render: the film is still being made, the disk may have
+                // room by the next one, and the caller saves the finished film anyway.
+                if let Err(e) = saved {
+                    log::warn!(
+                        "{e}; the render goes on and saves its checkpoint again in {} s",
+                        hook.every_s
+                    );
+                }
                 return Ok(elapsed_s);
             }
         }

@@ -11,6 +11,7 @@ use std::process::ExitCode;
 use anyhow::{anyhow, bail, Context};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
+use splitray::film::ImageFiles;
 use splitray::integrator::bpt::technique_images;
 use splitray::integrator::cbpt::CameraPaths;
 use splitray::integrator::lvc::Resampling;
@@ -340,10 +341,8 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<ExitCode> {
     if result.sums.passes == 0 {
         return nothing_rendered(window_closed, stopped_by);
     }
-    let exr = write_outputs(args, &job, &result, files)?;
-    if let Some(t) = timeline {
-        t.finish(&super::timeline::command_line())?;
-    }
+    print_summary(&result, args.profile);
+    let exr = write_outputs(args, &job, &result, files, timeline)?;
     report_early_stop(stopped_by, window_closed, &result, &exr);
     Ok(exit_code(stopped_by))
 }
@@ -501,49 +500,131 @@ fn nothing_rendered(window_closed: bool, stopped_by: Option<i32>) -> anyhow::Res
     Ok(exit_code(stopped_by))
 }
 
-/// Writes the image, the technique images, the stats and the last checkpoint, and tells
-/// the user; returns the EXR's path.
+/// Writes every output of the render: the last checkpoint, the stats, the technique
+/// images, the image and the timeline, each tried whatever became of the others (a disk
+/// that filled up under one output need not cost the rest), and tells the user. Returns
+/// the EXR's path, or an error listing every output that failed.
 fn write_outputs(
     args: &RenderArgs,
     job: &RenderJob<'_>,
     result: &RenderOutput,
     files: RenderFiles,
+    timeline: Option<super::timeline::TimelineOutput>,
 ) -> anyhow::Result<PathBuf> {
     let RenderFiles {
         image,
         stats,
         checkpoint,
     } = files;
-    let written = {
-        let _span = tracing::info_span!("write outputs").entered();
-        image.write(&result.film, &result.metadata)?
-    };
+    let mut failures = Failures::default();
+    // The checkpoint first: should the image fail, the render is kept in it.
+    let saved = checkpoint.and_then(|file| failures.keep(save_last_checkpoint(file, job, result)));
+    if let Some(file) = stats {
+        failures.keep(write_stats(file, &result.stats));
+    }
     if let Some(dir) = &args.bdpt_techniques {
         let _span = tracing::info_span!("write technique images").entered();
-        write_technique_images(dir, &result.extra_images, &result.metadata)?;
+        failures.keep(write_technique_images(
+            dir,
+            &result.extra_images,
+            &result.metadata,
+        ));
     }
-    print_summary(result, args.profile);
+    let exr = failures.keep(write_image(image, result));
+    // Last, so that it shows the other outputs being written.
+    if let Some(t) = timeline {
+        failures.keep(t.finish(&super::timeline::command_line()));
+    }
+    let hint = saved.map(|checkpoint| how_to_write_the_image(&checkpoint, &job.options, result));
+    failures.outcome(exr, hint)
+}
+
+/// How to write the image again from the checkpoint just saved: resuming it writes the
+/// image once the render reaches its target; a timed render that spent its time needs a
+/// new target (resuming refuses one that adds nothing).
+fn how_to_write_the_image(
+    checkpoint: &Path,
+    options: &RenderOptions,
+    result: &RenderOutput,
+) -> String {
+    let c = checkpoint.display();
+    let resume = if result.stats.stopped_early {
+        format!("`splitray render --resume {c} -o OUT.exr` continues it to its target and writes the image")
+    } else if options.time_limit.is_some() {
+        format!(
+            "`splitray render --resume {c} --spp N -o OUT.exr`, N more than its {} spp, \
+             continues it and writes the image",
+            result.sums.spp()
+        )
+    } else {
+        format!("`splitray render --resume {c} -o OUT.exr` writes the image again")
+    };
+    format!("the render is kept in the checkpoint {c}: {resume}")
+}
+
+/// The outputs of a render that could not be written.
+#[derive(Default)]
+struct Failures(Vec<anyhow::Error>);
+
+impl Failures {
+    /// The value written, or `None` with the error kept.
+    fn keep<T>(&mut self, written: anyhow::Result<T>) -> Option<T> {
+        written.map_err(|e| self.0.push(e)).ok()
+    }
+
+    /// `Ok(exr)` where every output was written; otherwise an error naming each failure,
+    /// and, where the image is among them, `hint` (how to write it from the checkpoint
+    /// saved, if one was).
+    fn outcome(self, exr: Option<PathBuf>, hint: Option<String>) -> anyhow::Result<PathBuf> {
+        let failures = self.0;
+        let image_lost = match exr {
+            Some(exr) if failures.is_empty() => return Ok(exr),
+            written => written.is_none(),
+        };
+        let mut message = match failures.as_slice() {
+            [one] => format!("{one:#}"),
+            all => {
+                let lines: Vec<String> = all.iter().map(|e| format!("\n  {e:#}")).collect();
+                format!("{} outputs were not written:{}", all.len(), lines.concat())
+            }
+        };
+        if let (true, Some(hint)) = (image_lost, hint) {
+            message.push('\n');
+            message.push_str(&hint);
+        }
+        Err(anyhow!(message))
+    }
+}
+
+/// Saves the finished film to the checkpoint file and says how to continue it.
+fn save_last_checkpoint(
+    mut file: CheckpointFile,
+    job: &RenderJob<'_>,
+    result: &RenderOutput,
+) -> anyhow::Result<PathBuf> {
+    let path = file.save(&Checkpoint::new(
+        &job.scene_spec,
+        &job.options,
+        &result.snapshot(),
+    ))?;
+    println!(
+        "checkpoint {} holds {} spp: `splitray render --resume {} --spp N` continues it",
+        path.display(),
+        result.sums.spp(),
+        path.display()
+    );
+    Ok(path)
+}
+
+/// Writes the EXR and its PNG preview; returns the EXR's path.
+fn write_image(image: ImageFiles, result: &RenderOutput) -> anyhow::Result<PathBuf> {
+    let _span = tracing::info_span!("write outputs").entered();
+    let written = image.write(&result.film, &result.metadata)?;
     println!(
         "wrote {} and {}",
         written.exr.display(),
         written.png.display()
     );
-    if let Some(file) = stats {
-        write_stats(file, &result.stats)?;
-    }
-    if let Some(mut file) = checkpoint {
-        let path = file.save(&Checkpoint::new(
-            &job.scene_spec,
-            &job.options,
-            &result.snapshot(),
-        ))?;
-        println!(
-            "checkpoint {} holds {} spp: `splitray render --resume {} --spp N` continues it",
-            path.display(),
-            result.sums.spp(),
-            path.display()
-        );
-    }
     Ok(written.exr)
 }
 

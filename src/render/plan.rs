@@ -29,7 +29,8 @@ pub struct Resume<'a> {
 }
 
 /// Called with the film every `every_s` seconds of rendering, at a pass boundary (not
-/// after the last pass: the caller has the finished film then).
+/// after the last pass: the caller has the finished film then). A save that fails is
+/// logged as a warning and the render goes on; the next one comes `every_s` later.
 pub struct CheckpointHook<'a> {
     pub every_s: f64,
     pub save: &'a mut dyn FnMut(&FilmSnapshot<'_>) -> Result<(), RenderError>,

@@ -453,3 +453,30 @@ fn missing_truncated_corrupted_and_foreign_checkpoints_are_refused_naming_the_fi
     .unwrap();
     assert!(read_error(&d.join("notes.txt")).contains("not a splitray checkpoint"));
 }
+
+/// A periodic checkpoint that cannot be saved does not stop the render: it goes on,
+/// and the next save is tried at the next interval.
+#[test]
+fn a_failed_periodic_checkpoint_lets_the_render_go_on() {
+    let gpu = common::gpu();
+    let scene = builtin("cornell-box").unwrap();
+    let opts = common::small_render_options(&scene, IntegratorKind::Ao, 5);
+    let mut offered: Vec<u32> = Vec::new();
+    let mut hook = |s: &FilmSnapshot<'_>| -> Result<(), RenderError> {
+        offered.push(s.sums.passes);
+        match offered.len() {
+            1 => Err(RenderError::from(splitray::film::FilmError::Io {
+                path: "full/disk.ckpt".into(),
+                op: "write",
+                error: std::io::Error::other("No space left on device"),
+            })),
+            _ => Ok(()),
+        }
+    };
+    let whole = checkpointed(&gpu, &scene, &opts, &mut hook);
+    assert_eq!(whole.sums.passes, 5);
+    // `ao` renders one pass per batch: offered after each but the last, the failure
+    // included.
+    assert_eq!(offered, [1, 2, 3, 4]);
+    common::assert_clean(&gpu);
+}

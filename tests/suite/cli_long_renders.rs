@@ -564,3 +564,107 @@ fn cbpt_auto_populations_resume_and_are_refused_for_shards() {
     );
     assert!(!d.join("s0.exr").exists());
 }
+
+/// Waits until a temporary file of `name` exists in `dir`: the command has checked its
+/// outputs and is at work.
+fn wait_for_temporary(dir: &Path, name: &str) {
+    let prefix = format!(".{name}.tmp-");
+    let deadline = Instant::now() + Duration::from_secs(120);
+    while !temporaries(dir).iter().any(|n| n.starts_with(&prefix)) {
+        assert!(Instant::now() < deadline, "no temporary file of {name}");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+}
+
+/// An image that cannot be written at the end (a folder took its path during the render)
+/// costs neither the checkpoint nor the stats; the error names it and says how to write
+/// the image from the checkpoint, which does.
+#[test]
+fn an_image_that_cannot_be_written_keeps_the_other_outputs() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let args = [
+        "render",
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--spp",
+        "1000000",
+        "--time",
+        "1",
+        "-o",
+        "img.exr",
+        "--checkpoint",
+        "run.ckpt",
+        "--stats",
+        "st.json",
+    ];
+    let render = Running::start(&args, d);
+    wait_for_temporary(d, "img.exr");
+    std::fs::create_dir(d.join("img.exr")).unwrap();
+    let (code, stderr) = render.finish();
+    assert_eq!(code, Some(1), "{stderr}");
+    assert!(stderr.contains("error: img.exr: cannot rename"), "{stderr}");
+    let held = Checkpoint::read(d.join("run.ckpt")).unwrap().header.passes;
+    assert!(held > 0 && d.join("st.json").is_file(), "{stderr}");
+    let hint = "`splitray render --resume run.ckpt --spp N -o OUT.exr`";
+    assert!(stderr.contains(hint), "{stderr}");
+    assert!(temporaries(d).is_empty(), "{:?}", temporaries(d));
+    let more = (held + 1).to_string();
+    let out = splitray(
+        &[
+            "render",
+            "--resume",
+            "run.ckpt",
+            "--spp",
+            &more,
+            "-o",
+            "again.exr",
+        ],
+        d,
+    );
+    assert!(out.status.success(), "{}", text(&out));
+    assert_eq!(read_exr(d.join("again.exr")).unwrap().1.spp, held + 1);
+}
+
+/// A periodic checkpoint that cannot be saved is a warning naming the file: the render
+/// goes on to its target and writes its image; the last checkpoint's failure is the
+/// command's error.
+#[test]
+fn a_checkpoint_that_cannot_be_saved_warns_and_the_render_goes_on() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let args = [
+        "render",
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--spp",
+        "1000000",
+        "--time",
+        "1.5",
+        "-o",
+        "img.exr",
+        "--checkpoint",
+        "run.ckpt",
+        "--checkpoint-every",
+        "0",
+    ];
+    let render = Running::start(&args, d);
+    wait_for_temporary(d, "run.ckpt");
+    std::fs::create_dir(d.join("run.ckpt")).unwrap();
+    let (code, stderr) = render.finish();
+    assert_eq!(code, Some(1), "{stderr}");
+    assert!(
+        stderr.contains("run.ckpt: cannot rename its temporary file over it")
+            && stderr.contains("the render goes on"),
+        "{stderr}"
+    );
+    let last = stderr.lines().find(|l| l.starts_with("error: ")).unwrap();
+    assert!(last.contains("run.ckpt"), "{stderr}");
+    let (_, meta) = read_exr(d.join("img.exr")).unwrap();
+    assert!(meta.spp > 1, "{stderr}");
+    assert!(temporaries(d).is_empty(), "{:?}", temporaries(d));
+}
