@@ -80,15 +80,16 @@ pub enum Command {
 }
 
 /// Runs a command; the exit code is not 0 only for a render a signal stopped (errors
-/// come back as `Err`).
+/// come back as `Err`; a signal ends the other commands that write files at once, with
+/// 128 + its number, leaving no temporary file).
 pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
     match cli.command {
         Command::Info(args) => info::run(&args),
         Command::Render(args) => return render::run(&args),
-        Command::Merge(args) => merge::run(&args),
-        Command::Bench(args) => bench::run(&args),
-        Command::Timeline(args) => timeline::run(&args),
-        Command::ExportScene(args) => export::run(&args),
+        Command::Merge(args) => exiting_at_a_signal(|| merge::run(&args)),
+        Command::Bench(args) => exiting_at_a_signal(|| bench::run(&args)),
+        Command::Timeline(args) => exiting_at_a_signal(|| timeline::run(&args)),
+        Command::ExportScene(args) => exiting_at_a_signal(|| export::run(&args)),
         Command::Scenes => {
             for (name, description) in splitray::scene::builtin_names() {
                 println!("{name:<14} {description}");
@@ -97,6 +98,14 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         }
     }
     .map(|()| ExitCode::SUCCESS)
+}
+
+/// Runs `command`, which writes its outputs atomically but has nothing worth finishing
+/// once stopped: a signal exits at once, removing its temporary files
+/// ([`signals::exit_at_first_signal`]).
+fn exiting_at_a_signal(command: impl FnOnce() -> anyhow::Result<()>) -> anyhow::Result<()> {
+    signals::exit_at_first_signal()?;
+    command()
 }
 
 /// `--max-depth` as Mitsuba takes it: -1 (unbounded) or a depth of 0 or more. Anything

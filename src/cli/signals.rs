@@ -1,4 +1,5 @@
-//! SIGINT and SIGTERM during a render (through `signal-hook`).
+//! SIGINT and SIGTERM (through `signal-hook`): during a render, and during the other
+//! commands that write files.
 //!
 //! The first one asks the render to stop: the pass loop asks before every batch of
 //! passes, so the work in flight finishes, and the image (with the samples it reached),
@@ -10,6 +11,10 @@
 //! purpose: waiting for a submission in flight, or a driver's exit handlers, is exactly
 //! what "at once" rules out; the kernel reclaims the device's memory with the process.
 //! Outputs already renamed into place are complete; none is ever left half-written.
+//!
+//! The other commands that write files (merge, bench, timeline, export-scene) have no
+//! partial result worth keeping: [`exit_at_first_signal`] makes the first signal exit at
+//! once in the same way.
 
 use std::sync::atomic::{AtomicI32, Ordering};
 use std::sync::Arc;
@@ -46,7 +51,7 @@ impl StopSignals {
                             name(signal)
                         );
                     } else {
-                        exit_at_once(signal);
+                        exit_at_once(signal, " again");
                     }
                 }
             })
@@ -76,10 +81,28 @@ pub fn name(signal: i32) -> &'static str {
     }
 }
 
-fn exit_at_once(signal: i32) -> ! {
+/// Handles SIGINT and SIGTERM from here on, on a thread of its own: the first one exits
+/// at once, removing every temporary output file, with 128 + its number.
+pub fn exit_at_first_signal() -> anyhow::Result<()> {
+    let mut signals =
+        Signals::new([SIGINT, SIGTERM]).context("cannot install the signal handlers")?;
+    std::thread::Builder::new()
+        .name("signals".into())
+        .spawn(move || {
+            if let Some(signal) = signals.forever().next() {
+                exit_at_once(signal, "");
+            }
+        })
+        .context("cannot start the signal thread")?;
+    Ok(())
+}
+
+/// Removes every temporary output file and exits with 128 + `signal`, saying so (the
+/// signal's name, then `again` where it is the second one).
+fn exit_at_once(signal: i32, again: &str) -> ! {
     let discarded = splitray::film::discard_all_temporaries();
     eprintln!(
-        "{} again: exiting at once; {} unfinished output file(s) removed",
+        "{}{again}: exiting at once; {} unfinished output file(s) removed",
         name(signal),
         discarded.removed.len()
     );

@@ -668,3 +668,25 @@ fn a_checkpoint_that_cannot_be_saved_warns_and_the_render_goes_on() {
     assert!(meta.spp > 1, "{stderr}");
     assert!(temporaries(d).is_empty(), "{:?}", temporaries(d));
 }
+
+/// A signal ends a command other than render at once, removing its temporary files.
+#[test]
+fn a_signal_ends_a_bench_at_once_leaving_no_temporary_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let args = [
+        "bench",
+        "primitives",
+        "--timeline",
+        "t.json",
+        "--json",
+        "b.json",
+    ];
+    let mut bench = Running::start(&args, d);
+    wait_for_temporary(d, "t.json");
+    bench.signal("TERM");
+    bench.wait_for_line("SIGTERM: exiting at once; 1 unfinished output file(s) removed");
+    let (code, stderr) = bench.finish();
+    assert_eq!(code, Some(143), "{stderr}");
+    assert!(outputs(d).is_empty(), "{:?}", outputs(d));
+}
