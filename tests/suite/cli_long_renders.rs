@@ -583,23 +583,9 @@ fn wait_for_temporary(dir: &Path, name: &str) {
 fn an_image_that_cannot_be_written_keeps_the_other_outputs() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let args = [
-        "render",
-        "--width",
-        "16",
-        "--height",
-        "16",
-        "--spp",
-        "1000000",
-        "--time",
-        "1",
-        "-o",
-        "img.exr",
-        "--checkpoint",
-        "run.ckpt",
-        "--stats",
-        "st.json",
-    ];
+    let args = "render --width 16 --height 16 --spp 1000000 --time 1 -o img.exr \
+                --checkpoint run.ckpt --stats st.json";
+    let args: Vec<&str> = args.split_whitespace().collect();
     let render = Running::start(&args, d);
     wait_for_temporary(d, "img.exr");
     std::fs::create_dir(d.join("img.exr")).unwrap();
@@ -635,23 +621,9 @@ fn an_image_that_cannot_be_written_keeps_the_other_outputs() {
 fn a_checkpoint_that_cannot_be_saved_warns_and_the_render_goes_on() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let args = [
-        "render",
-        "--width",
-        "16",
-        "--height",
-        "16",
-        "--spp",
-        "1000000",
-        "--time",
-        "1.5",
-        "-o",
-        "img.exr",
-        "--checkpoint",
-        "run.ckpt",
-        "--checkpoint-every",
-        "0",
-    ];
+    let args = "render --width 16 --height 16 --spp 1000000 --time 1.5 -o img.exr \
+                --checkpoint run.ckpt --checkpoint-every 0";
+    let args: Vec<&str> = args.split_whitespace().collect();
     let render = Running::start(&args, d);
     wait_for_temporary(d, "run.ckpt");
     std::fs::create_dir(d.join("run.ckpt")).unwrap();

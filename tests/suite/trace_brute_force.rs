@@ -154,27 +154,13 @@ fn nan_infinite_and_zero_rays_miss_like_the_cpu_twin() {
 #[test]
 fn coincident_triangles_resolve_to_the_smallest_index() {
     let gpu = common::gpu();
-    let tri = GpuTriangle::new([
-        Vec3::new(0.1, 0.1, 0.5),
-        Vec3::new(0.9, 0.1, 0.5),
-        Vec3::new(0.5, 0.9, 0.5),
-    ]);
-    let mut tris = common::triangle_soup(500, 11);
-    let first = tris.len() as u32;
-    tris.extend(std::iter::repeat_n(tri, 1000));
-    let mut rays: Vec<Ray> = (0..400)
-        .map(|i| {
-            let (x, y) = (0.3 + 0.001 * i as f32, 0.3 + 0.0005 * (i % 7) as f32);
-            let dir = if i % 2 == 0 { Vec3::Z } else { -Vec3::Z };
-            Ray::new(Vec3::new(x, y, 0.5 - dir.z * 1.5), dir, 0.0, f32::INFINITY)
-        })
-        .collect();
+    let (tris, first) = common::soup_with_coincident_copies();
+    let mut rays = common::rays_through_the_copies(400);
     let want = cpu::closest_hits(&rays, &tris);
     let soup_hits = cpu::closest_hits(&rays, &tris[..first as usize]);
     for (i, (h, s)) in want.iter().zip(&soup_hits).enumerate() {
-        // Either a soup triangle in front of the copies, or the first copy.
         assert!(
-            h.triangle == first || (s.is_hit() && s.t <= 1.5 && h == s),
+            common::is_the_first_copy_or_in_front(h, s, first),
             "ray {i}: the CPU twin hit {h:?}"
         );
     }

@@ -447,14 +447,7 @@ fn tiny_huge_and_far_offset_coordinates() {
 fn coincident_triangles_resolve_to_the_smallest_index() {
     // A thousand copies of one triangle (a deep, degenerate tree) among a soup: a ray
     // through them must report the first copy.
-    let tri = GpuTriangle::new([
-        Vec3::new(0.1, 0.1, 0.5),
-        Vec3::new(0.9, 0.1, 0.5),
-        Vec3::new(0.5, 0.9, 0.5),
-    ]);
-    let mut tris = common::triangle_soup(500, 11);
-    let first = tris.len() as u32;
-    tris.extend(std::iter::repeat_n(tri, 1000));
+    let (tris, first) = common::soup_with_coincident_copies();
     let bvh = CpuBvh::new(&tris);
     // Deeper than the traversal stack kept on the thread's stack (32 entries).
     assert!(bvh.depth() > 32, "depth {}", bvh.depth());

@@ -82,6 +82,23 @@ impl Draws {
     }
 }
 
+/// What shading at a hit works with: the hit, its shading frame and BSDF, the direction
+/// back along the path in that frame, and the path's random numbers at this bounce.
+struct Shading<'s> {
+    hit: &'s SurfaceHit,
+    frame: Frame,
+    bsdf: &'s BsdfParams,
+    wo: Vec3,
+    bounce: u32,
+    draws: Draws,
+}
+
+impl Shading<'_> {
+    fn draw(&self, k: u32) -> f32 {
+        self.draws.get(dim(self.bounce, k))
+    }
+}
+
 /// A shadow ray and the contribution it carries if it arrives.
 struct NextEvent {
     ray: Ray,
@@ -159,16 +176,22 @@ impl<'a> PathTwin<'a> {
         }
         let material = &self.scene.tables.materials[hit.material as usize];
         let frame = Frame::from_normal(hit.ns);
-        let bsdf = self.scene.bsdf(hit.material);
-        let wo = frame.to_local(-dir);
+        let at = Shading {
+            hit,
+            frame,
+            bsdf: self.scene.bsdf(hit.material),
+            wo: frame.to_local(-dir),
+            bounce,
+            draws,
+        };
         let lights = &self.scene.tables.lights;
         if flags.nee && !lights.lights.is_empty() && material.all_delta == 0 {
-            let event = self.next_event(s, hit, &frame, bsdf, wo, bounce, draws);
+            let event = self.next_event(s, &at);
             if let Some(e) = event.filter(|e| !self.scene.bvh.occluded(&e.ray)) {
                 s.radiance += e.contribution;
             }
         }
-        self.bsdf_step(s, hit, &frame, bsdf, wo, bounce, draws)
+        self.bsdf_step(s, &at)
     }
 
     /// Which estimators count: next-event estimation, BSDF sampling, both (MIS).
@@ -209,31 +232,20 @@ impl<'a> PathTwin<'a> {
 
     /// Step 2 of shade.comp: a light chosen by power, a point on it, and the shadow
     /// ray with its unoccluded contribution; `None` where it contributes nothing.
-    #[allow(clippy::too_many_arguments)]
-    fn next_event(
-        &self,
-        s: &State,
-        hit: &SurfaceHit,
-        frame: &Frame,
-        bsdf: &BsdfParams,
-        wo: Vec3,
-        bounce: u32,
-        draws: Draws,
-    ) -> Option<NextEvent> {
+    fn next_event(&self, s: &State, at: &Shading) -> Option<NextEvent> {
         let table = &self.scene.tables.lights;
-        let u = draws.get(dim(bounce, DIM_LIGHT_SELECT));
+        let u = at.draw(DIM_LIGHT_SELECT);
         // `pick_light`: the first light whose cumulative probability exceeds u.
         let index = table
             .cdf
             .partition_point(|&c| c <= u)
             .min(table.cdf.len() - 1);
         let light = &table.lights[index];
-        let u1 = draws.get(dim(bounce, DIM_LIGHT_U));
-        let u2 = draws.get(dim(bounce, DIM_LIGHT_V));
+        let (u1, u2) = (at.draw(DIM_LIGHT_U), at.draw(DIM_LIGHT_V));
         let pmf = light.emission_pmf[3];
         let p0 = Vec3::from_slice(&light.p0_type[..3]);
         let emitted = Vec3::from_slice(&light.emission_pmf[..3]);
-        let x = hit.p;
+        let x = at.hit.p;
         let delta_light = light.p0_type[3].to_bits() == LIGHT_POINT;
         let (target, le, pdf_light) = if delta_light {
             let dist = (p0 - x).length();
@@ -260,18 +272,18 @@ impl<'a> PathTwin<'a> {
         }
         let to = target - x;
         let wi_world = to / to.length();
-        let wi = frame.to_local(wi_world);
-        let f = bsdf.eval(wo, wi, TransportMode::Radiance) * wi.z.abs();
+        let wi = at.frame.to_local(wi_world);
+        let f = at.bsdf.eval(at.wo, wi, TransportMode::Radiance) * wi.z.abs();
         if !positive(f.x + f.y + f.z) {
             return None;
         }
         let flags = self.flags();
         let mut w = 1.0;
         if !delta_light && flags.nee && flags.bsdf {
-            w = power_heuristic(pdf_light, bsdf.pdf(wo, wi, TransportMode::Radiance));
+            w = power_heuristic(pdf_light, at.bsdf.pdf(at.wo, wi, TransportMode::Radiance));
         }
         let contribution = s.beta * f * le * (w / pdf_light);
-        let origin = self.scene.offset(x, hit.ng, wi_world);
+        let origin = self.scene.offset(x, at.hit.ng, wi_world);
         let reach = (target - origin).length();
         let ray = Ray::new(origin, (target - origin) / reach, 0.0, reach * (1.0 - 1e-4));
         Some(NextEvent { ray, contribution })
@@ -279,19 +291,9 @@ impl<'a> PathTwin<'a> {
 
     /// Steps 3 and 4 of shade.comp: BSDF sampling and Russian roulette; the next ray
     /// where the path lives on.
-    #[allow(clippy::too_many_arguments)]
-    fn bsdf_step(
-        &self,
-        s: &mut State,
-        hit: &SurfaceHit,
-        frame: &Frame,
-        bsdf: &BsdfParams,
-        wo: Vec3,
-        bounce: u32,
-        draws: Draws,
-    ) -> Option<(Vec3, Vec3)> {
-        let u = [DIM_BSDF_C, DIM_BSDF_U, DIM_BSDF_V].map(|k| draws.get(dim(bounce, k)));
-        let sample = bsdf.sample(wo, u, TransportMode::Radiance)?;
+    fn bsdf_step(&self, s: &mut State, at: &Shading) -> Option<(Vec3, Vec3)> {
+        let u = [DIM_BSDF_C, DIM_BSDF_U, DIM_BSDF_V].map(|k| at.draw(k));
+        let sample = at.bsdf.sample(at.wo, u, TransportMode::Radiance)?;
         if !positive(sample.pdf) {
             return None;
         }
@@ -300,18 +302,18 @@ impl<'a> PathTwin<'a> {
         s.eta2 *= sample.eta * sample.eta;
         s.prev_pdf = sample.pdf;
         s.prev_delta = sample.flags.is_specular();
-        let wi_world = frame.to_world(sample.wi).normalize();
+        let wi_world = at.frame.to_world(sample.wi).normalize();
         let beta_max = s.beta.max_element();
         let mut live = beta_max > 0.0;
         if live && s.depth >= self.options.rr_depth {
             let q = (beta_max * s.eta2).min(0.95);
-            if draws.get(dim(bounce, DIM_RR)) < q {
+            if at.draw(DIM_RR) < q {
                 s.beta /= q;
             } else {
                 live = false;
             }
         }
-        live.then(|| (self.scene.offset(hit.p, hit.ng, wi_world), wi_world))
+        live.then(|| (self.scene.offset(at.hit.p, at.hit.ng, wi_world), wi_world))
     }
 }
 

@@ -196,6 +196,46 @@ pub fn random_rays(n: usize, seed: u64) -> Vec<splitray::trace::Ray> {
         .collect()
 }
 
+/// A soup of 500 triangles followed by a thousand copies of one triangle in the plane
+/// z = 0.5, and the index of the first copy: a degenerate hierarchy, where every hit on
+/// a copy ties at equal t and must go to the first.
+pub fn soup_with_coincident_copies() -> (Vec<splitray::trace::GpuTriangle>, u32) {
+    use glam::Vec3;
+    let tri = splitray::trace::GpuTriangle::new([
+        Vec3::new(0.1, 0.1, 0.5),
+        Vec3::new(0.9, 0.1, 0.5),
+        Vec3::new(0.5, 0.9, 0.5),
+    ]);
+    let mut tris = triangle_soup(500, 11);
+    let first = tris.len() as u32;
+    tris.extend(std::iter::repeat_n(tri, 1000));
+    (tris, first)
+}
+
+/// `n` rays through the copies of [`soup_with_coincident_copies`], alternately from
+/// either side of their plane.
+pub fn rays_through_the_copies(n: usize) -> Vec<splitray::trace::Ray> {
+    use glam::Vec3;
+    (0..n)
+        .map(|i| {
+            let (x, y) = (0.3 + 0.001 * i as f32, 0.3 + 0.0005 * (i % 7) as f32);
+            let dir = if i % 2 == 0 { Vec3::Z } else { -Vec3::Z };
+            splitray::trace::Ray::new(Vec3::new(x, y, 0.5 - dir.z * 1.5), dir, 0.0, f32::INFINITY)
+        })
+        .collect()
+}
+
+/// Whether `hit`, of a ray of [`rays_through_the_copies`], is the first copy, or the
+/// soup triangle `soup_hit` the ray meets in front of the copies (1.5 away).
+pub fn is_the_first_copy_or_in_front(
+    hit: &splitray::trace::Hit,
+    soup_hit: &splitray::trace::Hit,
+    first: u32,
+) -> bool {
+    hit.triangle == first
+        || (soup_hit.is_hit() && soup_hit.t <= 1.5 && hit.triangle == soup_hit.triangle)
+}
+
 /// `tris` scaled by `s` about the origin, then moved by `offset`.
 pub fn scale_scene(
     tris: &[splitray::trace::GpuTriangle],
