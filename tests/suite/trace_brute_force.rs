@@ -105,6 +105,7 @@ fn assert_like_the_cpu_twin(
             batch: 7,
         }),
     ];
+    let occluded: Vec<bool> = rays.iter().map(|r| cpu::occluded(r, triangles)).collect();
     for tuning in tunings {
         let mut tracer = match tuning {
             None => BruteForceTracer::new(gpu, triangles),
@@ -115,21 +116,7 @@ fn assert_like_the_cpu_twin(
         let hits = common::trace_hits(gpu, &mut tracer, rays, Query::ClosestHit);
         common::assert_same_hits(&hits, &want, &what);
         let occ = common::trace_hits(gpu, &mut tracer, rays, Query::Occlusion);
-        for (i, r) in rays.iter().enumerate() {
-            if misses[i] {
-                assert_eq!(
-                    bytemuck::bytes_of(&hits[i]),
-                    bytemuck::bytes_of(&Hit::NONE),
-                    "{what}: ray {i} {r:?} gave {:?}",
-                    hits[i]
-                );
-            }
-            assert_eq!(
-                occ[i].is_hit(),
-                cpu::occluded(r, triangles),
-                "{what}: occlusion of ray {i} {r:?}"
-            );
-        }
+        common::assert_misses_and_occlusion(rays, &hits, &occ, misses, &occluded, &what);
     }
 }
 

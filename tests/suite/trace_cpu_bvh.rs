@@ -385,30 +385,7 @@ fn nan_infinite_and_zero_rays_miss_without_panicking() {
     let soup = common::triangle_soup(300, 12);
     let bvh = CpuBvh::new(&soup);
     let good = Ray::new(Vec3::new(0.5, 0.5, -1.0), Vec3::Z, 0.0, f32::INFINITY);
-    let mut rays = Vec::new();
-    for bad in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
-        for k in 0..3 {
-            let mut r = good;
-            r.origin[k] = bad;
-            rays.push(r);
-            let mut r = good;
-            r.dir[k] = bad;
-            rays.push(r);
-        }
-    }
-    let mut r = good;
-    r.tmin = f32::NAN;
-    rays.push(r);
-    let mut r = good;
-    r.tmax = f32::NAN;
-    rays.push(r);
-    rays.push(Ray::new(Vec3::splat(0.5), Vec3::ZERO, 0.0, f32::INFINITY));
-    rays.push(Ray::new(
-        Vec3::splat(0.5),
-        Vec3::ZERO,
-        f32::NEG_INFINITY,
-        1.0,
-    ));
+    let rays = common::rays_that_miss(good);
     for r in &rays {
         assert!(!bvh.closest_hit(r).is_hit(), "{r:?}");
         assert!(!bvh.occluded(r), "{r:?}");

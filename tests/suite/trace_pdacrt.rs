@@ -72,21 +72,7 @@ fn check_with_cpu(
         common::assert_same_hits(&hits, &oracle, what);
         common::assert_same_hits(&hits, &want, &format!("{what}: against the CPU twin"));
         let occ = common::trace_hits(gpu, &mut tracer, rays, Query::Occlusion);
-        for (i, r) in rays.iter().enumerate() {
-            if misses[i] {
-                assert_eq!(
-                    bytemuck::bytes_of(&hits[i]),
-                    bytemuck::bytes_of(&Hit::NONE),
-                    "{what}: ray {i} {r:?} gave {:?}",
-                    hits[i]
-                );
-            }
-            assert_eq!(
-                occ[i].is_hit(),
-                occluded[i],
-                "{what}: occlusion of ray {i} {r:?}"
-            );
-        }
+        common::assert_misses_and_occlusion(rays, &hits, &occ, misses, &occluded, what);
         all_hits.push(hits);
     }
     all_hits

@@ -236,6 +236,34 @@ pub fn is_the_first_copy_or_in_front(
         || (soup_hit.is_hit() && soup_hit.t <= 1.5 && hit.triangle == soup_hit.triangle)
 }
 
+/// Checks a tracer's answers for `rays`: each ray marked in `misses` gave exactly
+/// [`splitray::trace::Hit::NONE`] (no NaN barycentrics, no t), and every occlusion
+/// answer `occ` is the CPU twin's `occluded`.
+pub fn assert_misses_and_occlusion(
+    rays: &[splitray::trace::Ray],
+    hits: &[splitray::trace::Hit],
+    occ: &[splitray::trace::Hit],
+    misses: &[bool],
+    occluded: &[bool],
+    what: &str,
+) {
+    for (i, r) in rays.iter().enumerate() {
+        if misses[i] {
+            assert_eq!(
+                bytemuck::bytes_of(&hits[i]),
+                bytemuck::bytes_of(&splitray::trace::Hit::NONE),
+                "{what}: ray {i} {r:?} gave {:?}",
+                hits[i]
+            );
+        }
+        assert_eq!(
+            occ[i].is_hit(),
+            occluded[i],
+            "{what}: occlusion of ray {i} {r:?}"
+        );
+    }
+}
+
 /// `tris` scaled by `s` about the origin, then moved by `offset`.
 pub fn scale_scene(
     tris: &[splitray::trace::GpuTriangle],
