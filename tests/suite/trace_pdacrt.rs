@@ -163,11 +163,7 @@ fn tiny_huge_and_far_offset_scenes_match_the_cpu_twin() {
     let soup = common::triangle_soup(600, 41);
     let rays = common::random_rays(2000, 42);
     let want = cpu::closest_hits(&rays, &soup);
-    for (scale, offset) in [
-        (1e-6f32, Vec3::ZERO),
-        (1e6, Vec3::ZERO),
-        (1.0, Vec3::new(300.0, -200.0, 100.0)),
-    ] {
+    for (scale, offset) in common::SCALES_AND_OFFSETS {
         let tris = common::scale_scene(&soup, scale, offset);
         let scaled_rays = common::scale_rays(&rays, scale, offset);
         let what = format!("scale {scale}, offset {offset}");

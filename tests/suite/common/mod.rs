@@ -264,6 +264,14 @@ pub fn assert_misses_and_occlusion(
     }
 }
 
+/// The (scale, offset) pairs of [`scale_scene`] that tracers are checked at: shrunk to
+/// 1e-6, grown to 1e6, and moved far from the origin.
+pub const SCALES_AND_OFFSETS: [(f32, glam::Vec3); 3] = [
+    (1e-6, glam::Vec3::ZERO),
+    (1e6, glam::Vec3::ZERO),
+    (1.0, glam::Vec3::new(300.0, -200.0, 100.0)),
+];
+
 /// `tris` scaled by `s` about the origin, then moved by `offset`.
 pub fn scale_scene(
     tris: &[splitray::trace::GpuTriangle],
