@@ -4,10 +4,13 @@
 //! Only regular files are opened: a FIFO's `open` blocks until a writer comes, perhaps
 //! never, and the process stuck in it does not even reach the signal handling that would
 //! let it stop; a folder or a device is no input either. The check reads the path's
-//! metadata, which never blocks, so a wrong path fails at once, naming what it is.
+//! metadata, which never blocks, so a wrong path fails at once, naming what it is. The
+//! path is then opened without blocking (`O_NONBLOCK`, which reads of a regular file
+//! ignore) and the opened file's own metadata checked again: a file replaced by a FIFO
+//! between the two is refused as well, not waited on.
 
 use std::fs::File;
-use std::io;
+use std::io::{self, Read};
 use std::path::Path;
 
 /// Fails unless `path` (followed through symbolic links) is a regular file; the error
@@ -47,20 +50,44 @@ fn describe(kind: &std::fs::FileType) -> &'static str {
 
 /// [`File::open`] of a regular file only.
 pub fn open(path: &Path) -> io::Result<File> {
+    // The path's metadata first: opening a device can itself have effects.
     check_regular_file(path)?;
-    File::open(path)
+    open_without_blocking(path)
+}
+
+/// Opens `path` for reading without waiting for a FIFO's writer, and fails unless what
+/// was opened is a regular file (the check of the open file, so no race with a rename).
+fn open_without_blocking(path: &Path) -> io::Result<File> {
+    let mut options = std::fs::OpenOptions::new();
+    options.read(true);
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::OpenOptionsExt;
+        options.custom_flags(libc::O_NONBLOCK);
+    }
+    let file = options.open(path)?;
+    let kind = file.metadata()?.file_type();
+    if kind.is_file() {
+        return Ok(file);
+    }
+    Err(io::Error::new(
+        io::ErrorKind::InvalidInput,
+        format!("it is {}, not a regular file", describe(&kind)),
+    ))
 }
 
 /// [`std::fs::read`] of a regular file only.
 pub fn read(path: &Path) -> io::Result<Vec<u8>> {
-    check_regular_file(path)?;
-    std::fs::read(path)
+    let mut bytes = Vec::new();
+    open(path)?.read_to_end(&mut bytes)?;
+    Ok(bytes)
 }
 
 /// [`std::fs::read_to_string`] of a regular file only.
 pub fn read_to_string(path: &Path) -> io::Result<String> {
-    check_regular_file(path)?;
-    std::fs::read_to_string(path)
+    let mut text = String::new();
+    open(path)?.read_to_string(&mut text)?;
+    Ok(text)
 }
 
 #[cfg(test)]
@@ -82,5 +109,22 @@ mod tests {
         );
         let missing = read(&dir.path().join("missing")).unwrap_err();
         assert_eq!(missing.kind(), io::ErrorKind::NotFound);
+    }
+
+    /// A FIFO that takes the place of a checked file before it is opened: the open
+    /// neither waits for a writer nor returns the FIFO.
+    #[cfg(unix)]
+    #[test]
+    fn a_fifo_behind_the_check_is_refused_without_waiting() {
+        let dir = tempfile::tempdir().unwrap();
+        let fifo = dir.path().join("scene.toml");
+        let made = std::process::Command::new("mkfifo")
+            .arg(&fifo)
+            .status()
+            .expect("run mkfifo");
+        assert!(made.success());
+        let error = open_without_blocking(&fifo).unwrap_err();
+        assert_eq!(error.to_string(), "it is a FIFO, not a regular file");
+        assert_eq!(error.kind(), io::ErrorKind::InvalidInput);
     }
 }
