@@ -25,7 +25,7 @@ use splitray::trace::TracerKind;
 use splitray::vk::{Gpu, GpuDesc, InstanceDesc};
 
 use super::paths::{check_output, refuse_clashing_paths, same_file, Role};
-use super::render_files::{write_stats, CheckpointFile, RenderFiles};
+use super::render_files::{write_stats, CheckpointFile, Failures, RenderFiles};
 use super::signals::{self, StopSignals};
 use options::{parse_shard, render_options};
 
@@ -560,40 +560,6 @@ fn how_to_write_the_image(
         format!("`splitray render --resume {c} -o OUT.exr` writes the image again")
     };
     format!("the render is kept in the checkpoint {c}: {resume}")
-}
-
-/// The outputs of a render that could not be written.
-#[derive(Default)]
-struct Failures(Vec<anyhow::Error>);
-
-impl Failures {
-    /// The value written, or `None` with the error kept.
-    fn keep<T>(&mut self, written: anyhow::Result<T>) -> Option<T> {
-        written.map_err(|e| self.0.push(e)).ok()
-    }
-
-    /// `Ok(exr)` where every output was written; otherwise an error naming each failure,
-    /// and, where the image is among them, `hint` (how to write it from the checkpoint
-    /// saved, if one was).
-    fn outcome(self, exr: Option<PathBuf>, hint: Option<String>) -> anyhow::Result<PathBuf> {
-        let failures = self.0;
-        let image_lost = match exr {
-            Some(exr) if failures.is_empty() => return Ok(exr),
-            written => written.is_none(),
-        };
-        let mut message = match failures.as_slice() {
-            [one] => format!("{one:#}"),
-            all => {
-                let lines: Vec<String> = all.iter().map(|e| format!("\n  {e:#}")).collect();
-                format!("{} outputs were not written:{}", all.len(), lines.concat())
-            }
-        };
-        if let (true, Some(hint)) = (image_lost, hint) {
-            message.push('\n');
-            message.push_str(&hint);
-        }
-        Err(anyhow!(message))
-    }
 }
 
 /// Saves the finished film to the checkpoint file and says how to continue it.

@@ -2,11 +2,12 @@
 //! temporary file exists before the scene goes to the GPU, so a path that cannot be
 //! written fails at once instead of after the render. Until they are written, the
 //! temporary files stay open; a render that fails or is stopped removes them (they are
-//! [`AtomicFile`]s), so no partial output is ever left behind.
+//! [`AtomicFile`]s), so no partial output is ever left behind. [`Failures`] collects
+//! the outputs that could not be written at the end, a still's or a sequence's.
 
 use std::path::{Path, PathBuf};
 
-use anyhow::Context;
+use anyhow::{anyhow, Context};
 use splitray::film::{AtomicFile, FilmError, ImageFiles};
 use splitray::render::{Checkpoint, RenderError};
 
@@ -68,5 +69,45 @@ impl CheckpointFile {
             None => AtomicFile::create(&self.path)?,
         };
         checkpoint.write(file)
+    }
+}
+
+/// The outputs of a render that could not be written: each output is tried whatever
+/// became of the others (a disk that filled up under one need not cost the rest), and
+/// the error lists them all.
+#[derive(Default)]
+pub struct Failures(Vec<anyhow::Error>);
+
+impl Failures {
+    /// The value written, or `None` with the error kept.
+    pub fn keep<T>(&mut self, written: anyhow::Result<T>) -> Option<T> {
+        written.map_err(|e| self.0.push(e)).ok()
+    }
+
+    /// `Ok` where every output was written; otherwise an error naming each failure,
+    /// then `hint` (what the user can do about them), if any.
+    pub fn check(self, hint: Option<String>) -> anyhow::Result<()> {
+        let mut message = match self.0.as_slice() {
+            [] => return Ok(()),
+            [one] => format!("{one:#}"),
+            all => {
+                let lines: Vec<String> = all.iter().map(|e| format!("\n  {e:#}")).collect();
+                format!("{} outputs were not written:{}", all.len(), lines.concat())
+            }
+        };
+        if let Some(hint) = hint {
+            message.push('\n');
+            message.push_str(&hint);
+        }
+        Err(anyhow!(message))
+    }
+
+    /// `Ok(exr)` where every output was written; otherwise [`Failures::check`]'s error,
+    /// with `hint` (how to write the image from the checkpoint saved, if one was) where
+    /// the image is among the failures.
+    pub fn outcome(self, exr: Option<PathBuf>, hint: Option<String>) -> anyhow::Result<PathBuf> {
+        let image_lost = exr.is_none();
+        self.check(hint.filter(|_| image_lost))?;
+        exr.ok_or_else(|| anyhow!("the image was not written"))
     }
 }
