@@ -2,7 +2,8 @@
 //! work; SIGINT/SIGTERM stop a render at a pass boundary and write what it reached (exit
 //! 130/143), a second signal exits at once leaving no partial file; a stopped render
 //! resumes bit-identically; shards rendered apart merge into one image; bad checkpoints
-//! and parts fail naming the file.
+//! and parts fail naming the file; an output that cannot be written at the end costs
+//! none of the others (of a sequence, none of the frames before it).
 
 use std::io::{BufRead, BufReader};
 use std::path::Path;
@@ -639,6 +640,56 @@ fn a_checkpoint_that_cannot_be_saved_warns_and_the_render_goes_on() {
     let (_, meta) = read_exr(d.join("img.exr")).unwrap();
     assert!(meta.spp > 1, "{stderr}");
     assert!(temporaries(d).is_empty(), "{:?}", temporaries(d));
+}
+
+/// A frame of a sequence that cannot be written once rendered (a folder took its name
+/// during its render) ends the sequence: the frame before keeps its files, the stats
+/// hold the frames written (not the failed one), and the error lists every output that
+/// failed (the timeline too, here) with the frames left to render; no temporary file is
+/// left.
+#[test]
+fn a_sequence_frame_that_cannot_be_written_keeps_the_frames_before() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let args = "render --width 16 --height 16 --spp 1000000 --time 1 --frames 0..3 \
+                -o img.exr --stats st.json --timeline tl.json";
+    let args: Vec<&str> = args.split_whitespace().collect();
+    let render = Running::start(&args, d);
+    // Frame 1's temporary files exist once frame 0 is written.
+    wait_for_temporary(d, "img_0001.exr");
+    std::fs::create_dir(d.join("img_0001.exr")).unwrap();
+    std::fs::create_dir(d.join("tl.json")).unwrap();
+    let (code, stderr) = render.finish();
+    assert_eq!(code, Some(1), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert_eq!(
+        outputs(d),
+        [
+            "img_0000.exr",
+            "img_0000.png",
+            "img_0001.exr",
+            "st.json",
+            "tl.json"
+        ],
+        "{stderr}"
+    );
+    assert_eq!(read_exr(d.join("img_0000.exr")).unwrap().0.width(), 16);
+    let stats: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(d.join("st.json")).unwrap()).unwrap();
+    let frames = stats["frames"].as_array().unwrap();
+    assert_eq!(frames.len(), 1, "{stats}");
+    assert_eq!(frames[0]["frame"], 0, "{stats}");
+    let error = &stderr[stderr.find("error: ").expect("an error")..];
+    let lines = [
+        "error: 2 outputs were not written:",
+        "  img_0001.exr: cannot rename its temporary file over it",
+        "  tl.json: cannot rename its temporary file over it",
+        "the sequence stopped after 1 frame(s) (0..1); `--frames 1..3` renders the rest",
+    ];
+    for (line, want) in error.lines().zip(lines) {
+        assert!(line.starts_with(want), "{stderr}");
+    }
+    assert_eq!(error.lines().count(), lines.len(), "{stderr}");
 }
 
 /// A signal ends a command other than render at once, removing its temporary files.

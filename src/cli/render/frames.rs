@@ -9,12 +9,20 @@
 //! shards (a render farm splits a sequence by giving each job its own frame range),
 //! `--reference`, `--bdpt-techniques`, `--preview` and `--display-server`. `--time` limits each frame; `--stats` writes
 //! one JSON file with every frame's statistics.
+//!
+//! A frame whose image or PNG cannot be written ends the sequence there (a full disk
+//! would fail every later frame: rendering them would waste the work). The frames before
+//! it keep their files; the stats file, which lists the frames written (not the one that
+//! failed: its image is not on disk), and the timeline are still written. The error
+//! lists every output that failed, the frames written and the `--frames` range that
+//! renders the rest. Any other error that ends a sequence (a device lost) is reported
+//! the same way.
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::{anyhow, bail};
-use splitray::film::ImageFiles;
+use splitray::film::{AtomicFile, ImageFiles};
 use splitray::render::frames::{
     check_frames, frame_named, frame_path, render_frames, Frame, FrameRange, FramesControl,
     FramesRun, DEFAULT_FPS,
@@ -23,8 +31,9 @@ use splitray::render::{RenderError, RenderOptions, RenderStats, Shard};
 use splitray::scene::AnimatedScene;
 use splitray::vk::Gpu;
 
-use super::super::render_files::{write_stats, RenderFiles};
+use super::super::render_files::{write_stats, Failures, RenderFiles};
 use super::super::signals::{self, StopSignals};
+use super::super::timeline::{command_line, TimelineOutput};
 use super::options::render_options;
 use super::{
     gpu_desc, output_path, print_summary, progress_bar, show_progress, RenderArgs, DEFAULT_SCENE,
@@ -75,7 +84,7 @@ pub(super) fn run(args: &RenderArgs, spec: &str) -> anyhow::Result<ExitCode> {
     refuse_single_image_options(args)?;
     let signals =
         StopSignals::install("the frame in progress is dropped; the frames written are kept")?;
-    let mut timeline = super::super::timeline::TimelineOutput::start(args.timeline.as_deref())?;
+    let mut timeline = TimelineOutput::start(args.timeline.as_deref())?;
     let job = read_sequence(args, spec)?;
     let range = job.range;
     let base = output_path(args, &job.animated.scene.name, Shard::WHOLE)?;
@@ -93,14 +102,42 @@ pub(super) fn run(args: &RenderArgs, spec: &str) -> anyhow::Result<ExitCode> {
     }
 
     let RenderFiles { image, stats, .. } = files;
-    let (run, frame_stats) = render_sequence(args, &gpu, &job, &base, image, &signals)?;
+    let (ended, frame_stats) = render_sequence(args, &gpu, &job, &base, image, &signals);
+    let written = frame_stats.len() as u32;
+    write_sequence_outputs(ended, frame_stats, stats, timeline, &range)?;
+    Ok(report_sequence_end(
+        signals.received(),
+        written,
+        &range,
+        &base,
+    ))
+}
+
+/// Writes the stats of the frames written and the timeline, each tried whatever ended
+/// the sequence (a frame that could not be written, say) and whatever became of the
+/// other. Returns an error listing every failure, `ended`'s first, and, where frames
+/// are left, which were written and the range that renders the rest.
+fn write_sequence_outputs(
+    ended: Result<FramesRun, RenderError>,
+    frame_stats: Vec<FrameStats>,
+    stats: Option<AtomicFile>,
+    timeline: Option<TimelineOutput>,
+    range: &FrameRange,
+) -> anyhow::Result<()> {
+    let written = frame_stats.len() as u32;
+    let mut failures = Failures::default();
+    failures.keep(ended.map_err(anyhow::Error::from));
     if let Some(file) = stats {
-        write_stats(file, &serde_json::json!({ "frames": frame_stats }))?;
+        failures.keep(write_stats(
+            file,
+            &serde_json::json!({ "frames": frame_stats }),
+        ));
     }
     if let Some(t) = timeline {
-        t.finish(&super::super::timeline::command_line())?;
+        failures.keep(t.finish(&command_line()));
     }
-    Ok(report_sequence_end(signals.received(), run, &range, &base))
+    let left = written < range.len();
+    failures.check(left.then(|| rest_of_sequence(written, range)))
 }
 
 /// Refuses a sequence whose files would overwrite one another: the first frame's against
@@ -147,9 +184,8 @@ fn read_sequence(args: &RenderArgs, spec: &str) -> anyhow::Result<SequenceJob> {
 }
 
 /// Renders `job`'s frames behind a progress bar, writing each as it is done (`image` is
-/// the first frame's files; each later frame's are created when the one before is
-/// written); a signal stops it. Returns how the sequence ended and each written frame's
-/// statistics.
+/// the first frame's files); a signal stops it. Returns how the sequence ended and the
+/// statistics of each frame written.
 fn render_sequence(
     args: &RenderArgs,
     gpu: &Gpu,
@@ -157,39 +193,22 @@ fn render_sequence(
     base: &Path,
     image: ImageFiles,
     signals: &StopSignals,
-) -> Result<(FramesRun, Vec<FrameStats>), RenderError> {
+) -> (Result<FramesRun, RenderError>, Vec<FrameStats>) {
     let SequenceJob {
         animated,
         range,
         options,
     } = job;
-    let mut next_image = Some(image);
-    let mut frame_stats = Vec::new();
+    let mut files = FrameFiles {
+        base,
+        range,
+        next: Some(image),
+        written: Vec::new(),
+    };
     let name = &animated.scene.name;
     let (w, h) = (options.width, options.height);
     let bar = progress_bar(options, &format!("{name} {w}x{h}"));
     let pixels = w as f64 * h as f64;
-    let mut frame_done = |frame: Frame| -> Result<(), RenderError> {
-        bar.suspend(|| -> Result<(), RenderError> {
-            let image = next_image.take().expect("created for each frame");
-            write_frame(gpu, &frame, image, args.profile)?;
-            if frame.index + 1 < range.end {
-                next_image = Some(ImageFiles::create(frame_path(
-                    base,
-                    frame.index + 1,
-                    range,
-                ))?);
-            }
-            Ok(())
-        })?;
-        frame_stats.push(FrameStats {
-            frame: frame.index,
-            time: frame.time,
-            changed_triangles: frame.changed_triangles,
-            stats: frame.output.stats,
-        });
-        Ok(())
-    };
     let result = render_frames(
         gpu,
         animated,
@@ -201,30 +220,58 @@ fn render_sequence(
                 show_progress(&bar, &label, p, pixels, options.time_limit)
             },
             stop: &|| signals.received().is_some(),
-            frame_done: &mut frame_done,
+            frame_done: &mut |frame| bar.suspend(|| files.write(gpu, frame, args.profile)),
         },
     );
     bar.finish_and_clear();
-    Ok((result?, frame_stats))
+    // Dropping the next frame's files (a sequence that ended early) removes them.
+    (result, files.written)
 }
 
-/// Tells the user which frames were written, or, when `stopped_by` a signal, which
-/// frames are left to render; returns the exit code.
+/// The files of a sequence as it renders: the next frame's, created ahead of its render,
+/// and the statistics of each frame written.
+struct FrameFiles<'a> {
+    base: &'a Path,
+    range: &'a FrameRange,
+    next: Option<ImageFiles>,
+    written: Vec<FrameStats>,
+}
+
+impl FrameFiles<'_> {
+    /// Writes `frame` and records its statistics, then creates the next frame's files:
+    /// a path that cannot be written stops the sequence before that frame's render.
+    fn write(&mut self, gpu: &Gpu, frame: Frame, profile: bool) -> Result<(), RenderError> {
+        let image = self.next.take().expect("created for each frame");
+        write_frame(gpu, &frame, image, profile)?;
+        self.written.push(FrameStats {
+            frame: frame.index,
+            time: frame.time,
+            changed_triangles: frame.changed_triangles,
+            stats: frame.output.stats,
+        });
+        let next = frame.index + 1;
+        if next < self.range.end {
+            let path = frame_path(self.base, next, self.range);
+            self.next = Some(ImageFiles::create(path)?);
+        }
+        Ok(())
+    }
+}
+
+/// Tells the user which frames were written (the first `written` of `range`), or, when
+/// `stopped_by` a signal, which frames are left to render; returns the exit code.
 fn report_sequence_end(
     stopped_by: Option<i32>,
-    run: FramesRun,
+    written: u32,
     range: &FrameRange,
     base: &Path,
 ) -> ExitCode {
-    let done = range.first..range.first + run.frames;
     match stopped_by {
         Some(signal) => {
             eprintln!(
-                "{}: the sequence stopped after {} frame(s) ({done:?}); `--frames {}..{}` renders the rest",
+                "{}: {}",
                 signals::name(signal),
-                run.frames,
-                done.end,
-                range.end
+                rest_of_sequence(written, range)
             );
             ExitCode::from(signals::exit_status(signal))
         }
@@ -233,13 +280,24 @@ fn report_sequence_end(
                 "wrote frames {}..{} ({} at {} fps) as {}",
                 range.first,
                 range.end,
-                run.frames,
+                written,
                 range.fps,
                 display_pattern(base, range)
             );
             ExitCode::SUCCESS
         }
     }
+}
+
+/// Which frames a sequence that stopped short of `range` wrote (its first `written`),
+/// and the `--frames` range that renders the rest.
+fn rest_of_sequence(written: u32, range: &FrameRange) -> String {
+    let done = range.first..range.first + written;
+    format!(
+        "the sequence stopped after {written} frame(s) ({done:?}); `--frames {}..{}` renders \
+         the rest",
+        done.end, range.end
+    )
 }
 
 /// Writes one frame's EXR and PNG, unless the device reported validation messages.

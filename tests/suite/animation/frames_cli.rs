@@ -1,10 +1,10 @@
-//! `render --frames` on the command line: the numbered files of a sequence, and bad
-//! input refused before any work.
+//! `render --frames` on the command line: the numbered files of a sequence, bad input
+//! refused before any work, and a frame that cannot be written.
 
 use std::path::Path;
 
 use super::write_scene;
-use crate::common::cli::splitray;
+use crate::common::cli::{printed, splitray};
 
 fn files_in(dir: &Path) -> Vec<String> {
     let mut names: Vec<String> = std::fs::read_dir(dir)
@@ -164,4 +164,77 @@ fn render_frames_refuses_bad_input() {
         .collect();
     assert!(written.is_empty(), "{written:?}");
     assert!(!dir.path().join("out").exists());
+}
+
+/// A frame whose image cannot be written (a folder holds its name) ends the sequence
+/// there: the frames before it keep their files, the stats file holds those frames, the
+/// timeline is written, and the error names the path, the frames written and the range
+/// that renders the rest; no temporary file is left.
+#[test]
+fn a_frame_that_cannot_be_written_ends_the_sequence_keeping_the_other_outputs() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write_scene(dir.path());
+    let out = dir.path().join("out");
+    std::fs::create_dir_all(out.join("shot_0002.exr")).unwrap();
+    let o = splitray(
+        &[
+            "render",
+            scene.to_str().unwrap(),
+            "--frames",
+            "0..4",
+            "--width",
+            "16",
+            "--height",
+            "12",
+            "-o",
+            "out/shot.exr",
+            "--stats",
+            "out/stats.json",
+            "--timeline",
+            "out/timeline.json",
+            "--validation",
+        ],
+        dir.path(),
+    );
+    let text = printed(&o);
+    assert_eq!(o.status.code(), Some(1), "{text}");
+    assert!(!text.contains("panicked"), "{text}");
+    assert_eq!(
+        files_in(&out),
+        [
+            "shot_0000.exr",
+            "shot_0000.png",
+            "shot_0001.exr",
+            "shot_0001.png",
+            "shot_0002.exr",
+            "stats.json",
+            "timeline.json"
+        ],
+        "{text}"
+    );
+    assert!(out.join("shot_0002.exr").is_dir());
+    let stats: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("stats.json")).unwrap()).unwrap();
+    let frames: Vec<&serde_json::Value> = stats["frames"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| &f["frame"])
+        .collect();
+    assert_eq!(frames, [0, 1], "{stats}");
+    let timeline: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("timeline.json")).unwrap()).unwrap();
+    assert!(timeline["traceEvents"].is_array(), "{timeline}");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    let error = &stderr[stderr.find("error: ").expect("an error")..];
+    assert!(
+        error.contains("out/shot_0002.exr: is a folder, not a file"),
+        "{stderr}"
+    );
+    assert!(
+        error.contains(
+            "the sequence stopped after 2 frame(s) (0..2); `--frames 2..4` renders the rest"
+        ),
+        "{stderr}"
+    );
 }
