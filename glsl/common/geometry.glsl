@@ -23,12 +23,16 @@ struct Hit {
     float v;
 };
 
-// 48 bytes: vertex 0 and the two edges from it, precomputed on the host.
+// 48 bytes: the three vertices (w unused). Vertices, not edges: a vertex that two
+// triangles share is then the same bits in both, which the watertight test needs.
 struct Triangle {
     vec4 v0;
-    vec4 e1;
-    vec4 e2;
+    vec4 v1;
+    vec4 v2;
 };
+
+// The unnormalised geometric normal (v1 - v0) x (v2 - v0); its side follows the winding.
+vec3 triangle_normal(Triangle t) { return cross(t.v1.xyz - t.v0.xyz, t.v2.xyz - t.v0.xyz); }
 
 const uint MISS = 0xFFFFFFFFu;
 
@@ -43,28 +47,64 @@ layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer Hi
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer HitsRef { Hit data[]; };
 layout(buffer_reference, std430, buffer_reference_align = 16) writeonly buffer HitsOutRef { Hit data[]; };
 
-// Möller–Trumbore. Returns t in (tmin, tmax) or +inf, with barycentrics (u, v).
-// Mirrored operation for operation by `intersect_triangle` in src/trace/cpu.rs, so the
-// CPU twin agrees to rounding. Edge-on and degenerate triangles (det == 0) never hit.
-float intersect_triangle(vec3 o, vec3 d, float tmin, float tmax, vec3 v0, vec3 e1, vec3 e2,
+// Whether no component is infinite or NaN, by the exponent bits: a compiler may assume
+// that floats are neither (SPIR-V without SignedZeroInfNanPreserve) and fold isinf and
+// isnan away, but not integer tests.
+bool finite(vec3 v) {
+    return all(lessThan(floatBitsToUint(v) & 0x7F800000u, uvec3(0x7F800000u)));
+}
+
+// `a` with the axis kz last, the other two in cyclic order (kz = 0: yzx, 1: zxy, 2: xyz):
+// a rotation of the axes, so the sign of every edge function below keeps its meaning.
+vec3 permute_to_z(vec3 a, uint kz) { return kz == 0u ? a.yzx : (kz == 1u ? a.zxy : a); }
+
+// Watertight ray–triangle intersection (Woop, Benthin and Wald 2013, "Watertight
+// Ray/Triangle Intersection"; pbrt-v4's IntersectTriangle without its double fallback).
+// The vertices are moved into a frame where the ray starts at the origin and runs along
+// +z (a translation, a rotation of the axes and a shear), and the three 2D edge
+// functions decide. An edge two triangles share gives both exactly opposite edge
+// functions (same vertex bits, same arithmetic, products that commute), and a zero
+// counts as inside for both: a ray through a shared edge or vertex hits at least one of
+// the triangles and never slips between them, which Möller–Trumbore's per-triangle
+// rounding lets happen. `precise` keeps the compiler from fusing multiplies into adds
+// here, which would break that antisymmetry.
+//
+// Returns t in (tmin, tmax) or +inf, with the barycentrics (u, v) of v1 and v2. Mirrored
+// operation for operation by `intersect_triangle` in src/trace/cpu.rs, so the CPU twin
+// agrees to rounding (the division is the only operation Vulkan does not round
+// correctly). A ray in the triangle's plane (det == 0), a degenerate triangle, and a ray
+// with an infinite or NaN origin or direction, or a zero direction, never hit (an
+// infinite direction would otherwise make the shear 0 and hit at t = 0).
+float intersect_triangle(vec3 o, vec3 d, float tmin, float tmax, vec3 p0, vec3 p1, vec3 p2,
                          out float u, out float v) {
-    vec3 p = cross(d, e2);
-    float det = dot(e1, p);
     u = 0.0;
     v = 0.0;
+    vec3 ad = abs(d);
+    uint kz = ad.x > ad.y ? (ad.x > ad.z ? 0u : 2u) : (ad.y > ad.z ? 1u : 2u);
+    vec3 dp = permute_to_z(d, kz);
+    if (!(finite(o) && finite(d)) || dp.z == 0.0) return 1.0 / 0.0;
+    precise float sz = 1.0 / dp.z;
+    precise float sx = -dp.x * sz;
+    precise float sy = -dp.y * sz;
+    vec3 a = permute_to_z(p0 - o, kz);
+    vec3 b = permute_to_z(p1 - o, kz);
+    vec3 c = permute_to_z(p2 - o, kz);
+    precise float ax = a.x + sx * a.z, ay = a.y + sy * a.z;
+    precise float bx = b.x + sx * b.z, by = b.y + sy * b.z;
+    precise float cx = c.x + sx * c.z, cy = c.y + sy * c.z;
+    precise float e0 = bx * cy - by * cx;
+    precise float e1 = cx * ay - cy * ax;
+    precise float e2 = ax * by - ay * bx;
+    if ((e0 < 0.0 || e1 < 0.0 || e2 < 0.0) && (e0 > 0.0 || e1 > 0.0 || e2 > 0.0)) return 1.0 / 0.0;
+    precise float det = e0 + e1 + e2;
     if (det == 0.0) return 1.0 / 0.0;
-    float inv_det = 1.0 / det;
-    vec3 s = o - v0;
-    u = dot(s, p) * inv_det;
-    // Written as the Rust twin's `!(0.0..=1.0).contains(&u)` so that a NaN u misses too:
-    // a ray with an infinite direction component makes det infinite, inv_det 0, u NaN
-    // and t 0, a hit at t = 0 wherever tmin < 0 if NaN slipped through.
-    if (!(u >= 0.0 && u <= 1.0)) return 1.0 / 0.0;
-    vec3 q = cross(s, e1);
-    v = dot(d, q) * inv_det;
-    if (v < 0.0 || u + v > 1.0) return 1.0 / 0.0;
-    float t = dot(e2, q) * inv_det;
-    return (t > tmin && t < tmax) ? t : 1.0 / 0.0;
+    precise float scaled_t = (e0 * (sz * a.z) + e1 * (sz * b.z)) + e2 * (sz * c.z);
+    precise float inv_det = 1.0 / det;
+    precise float t = scaled_t * inv_det;
+    if (!(t > tmin && t < tmax)) return 1.0 / 0.0;
+    u = e1 * inv_det;
+    v = e2 * inv_det;
+    return t;
 }
 
 #endif

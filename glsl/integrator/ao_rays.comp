@@ -44,7 +44,7 @@ void main() {
         return;
     }
     Triangle tri = triangles.data[hit.triangle];
-    vec3 n = normalize(cross(tri.e1.xyz, tri.e2.xyz));
+    vec3 n = normalize(triangle_normal(tri));
     if (dot(n, primary.dir) > 0.0) n = -n;
     vec3 p = primary.origin + hit.t * primary.dir + frame.ray_epsilon * n;
     vec3 t, b;

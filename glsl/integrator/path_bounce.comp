@@ -66,7 +66,7 @@ void main() {
         throughput.data[i] = vec4(0.0);
         return;
     }
-    vec3 n = normalize(cross(tri.e1.xyz, tri.e2.xyz));
+    vec3 n = normalize(triangle_normal(tri));
     if (dot(n, ray.dir) > 0.0) n = -n;
     vec3 p = ray.origin + hit.t * ray.dir + frame.ray_epsilon * n;
     uint dim = 2u + 2u * frame.bounce;

@@ -31,7 +31,7 @@ void main() {
     vec3 color = vec3(0.0);
     if (hit.triangle != MISS) {
         Triangle tri = triangles.data[hit.triangle];
-        vec3 n = normalize(cross(tri.e1.xyz, tri.e2.xyz));
+        vec3 n = normalize(triangle_normal(tri));
         Material m = materials.data[triangle_material.data[hit.triangle]];
         color = m.emission.rgb + m.diffuse.rgb * abs(dot(n, rays.data[i].dir));
     }

@@ -29,7 +29,7 @@ void main() {
     vec3 n = vec3(0.0);
     if (hit.triangle != MISS) {
         Triangle tri = triangles.data[hit.triangle];
-        n = normalize(cross(tri.e1.xyz, tri.e2.xyz));
+        n = normalize(triangle_normal(tri));
         if (dot(n, rays.data[i].dir) > 0.0) n = -n;
     }
     depth.data[pixel] = hit.t;

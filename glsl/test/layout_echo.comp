@@ -23,6 +23,6 @@ void main() {
     fields[o + 8] = h.t; fields[o + 9] = float(h.triangle); fields[o + 10] = h.u; fields[o + 11] = h.v;
     Triangle t = triangles[i];
     fields[o + 12] = t.v0.x; fields[o + 13] = t.v0.y; fields[o + 14] = t.v0.z; fields[o + 15] = t.v0.w;
-    fields[o + 16] = t.e1.x; fields[o + 17] = t.e1.y; fields[o + 18] = t.e1.z; fields[o + 19] = t.e1.w;
-    fields[o + 20] = t.e2.x; fields[o + 21] = t.e2.y; fields[o + 22] = t.e2.z; fields[o + 23] = t.e2.w;
+    fields[o + 16] = t.v1.x; fields[o + 17] = t.v1.y; fields[o + 18] = t.v1.z; fields[o + 19] = t.v1.w;
+    fields[o + 20] = t.v2.x; fields[o + 21] = t.v2.y; fields[o + 22] = t.v2.z; fields[o + 23] = t.v2.w;
 }

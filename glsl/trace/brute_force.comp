@@ -53,7 +53,7 @@ void main() {
             for (uint j = 0; j < count; ++j) {
                 float u, v;
                 float t = intersect_triangle(ray.origin, ray.dir, ray.tmin, min(ray.tmax, best_t),
-                                             staged[j].v0.xyz, staged[j].e1.xyz, staged[j].e2.xyz, u, v);
+                                             staged[j].v0.xyz, staged[j].v1.xyz, staged[j].v2.xyz, u, v);
                 // Strictly closer only: the first (smallest-index) of equal-t hits stays.
                 if (t < best_t) {
                     best_t = t;

@@ -25,13 +25,6 @@ layout(push_constant) uniform Push {
 BUFFER_BINDING(0, readonly, Ray, rays)
 BUFFER_BINDING(1, writeonly, Hit, hits)
 
-// Whether no component is infinite or NaN, by the exponent bits: a compiler may assume
-// that floats are neither (SPIR-V without SignedZeroInfNanPreserve) and fold isinf and
-// isnan away, but not integer tests.
-bool finite(vec3 v) {
-    return all(lessThan(floatBitsToUint(v) & 0x7F800000u, uvec3(0x7F800000u)));
-}
-
 void main() {
     uint ray_index = linear_invocation_id();
     if (ray_index >= pc.ray_count) return;

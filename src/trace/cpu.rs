@@ -5,8 +5,10 @@ use rayon::prelude::*;
 
 use super::types::{GpuTriangle, Hit, Ray, MISS};
 
-/// Möller–Trumbore, mirroring `intersect_triangle` in glsl/common/geometry.glsl operation
-/// for operation. Returns t in (tmin, tmax) or +inf, and the barycentrics (u, v).
+/// The watertight ray–triangle test (Woop, Benthin and Wald 2013), mirroring
+/// `intersect_triangle` in glsl/common/geometry.glsl operation for operation (its comment
+/// gives the method and why). Returns t in (tmin, tmax) or +inf, and the barycentrics
+/// (u, v) of vertices 1 and 2 (zero for a miss).
 #[inline]
 pub fn intersect_triangle(
     o: Vec3,
@@ -15,28 +17,56 @@ pub fn intersect_triangle(
     tmax: f32,
     tri: &GpuTriangle,
 ) -> (f32, f32, f32) {
-    let (v0, e1, e2) = (tri.v0(), tri.e1(), tri.e2());
-    let p = d.cross(e2);
-    let det = e1.dot(p);
-    if det == 0.0 {
-        return (f32::INFINITY, 0.0, 0.0);
-    }
-    let inv_det = 1.0 / det;
-    let s = o - v0;
-    let u = s.dot(p) * inv_det;
-    if !(0.0..=1.0).contains(&u) {
-        return (f32::INFINITY, u, 0.0);
-    }
-    let q = s.cross(e1);
-    let v = d.dot(q) * inv_det;
-    if v < 0.0 || u + v > 1.0 {
-        return (f32::INFINITY, u, v);
-    }
-    let t = e2.dot(q) * inv_det;
-    if t > tmin && t < tmax {
-        (t, u, v)
+    const MISSED: (f32, f32, f32) = (f32::INFINITY, 0.0, 0.0);
+    let ad = d.abs();
+    let kz = if ad.x > ad.y {
+        if ad.x > ad.z {
+            0
+        } else {
+            2
+        }
+    } else if ad.y > ad.z {
+        1
     } else {
-        (f32::INFINITY, u, v)
+        2
+    };
+    let dp = permute_to_z(d, kz);
+    if !(o.is_finite() && d.is_finite()) || dp.z == 0.0 {
+        return MISSED;
+    }
+    let sz = 1.0 / dp.z;
+    let (sx, sy) = (-dp.x * sz, -dp.y * sz);
+    let [a, b, c] = tri.vertices().map(|p| permute_to_z(p - o, kz));
+    let (ax, ay) = (a.x + sx * a.z, a.y + sy * a.z);
+    let (bx, by) = (b.x + sx * b.z, b.y + sy * b.z);
+    let (cx, cy) = (c.x + sx * c.z, c.y + sy * c.z);
+    let e0 = bx * cy - by * cx;
+    let e1 = cx * ay - cy * ax;
+    let e2 = ax * by - ay * bx;
+    if (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) && (e0 > 0.0 || e1 > 0.0 || e2 > 0.0) {
+        return MISSED;
+    }
+    let det = e0 + e1 + e2;
+    if det == 0.0 {
+        return MISSED;
+    }
+    let scaled_t = (e0 * (sz * a.z) + e1 * (sz * b.z)) + e2 * (sz * c.z);
+    let inv_det = 1.0 / det;
+    let t = scaled_t * inv_det;
+    if !(t > tmin && t < tmax) {
+        return MISSED;
+    }
+    (t, e1 * inv_det, e2 * inv_det)
+}
+
+/// `a` with the axis `kz` last and the other two in cyclic order (`permute_to_z` in
+/// glsl/common/geometry.glsl).
+#[inline]
+fn permute_to_z(a: Vec3, kz: usize) -> Vec3 {
+    match kz {
+        0 => Vec3::new(a.y, a.z, a.x),
+        1 => Vec3::new(a.z, a.x, a.y),
+        _ => a,
     }
 }
 

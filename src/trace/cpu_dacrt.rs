@@ -103,8 +103,7 @@ impl Aabb {
     };
 
     fn of_triangle(t: &GpuTriangle) -> Aabb {
-        let v0 = t.v0();
-        let (v1, v2) = (v0 + t.e1(), v0 + t.e2());
+        let [v0, v1, v2] = t.vertices();
         Aabb {
             lo: v0.min(v1).min(v2),
             hi: v0.max(v1).max(v2),

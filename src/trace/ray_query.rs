@@ -61,12 +61,11 @@ pub fn unsupported_reason(gpu: &Gpu) -> Option<String> {
     })
 }
 
-/// Non-indexed vertex positions of the triangles (v0, v0 + e1, v0 + e2), 9 f32 each.
+/// Non-indexed vertex positions of the triangles, 9 f32 each.
 fn vertices_of(triangles: &[GpuTriangle]) -> Vec<f32> {
     let mut out = Vec::with_capacity(triangles.len() * 9);
     for t in triangles {
-        let v0 = t.v0();
-        for p in [v0, v0 + t.e1(), v0 + t.e2()] {
+        for p in t.vertices() {
             out.extend(<[f32; 3]>::from(p));
         }
     }

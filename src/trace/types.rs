@@ -59,37 +59,46 @@ impl Hit {
     }
 }
 
-/// A triangle prepared for intersection: vertex 0 and the edges to vertices 1 and 2.
+/// A triangle as the tracers read it: its three vertices (w unused). Vertices rather
+/// than edges, so that a vertex two triangles share is the same bits in both, which the
+/// watertight intersection test ([`super::cpu::intersect_triangle`]) needs.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 #[repr(C)]
 pub struct GpuTriangle {
     pub v0: [f32; 4],
-    pub e1: [f32; 4],
-    pub e2: [f32; 4],
+    pub v1: [f32; 4],
+    pub v2: [f32; 4],
 }
 
 impl GpuTriangle {
     pub fn new(p: [Vec3; 3]) -> Self {
-        let e1 = p[1] - p[0];
-        let e2 = p[2] - p[0];
         Self {
             v0: p[0].extend(0.0).into(),
-            e1: e1.extend(0.0).into(),
-            e2: e2.extend(0.0).into(),
+            v1: p[1].extend(0.0).into(),
+            v2: p[2].extend(0.0).into(),
         }
     }
 
     pub fn v0(&self) -> Vec3 {
         Vec3::from_slice(&self.v0[..3])
     }
-    pub fn e1(&self) -> Vec3 {
-        Vec3::from_slice(&self.e1[..3])
-    }
-    pub fn e2(&self) -> Vec3 {
-        Vec3::from_slice(&self.e2[..3])
+
+    pub fn vertices(&self) -> [Vec3; 3] {
+        [self.v0, self.v1, self.v2].map(|v| Vec3::from_slice(&v[..3]))
     }
 
-    /// Unnormalised geometric normal e1 × e2 (its side follows the vertex winding).
+    /// The edge from vertex 0 to vertex 1.
+    pub fn e1(&self) -> Vec3 {
+        Vec3::from_slice(&self.v1[..3]) - self.v0()
+    }
+
+    /// The edge from vertex 0 to vertex 2.
+    pub fn e2(&self) -> Vec3 {
+        Vec3::from_slice(&self.v2[..3]) - self.v0()
+    }
+
+    /// Unnormalised geometric normal e1 × e2 (its side follows the vertex winding;
+    /// `triangle_normal` in glsl/common/geometry.glsl).
     pub fn normal(&self) -> Vec3 {
         self.e1().cross(self.e2())
     }

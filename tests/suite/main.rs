@@ -59,4 +59,5 @@ mod trace_brute_force;
 mod trace_cpu_bvh;
 mod trace_pdacrt;
 mod trace_tracers;
+mod trace_watertight;
 mod vk_runtime;

@@ -215,8 +215,8 @@ fn rust_and_glsl_struct_layouts_agree() {
     let tris: Vec<GpuTriangle> = (0..n)
         .map(|i| GpuTriangle {
             v0: [f[i], f[i + 1], f[i + 2], f[i + 3]],
-            e1: [f[i + 4], f[i + 5], f[i + 6], f[i + 7]],
-            e2: [f[i + 8], f[i + 9], f[i + 10], f[i + 11]],
+            v1: [f[i + 4], f[i + 5], f[i + 6], f[i + 7]],
+            v2: [f[i + 8], f[i + 9], f[i + 10], f[i + 11]],
         })
         .collect();
     let pipeline = ComputePipeline::new(
@@ -254,8 +254,8 @@ fn rust_and_glsl_struct_layouts_agree() {
         expected.push(r.tmax);
         expected.extend([h.t, h.triangle as f32, h.u, h.v]);
         expected.extend(t.v0);
-        expected.extend(t.e1);
-        expected.extend(t.e2);
+        expected.extend(t.v1);
+        expected.extend(t.v2);
         assert_eq!(&fields[i * 24..(i + 1) * 24], &expected[..], "record {i}");
     }
     common::assert_clean(&gpu);

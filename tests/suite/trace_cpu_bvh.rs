@@ -15,8 +15,8 @@ use splitray::trace::{cpu, CpuBvh, GpuTriangle, Hit, Query, Ray, TracerKind};
 const BUNNY: &str = "../shared/meshes/bunny/bunny.obj";
 
 /// The scene as brute force should see it: triangles the BVH never hits (degenerate)
-/// replaced by all-zero ones, which Möller–Trumbore cannot hit either (its
-/// determinant is exactly zero), so that indices stay put.
+/// replaced by all-zero ones, which the triangle test cannot hit either (its edge
+/// functions are exactly zero), so that indices stay put.
 fn hittable_only(tris: &[GpuTriangle]) -> Vec<GpuTriangle> {
     tris.iter()
         .map(|t| {
@@ -399,8 +399,9 @@ fn nan_infinite_and_zero_rays_miss_without_panicking() {
 
 #[test]
 fn tiny_huge_and_far_offset_coordinates() {
-    // Within f32 Möller–Trumbore's range: its t is a product of three coordinates'
-    // worth of magnitude (≈ 10¹⁵ here at most), and its determinant of two (≥ 10⁻²⁶).
+    // Within the f32 triangle test's range: its scaled t is a product of three
+    // coordinates' worth of magnitude (≈ 10¹⁵ here at most), and its determinant of two
+    // (≥ 10⁻²⁶).
     let soup = common::triangle_soup(1000, 41);
     let rays = common::random_rays(3000, 42);
     for (scale, offset) in [

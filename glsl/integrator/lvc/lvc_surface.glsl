@@ -5,11 +5,11 @@
 
 // Unit geometric normal: the triangle's front, normalize(e1 x e2).
 vec3 triangle_normal(uint tri) {
-    return normalize(cross(triangles[tri].e1.xyz, triangles[tri].e2.xyz));
+    return normalize(triangle_normal(triangles[tri]));
 }
 
 float triangle_area(uint tri) {
-    return 0.5 * length(cross(triangles[tri].e1.xyz, triangles[tri].e2.xyz));
+    return 0.5 * length(triangle_normal(triangles[tri]));
 }
 
 #ifdef LVC_SHADING_NORMALS

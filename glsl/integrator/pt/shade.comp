@@ -92,7 +92,7 @@ void main() {
     Triangle tri = triangles.data[hit.triangle];
     uint mat = triangle_material.data[hit.triangle];
     PtMaterial m = materials.data[mat];
-    vec3 cross_n = cross(tri.e1.xyz, tri.e2.xyz);
+    vec3 cross_n = triangle_normal(tri);
     vec3 ng = normalize(cross_n);
     vec3 x = ray.origin + hit.t * ray.dir;
     vec3 beta = s.throughput.rgb;

@@ -66,10 +66,8 @@ BUFFER_BINDING(4, , uint, bounds)
 // A triangle's box.
 void triangle_box(uint id, out vec3 lo, out vec3 hi) {
     Triangle t = triangles.data[id];
-    vec3 b = t.v0.xyz + t.e1.xyz;
-    vec3 c = t.v0.xyz + t.e2.xyz;
-    lo = min(t.v0.xyz, min(b, c));
-    hi = max(t.v0.xyz, max(b, c));
+    lo = min(t.v0.xyz, min(t.v1.xyz, t.v2.xyz));
+    hi = max(t.v0.xyz, max(t.v1.xyz, t.v2.xyz));
 }
 
 // The status code of a triangle with box [lo, hi] against the split of the node's box

@@ -38,7 +38,7 @@ void main() {
         Ray r = rays.data[pc.ray_offset + i];
         Triangle t = triangles.data[tri];
         float u, v;
-        intersect_triangle(r.origin, r.dir, r.tmin, 1.0 / 0.0, t.v0.xyz, t.e1.xyz, t.e2.xyz, u, v);
+        intersect_triangle(r.origin, r.dir, r.tmin, 1.0 / 0.0, t.v0.xyz, t.v1.xyz, t.v2.xyz, u, v);
         h = Hit(hit_t(closest), tri, u, v);
     }
     hits.data[pc.ray_offset + i] = h;

@@ -131,7 +131,7 @@ void main() {
                 if (m >= mine) break;
                 float u, v;
                 float t = intersect_triangle(r[m].origin, r[m].dir, r[m].tmin, r[m].tmax,
-                                             tri.v0.xyz, tri.e1.xyz, tri.e2.xyz, u, v);
+                                             tri.v0.xyz, tri.v1.xyz, tri.v2.xyz, u, v);
                 if (t < best_t[m] || (t == best_t[m] && t < 1.0 / 0.0 && id < best[m])) {
                     best_t[m] = t;
                     best[m] = id;
@@ -173,7 +173,7 @@ void main() {
                 for (uint j = 0u; j < count; ++j) {
                     float u, v;
                     float t = intersect_triangle(r.origin, r.dir, r.tmin, r.tmax, staged[j].v0.xyz,
-                                                 staged[j].e1.xyz, staged[j].e2.xyz, u, v);
+                                                 staged[j].v1.xyz, staged[j].v2.xyz, u, v);
                     if (t < best_t || (t == best_t && t < 1.0 / 0.0 && staged_id[j] < best)) {
                         best_t = t;
                         best = staged_id[j];

@@ -56,8 +56,8 @@ pub(super) fn build(triangles: &[GpuTriangle], params: BvhBuildParams) -> CpuBvh
 /// Whether a triangle goes into the tree: not degenerate by the scene's own test
 /// ([`crate::scene::Triangle::is_degenerate`]: non-finite, or an area within f32
 /// precision of zero relative to its edges). A degenerate triangle has no normal to shade
-/// with, so it is never hit, although Möller–Trumbore can return a hit on one by rounding
-/// (its determinant e1 · (d × e2) is rounded differently from e1 × e2).
+/// with, so it is never hit, although the triangle test can return a hit on one by
+/// rounding (its determinant, a sum of three rounded edge functions, need not be zero).
 pub fn is_hittable(t: &GpuTriangle) -> bool {
     let (e1, e2) = (t.e1(), t.e2());
     let c = e1.cross(e2);

@@ -39,9 +39,9 @@
 //! Degenerate triangles (the scene's test: zero area within f32 precision relative to
 //! the edges, or non-finite; repeated vertices, collinear ones) are left out of the tree
 //! ([`is_hittable`]): a hit on one would have no normal to shade with. Here alone the BVH
-//! departs from brute force, whose Möller–Trumbore determinant e1 · (d × e2) is rounded
-//! differently from e1 × e2 and can be non-zero on such a triangle, so that it sometimes
-//! reports a hit on one. A ray with a NaN component or a non-finite origin or direction
+//! departs from brute force, whose determinant (the sum of the three edge functions of
+//! the watertight test) is rounded and can be non-zero on such a triangle, so that it
+//! sometimes reports a hit on one. A ray with a NaN component or a non-finite origin or direction
 //! misses without being traced, as it does in brute force.
 
 mod build;

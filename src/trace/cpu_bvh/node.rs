@@ -37,7 +37,7 @@ pub(super) struct BoxRay {
 
 /// Relative margin on both ends of a ray's segment in a box: the slab distances carry a
 /// few ulps of rounding (two operations, Ize 2013 bounds it by 2γ₃ ≈ 3.6·10⁻⁷), and the
-/// Möller–Trumbore t of a triangle inside the box carries its own; 10⁻⁵ covers both with
+/// t of the triangle test inside the box carries its own; 10⁻⁵ covers both with
 /// room to spare and costs a few extra box visits, never a hit.
 const T_MARGIN: f32 = 1e-5;
 
@@ -197,7 +197,6 @@ pub(super) enum Child {
 
 /// Bounds of a triangle.
 pub(super) fn triangle_bounds(t: &GpuTriangle) -> (Vec3, Vec3) {
-    let v0 = t.v0();
-    let (v1, v2) = (v0 + t.e1(), v0 + t.e2());
+    let [v0, v1, v2] = t.vertices();
     (v0.min(v1).min(v2), v0.max(v1).max(v2))
 }

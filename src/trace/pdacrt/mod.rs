@@ -154,13 +154,13 @@ pub struct PdacrtTracer {
     stats: TraceStats,
 }
 
-/// The box around the triangles (as the GPU reconstructs their vertices) and the padding
+/// The box around the triangles' vertices and the padding
 /// of every box test: 1e-5 of the larger of the scene's extent and its distance from the
 /// origin, well above float rounding of coordinates that size.
 fn scene_box(triangles: &[GpuTriangle]) -> (Vec3, Vec3, f32) {
     let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
     for t in triangles {
-        for p in [t.v0(), t.v0() + t.e1(), t.v0() + t.e2()] {
+        for p in t.vertices() {
             lo = lo.min(p);
             hi = hi.max(p);
         }
