@@ -306,7 +306,7 @@ impl Splats {
     /// The film's words and the counters after `splat` at `scale`.
     fn on_gpu(&self, gpu: &Gpu, kernels: &Kernels, scale: f32) -> (Vec<u32>, Vec<u32>) {
         let constants = LvcConstants {
-            splat_scale: scale,
+            brightness_scale: scale,
             ..Zeroable::zeroed()
         };
         // A buffer of at least one element (no contribution: nothing is read).

@@ -224,7 +224,7 @@ fn check_case(case: Case) -> usize {
             );
         }
         check_light_tracing(d, &connector, &open, c.light_paths, pixels);
-        check_splat_film(d, pixels, c.splat_scale);
+        check_splat_film(d, pixels, c.brightness_scale);
         if let Some(pt) = &sorted_scene {
             for b in &d.bounces {
                 sorted_keys = sorted_keys.max(check_material_order(b, pt, case.name));
@@ -234,7 +234,7 @@ fn check_case(case: Case) -> usize {
             d, &case, &connector, &cpu_scene, &open, seed, scale, &mut cam,
         );
         // finish: the film gains each pass's radiance plus its splats.
-        let splats = FixedFilm::from_words(&d.splat_film, c.splat_scale);
+        let splats = FixedFilm::from_words(&d.splat_film, c.brightness_scale);
         for q in 0..ch.passes {
             for p in 0..pixels {
                 let r = radiance[(q * pixels + p) as usize];

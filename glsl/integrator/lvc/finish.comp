@@ -26,7 +26,7 @@ void main() {
     vec4 sum = accum[pixel];
     vec4 sum2 = accum2[pixel];
     for (uint q = 0u; q < passes; ++q) {
-        vec3 splats = fixed_value(q * pixels + pixel) * (1.0 / C.splat_scale);
+        vec3 splats = fixed_value(q * pixels + pixel) * (1.0 / C.brightness_scale);
         vec3 l = radiance[q * P.pixel_count + i].rgb + splats;
         sum += vec4(l, 1.0);
         sum2 += vec4(l * l, 0.0);

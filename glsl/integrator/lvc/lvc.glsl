@@ -31,8 +31,8 @@ struct LvcConstants {
     uint flags;          // LVC_FLAG_*
     uint candidates;     // M: candidates per camera vertex (resampling)
     uint connections;    // N: connections per camera vertex
-    float splat_scale;   // the power of two splat-film values are multiplied by
-                         // (src/integrator/lvc/fixed.rs, splat_scale)
+    float brightness_scale;  // the power of two splat-film values are multiplied by
+                             // (src/integrator/pt/lights.rs, brightness_scale)
     uint pad0;
     uint pad1;
     uint pad2;

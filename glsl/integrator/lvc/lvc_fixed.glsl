@@ -6,8 +6,8 @@
 // Each part is rounded to the nearest multiple of 2^-32 (ties to even), so that the sum's
 // rounding errors cancel on average instead of all cutting it down. Callers scale
 // values by a power of two that puts the scene's radiance near 1 (LvcConstants'
-// splat_scale), which keeps splats well inside the 2^-32 .. 2^31 range whatever the
-// scene's units. Needs `uint fixed_film[]`; kernels that add define LVC_FIXED_ADD and
+// brightness_scale), which keeps splats well inside the 2^-32 .. 2^31 range whatever
+// the scene's units. Needs `uint fixed_film[]`; kernels that add define LVC_FIXED_ADD and
 // also declare `uint counters[]`. src/integrator/lvc/fixed.rs is the twin.
 #ifndef SPLITRAY_LVC_FIXED_GLSL
 #define SPLITRAY_LVC_FIXED_GLSL

@@ -27,5 +27,5 @@ void main() {
         atomicAdd(counters[COUNTER_NON_FINITE], 1u);
         return;
     }
-    fixed_add(c.target, c.value * C.splat_scale);
+    fixed_add(c.target, c.value * C.brightness_scale);
 }

@@ -10,48 +10,18 @@
 //! The range is 2^-32 ≈ 2.3e-10 to 2^31: each part is rounded to the nearest 2^-32 (ties
 //! to even, so that rounding errors cancel on average rather than all cutting the sum
 //! down), and parts above [`FIXED_MAX`] are clamped and counted. Scenes come in any
-//! units, so values are first multiplied by a power of two ([`splat_scale`]) that puts
-//! the scene's brightest emitter near 1, and divided by it when the film is read:
-//! multiplying by a power of two is exact, and splats then sit in the middle of the
-//! range whether the lights emit 1e-8 or 1e8.
-
-use crate::integrator::pt::gpu::LIGHT_POINT;
-use crate::integrator::pt::LightTable;
+//! units, so values are first multiplied by a power of two that puts the scene's
+//! brightest emitter near 1 ([`LightTable::brightness_scale`]), and divided by it when
+//! the film is read: multiplying by a power of two is exact, and splats then sit in the
+//! middle of the range whether the lights emit 1e-8 or 1e8.
+//!
+//! [`LightTable::brightness_scale`]: crate::integrator::pt::LightTable::brightness_scale
 
 /// Words per slot: the low words of r, g, b, then their high words.
 pub const FIXED_WORDS: usize = 6;
 /// The largest part (the largest f32 below 2^31).
 pub const FIXED_MAX: f32 = 2_147_483_520.0;
 const FIXED_ONE: f32 = 4_294_967_296.0;
-/// The largest exponent [`splat_scale`] uses either way: 2^±100 and the values it
-/// scales stay normal f32 numbers.
-const SCALE_EXPONENT_LIMIT: i32 = 100;
-
-/// The power of two splat values are multiplied by before they are cut into parts:
-/// 2^-e, where 2^e is the brightest emitter's radiance rounded down to a power of two.
-/// A point light's intensity I counts as the radiance I / r² it gives at the scene's
-/// radius r. 1 without lights.
-pub fn splat_scale(lights: &LightTable, scene_radius: f32) -> f32 {
-    let brightest = lights
-        .lights
-        .iter()
-        .map(|l| {
-            let emitted = l.emission_pmf[..3].iter().copied().fold(0.0f32, f32::max);
-            if l.p0_type[3].to_bits() == LIGHT_POINT {
-                emitted / (scene_radius * scene_radius)
-            } else {
-                emitted
-            }
-        })
-        .filter(|&v| v.is_finite() && v > 0.0)
-        .fold(0.0f32, f32::max);
-    if brightest == 0.0 {
-        return 1.0;
-    }
-    let exponent =
-        (brightest.log2().floor() as i32).clamp(-SCALE_EXPONENT_LIMIT, SCALE_EXPONENT_LIMIT);
-    2f32.powi(-exponent)
-}
 
 /// The (low, high) words of a part, as `fixed_add_channel` computes them (`None` for a
 /// value that adds nothing: zero, negative or NaN). The flag says it was clamped.
@@ -72,7 +42,7 @@ pub struct FixedFilm {
     /// Per slot and channel: the 64-bit sum (wrapping, as the GPU's words).
     pub sums: Vec<[u64; 3]>,
     pub clamped: u64,
-    /// What values are multiplied by before they are added ([`splat_scale`]).
+    /// What values are multiplied by before they are added (the brightness scale).
     pub scale: f32,
 }
 
@@ -121,23 +91,6 @@ impl FixedFilm {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn the_scale_puts_the_brightest_emitter_near_one() {
-        let mut scene = crate::scene::builtin("cornell-box").unwrap();
-        let radius = scene.bounds().radius();
-        // The Cornell light emits (17, 12, 4): 2^4 ≤ 17 < 2^5.
-        assert_eq!(splat_scale(&LightTable::new(&scene), radius), 1.0 / 16.0);
-        for m in &mut scene.materials {
-            m.emission *= 1e-9;
-        }
-        let scale = splat_scale(&LightTable::new(&scene), radius);
-        assert!((1.0..2.0).contains(&(17e-9 * scale)), "{scale}");
-        for m in &mut scene.materials {
-            m.emission = glam::Vec3::ZERO;
-        }
-        assert_eq!(splat_scale(&LightTable::new(&scene), radius), 1.0);
-    }
 
     #[test]
     fn parts_split_exactly_and_sums_are_order_free() {

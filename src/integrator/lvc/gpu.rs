@@ -37,8 +37,10 @@ pub struct LvcConstants {
     /// N: connections per camera vertex.
     pub connections: u32,
     /// The power of two the splat film's values are multiplied by
-    /// ([`super::fixed::splat_scale`]).
-    pub splat_scale: f32,
+    /// ([`LightTable::brightness_scale`]).
+    ///
+    /// [`LightTable::brightness_scale`]: crate::integrator::pt::LightTable::brightness_scale
+    pub brightness_scale: f32,
     pub pad: [u32; 3],
 }
 

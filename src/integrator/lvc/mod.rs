@@ -110,7 +110,7 @@ fn prepass_constants(
 ) -> LvcConstants {
     let mut constants = LvcConstants::new(camera);
     constants.ray_epsilon = bounds.ray_epsilon();
-    constants.splat_scale = fixed::splat_scale(lights, bounds.radius());
+    constants.brightness_scale = lights.brightness_scale(bounds.radius());
     constants.seed = fold_seed(options.seed);
     constants.light_paths = plan.light_paths;
     constants.max_depth = options.max_depth;

@@ -7,11 +7,20 @@
 //! multiple importance sampling the probability of having chosen a triangle is kept per
 //! triangle (`tri_pmf`), and the shading kernel turns pmf / area into a solid-angle
 //! density with dist² / cos θ_light.
+//!
+//! GPU films add values in number formats whose range is narrower than the units scenes
+//! come in. Values are multiplied by a power of two ([`LightTable::brightness_scale`])
+//! that puts the brightest emitter near 1 before they are added, and divided by it when
+//! read: the light vertex cache's fixed-point splats.
 
 use glam::Vec3;
 
 use super::gpu::{GpuLight, LIGHT_POINT, LIGHT_TRIANGLE};
 use crate::scene::Scene;
+
+/// The largest exponent [`LightTable::brightness_scale`] uses either way: 2^±100 and
+/// the values it scales stay normal f32 numbers.
+const SCALE_EXPONENT_LIMIT: i32 = 100;
 
 /// Rec. 709 luminance.
 pub fn luminance(c: Vec3) -> f32 {
@@ -90,6 +99,33 @@ impl LightTable {
             total_power: total as f32,
         }
     }
+
+    /// The power of two GPU films multiply values by before adding them: 2^-e, where
+    /// 2^e is the brightest emitter's radiance rounded down to a power of two. A point
+    /// light's intensity I counts as the radiance I / r² it gives at the scene's radius
+    /// r. 1 without lights. Multiplying by a power of two is exact, so dividing by it
+    /// again gives back every bit.
+    pub fn brightness_scale(&self, scene_radius: f32) -> f32 {
+        let brightest = self
+            .lights
+            .iter()
+            .map(|l| {
+                let emitted = l.emission_pmf[..3].iter().copied().fold(0.0f32, f32::max);
+                if l.p0_type[3].to_bits() == LIGHT_POINT {
+                    emitted / (scene_radius * scene_radius)
+                } else {
+                    emitted
+                }
+            })
+            .filter(|&v| v.is_finite() && v > 0.0)
+            .fold(0.0f32, f32::max);
+        if brightest == 0.0 {
+            return 1.0;
+        }
+        let exponent =
+            (brightest.log2().floor() as i32).clamp(-SCALE_EXPONENT_LIMIT, SCALE_EXPONENT_LIMIT);
+        2f32.powi(-exponent)
+    }
 }
 
 #[cfg(test)]
@@ -110,5 +146,22 @@ mod tests {
             let n = Vec3::from_slice(&l.e1_area[..3]).cross(Vec3::from_slice(&l.e2_tri[..3]));
             assert!(n.y < 0.0, "the light faces down");
         }
+    }
+
+    #[test]
+    fn the_brightness_scale_puts_the_brightest_emitter_near_one() {
+        let mut scene = crate::scene::builtin("cornell-box").unwrap();
+        let radius = scene.bounds().radius();
+        // The Cornell light emits (17, 12, 4): 2^4 ≤ 17 < 2^5.
+        assert_eq!(LightTable::new(&scene).brightness_scale(radius), 1.0 / 16.0);
+        for m in &mut scene.materials {
+            m.emission *= 1e-9;
+        }
+        let scale = LightTable::new(&scene).brightness_scale(radius);
+        assert!((1.0..2.0).contains(&(17e-9 * scale)), "{scale}");
+        for m in &mut scene.materials {
+            m.emission = Vec3::ZERO;
+        }
+        assert_eq!(LightTable::new(&scene).brightness_scale(radius), 1.0);
     }
 }
