@@ -423,7 +423,7 @@ mod tests {
                 .collect();
             sums.add_pass(&estimate);
         }
-        let (gpu_sums, _) = sums.to_gpu();
+        let (gpu_sums, _) = sums.to_gpu(1.0);
         let aovs = Aovs {
             depth: vec![1.0; (w * h) as usize],
             triangle_id: vec![0; (w * h) as usize],

@@ -7,7 +7,9 @@
 //! (their mean) and its standard error — for integrators whose samples within a pass are
 //! correlated (CBPT) as much as for one-sample passes (`pt`). Sums are `f64`: integrators
 //! that accumulate in `f32` on the GPU convert exactly, so a film can be saved and
-//! restored without changing a bit.
+//! restored without changing a bit. The GPU's second moments are of estimates multiplied
+//! by a power of two (the square of an f32 estimate leaves f32's range above about 1e19
+//! and below about 1e-22); the conversions take it out and put it back exactly.
 
 use super::{Film, FilmError};
 
@@ -49,7 +51,10 @@ impl FilmSums {
     }
 
     /// Sums of GPU accumulators: `sum` holds Σ L in rgb (its w is ignored), `sum_sq`
-    /// Σ L² in rgb.
+    /// Σ (s L)² in rgb, s = `moment_scale`, a power of two
+    /// ([`LightTable::brightness_scale`]; 1 where there are no second moments).
+    ///
+    /// [`LightTable::brightness_scale`]: crate::integrator::pt::LightTable::brightness_scale
     pub fn from_gpu(
         width: u32,
         height: u32,
@@ -57,33 +62,29 @@ impl FilmSums {
         samples_per_pass: u32,
         sum: &[[f32; 4]],
         sum_sq: Option<&[[f32; 4]]>,
+        moment_scale: f32,
     ) -> Self {
-        let widen = |v: &[[f32; 4]]| -> Vec<[f64; 3]> {
-            v.iter()
-                .map(|s| [s[0] as f64, s[1] as f64, s[2] as f64])
-                .collect()
-        };
+        // 1 / s² is a power of two of f64's range (s is at most 2^±100), so dividing by
+        // it is exact.
+        let unscale = 1.0 / squared_scale(moment_scale);
         Self {
             width,
             height,
             passes,
             samples_per_pass,
-            sum: widen(sum),
-            sum_sq: sum_sq.map(widen),
+            sum: widen(sum, 1.0),
+            sum_sq: sum_sq.map(|q| widen(q, unscale)),
         }
     }
 
-    /// The sums as the GPU accumulators hold them (`w` of the first = passes). Exact for
-    /// sums that came from [`FilmSums::from_gpu`].
-    pub fn to_gpu(&self) -> (Vec<[f32; 4]>, Option<Vec<[f32; 4]>>) {
-        let narrow = |v: &[[f64; 3]], w: f32| -> Vec<[f32; 4]> {
-            v.iter()
-                .map(|s| [s[0] as f32, s[1] as f32, s[2] as f32, w])
-                .collect()
-        };
+    /// The sums as the GPU accumulators hold them (`w` of the first = passes), second
+    /// moments at `moment_scale` as [`FilmSums::from_gpu`] takes them. Exact for sums
+    /// that came from [`FilmSums::from_gpu`] at the same scale.
+    pub fn to_gpu(&self, moment_scale: f32) -> (Vec<[f32; 4]>, Option<Vec<[f32; 4]>>) {
+        let scale = squared_scale(moment_scale);
         (
-            narrow(&self.sum, self.passes as f32),
-            self.sum_sq.as_deref().map(|q| narrow(q, 0.0)),
+            narrow(&self.sum, 1.0, self.passes as f32),
+            self.sum_sq.as_deref().map(|q| narrow(q, scale, 0.0)),
         )
     }
 
@@ -186,6 +187,33 @@ impl FilmSums {
     }
 }
 
+/// s², exact in f64 for any power of two s of f32's range.
+fn squared_scale(s: f32) -> f64 {
+    let s = s as f64;
+    s * s
+}
+
+/// The rgb of GPU sums, times `by`.
+fn widen(v: &[[f32; 4]], by: f64) -> Vec<[f64; 3]> {
+    v.iter()
+        .map(|s| [s[0] as f64 * by, s[1] as f64 * by, s[2] as f64 * by])
+        .collect()
+}
+
+/// Sums times `by` as the GPU holds them, with `w` in the fourth lane.
+fn narrow(v: &[[f64; 3]], by: f64, w: f32) -> Vec<[f32; 4]> {
+    v.iter()
+        .map(|s| {
+            [
+                (s[0] * by) as f32,
+                (s[1] * by) as f32,
+                (s[2] * by) as f32,
+                w,
+            ]
+        })
+        .collect()
+}
+
 /// ε of [`relative_mse`]: the usual guard against dividing by black pixels (Rousselle
 /// et al. 2011).
 pub const RELATIVE_MSE_GUARD: f64 = 0.01;
@@ -239,10 +267,31 @@ mod tests {
     fn gpu_round_trip_is_exact() {
         let sum = [[0.1f32, 1e30, -3.5e-20, 4.0], [7.0, 8.0, 9.0, 4.0]];
         let sq = [[0.3f32, 2.0, 5.0, 0.0], [1.0, 1.0, 1.0, 0.0]];
-        let s = FilmSums::from_gpu(2, 1, 4, 1, &sum, Some(&sq));
-        let (back, back_sq) = s.to_gpu();
+        let s = FilmSums::from_gpu(2, 1, 4, 1, &sum, Some(&sq), 1.0);
+        let (back, back_sq) = s.to_gpu(1.0);
         assert_eq!(back, sum.to_vec());
         assert_eq!(back_sq.unwrap(), sq.to_vec());
+    }
+
+    #[test]
+    fn scaled_second_moments_come_back_unscaled_and_round_trip_exactly() {
+        // Two passes of estimates about 2^70 and 2^-80, whose squares leave f32's range,
+        // with their second moments summed at the scales that bring them near 1.
+        for (exponent, scale) in [(70, 2f32.powi(-70)), (-80, 2f32.powi(80))] {
+            let unit = 2f64.powi(exponent);
+            let mut expected = FilmSums::new(2, 1, 1, true);
+            expected.add_pass(&[[unit, 2.0 * unit, 0.0], [0.0; 3]]);
+            expected.add_pass(&[[3.0 * unit, 2.0 * unit, 0.0], [0.0; 3]]);
+            let u = unit as f32;
+            let sum = [[4.0 * u, 4.0 * u, 0.0, 2.0], [0.0, 0.0, 0.0, 2.0]];
+            let sq = [[1.0 + 9.0, 4.0 + 4.0, 0.0, 0.0], [0.0; 4]];
+            let got = FilmSums::from_gpu(2, 1, 2, 1, &sum, Some(&sq), scale);
+            assert_eq!(got, expected, "2^{exponent}");
+            // The estimates 1 and 3 (× 2^k) have a standard error of the mean of 1.
+            assert_eq!(got.stderr().unwrap()[0], [u, 0.0, 0.0], "2^{exponent}");
+            let (back, back_sq) = got.to_gpu(scale);
+            assert_eq!((back, back_sq.unwrap()), (sum.to_vec(), sq.to_vec()));
+        }
     }
 
     #[test]

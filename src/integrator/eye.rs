@@ -296,12 +296,12 @@ impl Integrator for EyeIntegrator {
     fn sums(&mut self) -> Result<FilmSums, IntegratorError> {
         let sum = self.accum.read::<[f32; 4]>()?;
         let (w, h) = (self.frame.width, self.frame.height);
-        Ok(FilmSums::from_gpu(w, h, self.passes, 1, &sum, None))
+        Ok(FilmSums::from_gpu(w, h, self.passes, 1, &sum, None, 1.0))
     }
 
     fn restore(&mut self, sums: &FilmSums) -> Result<(), IntegratorError> {
         check_film_size(sums, self.frame.width, self.frame.height, 1)?;
-        self.accum.write(&sums.to_gpu().0)?;
+        self.accum.write(&sums.to_gpu(1.0).0)?;
         self.passes = sums.passes;
         Ok(())
     }

@@ -2,8 +2,8 @@
 //! sequences and a keyframed camera load (and bad animation input is refused with the
 //! file and the problem); every tracer follows moving geometry; every integrator's
 //! frame k of a sequence is bit for bit the still render of the scene posed at time k,
-//! with its scene tables moved in place; `render --frames` writes the numbered files
-//! (frames_cli.rs).
+//! with its scene tables moved in place, and a new frame keeps the film; `render
+//! --frames` writes the numbered files (frames_cli.rs).
 
 mod frames_cli;
 
@@ -12,6 +12,7 @@ use crate::common;
 use std::path::{Path, PathBuf};
 
 use glam::Vec3;
+use splitray::integrator::pt::LightTable;
 use splitray::integrator::{IntegratorKind, SceneFrame};
 use splitray::render::frames::{render_frames, FrameRange, FramesControl};
 use splitray::render::{create_integrator, render, RenderError, RenderOptions, RenderOutput};
@@ -521,6 +522,47 @@ fn a_new_frame_allocates_nothing() {
                 assert_eq!(gpu.memory_bytes().0, before, "{integrator} at {next} s");
             }
         }
+    }
+    common::assert_clean(&gpu);
+}
+
+/// A new frame keeps the film, second moments included. They are summed at the
+/// brightness scale, which a point light decides by the radiance I / r² it gives at the
+/// scene's radius r: a frame that changes the radius rewrites them at the new scale.
+#[test]
+fn a_frame_that_changes_the_brightness_scale_keeps_the_film() {
+    let gpu = common::gpu();
+    let mut room = scene::builtin("cornell-box").unwrap();
+    room.point_lights.push(scene::PointLight {
+        position: Vec3::new(278.0, 400.0, 279.0),
+        intensity: Vec3::splat(1e9),
+    });
+    // A block's triangle eight times as far from the origin: the radius grows several
+    // times, and the point light, still the brightest emitter, counts as dimmer.
+    let mut posed = room.clone();
+    let moved = 10;
+    posed.triangles[moved].p = posed.triangles[moved].p.map(|p| p * 8.0);
+    let scale = |s: &Scene| LightTable::new(s).brightness_scale(s.bounds().radius());
+    assert!(scale(&posed) > scale(&room));
+    let triangles = posed.gpu_triangles();
+    for integrator in [
+        IntegratorKind::Pt,
+        IntegratorKind::LvcBdpt,
+        IntegratorKind::CisLbdpt,
+    ] {
+        let options = options(&room, integrator, TracerKind::Pdacrt);
+        let mut it = create_integrator(&gpu, &room, &options).unwrap();
+        it.render_passes(0, 2).unwrap();
+        let kept = it.sums().unwrap();
+        assert!(kept.stderr().unwrap().iter().flatten().any(|&v| v > 0.0));
+        it.set_frame(&SceneFrame {
+            scene: &posed,
+            triangles: &triangles,
+            changed: std::slice::from_ref(&(moved..moved + 1)),
+            camera: posed.camera.frame(options.width, options.height),
+        })
+        .unwrap();
+        assert!(it.sums().unwrap() == kept, "{integrator}: the film changed");
     }
     common::assert_clean(&gpu);
 }

@@ -1,5 +1,6 @@
 //! Checkpoints: a render stopped, saved, read back and continued is bit-identical to an
-//! uninterrupted render of the same samples, for every integrator; a checkpoint of
+//! uninterrupted render of the same samples, for every integrator (and, with its standard
+//! error, for films of lights 2^70 and 2^-80 as bright); a checkpoint of
 //! another scene or settings is refused; a missing, truncated, corrupted or foreign
 //! checkpoint gets an error naming the file.
 use crate::common;
@@ -134,6 +135,42 @@ fn an_interrupted_and_resumed_render_is_bit_identical_for_every_integrator() {
         assert_eq!(out.record, whole.record, "{kind}");
         assert_eq!(out.metadata.spp, spp);
         assert!(out.total_render_time_s > saved.header.render_time_s);
+    }
+    common::assert_clean(&gpu);
+}
+
+#[test]
+fn a_film_of_lights_far_from_one_resumes_bit_identical_with_its_standard_error() {
+    // The GPU sums second moments of estimates times a power of two (their squares
+    // would leave f32's range); the checkpoint holds them unscaled, and restoring puts
+    // the scale back exactly.
+    let gpu = common::gpu();
+    let dir = tempfile::tempdir().unwrap();
+    for exponent in [-80, 70] {
+        let factor = 2f32.powi(exponent);
+        let scene = common::scenes::brighter(&builtin("cornell-box").unwrap(), factor);
+        for kind in [
+            IntegratorKind::Pt,
+            IntegratorKind::LvcBdpt,
+            IntegratorKind::CisLbdpt,
+        ] {
+            let what = format!("{kind}, lights × 2^{exponent}");
+            let opts = common::small_render_options(&scene, kind, 6);
+            let (whole, saved) = whole_and_first_checkpoint(&gpu, &scene, &opts);
+            let path = save(dir.path(), &format!("{kind}{exponent}.ckpt"), &saved);
+            let read = Checkpoint::read(&path).unwrap();
+            assert!(read.sums == saved.sums, "{what}: the sums read back differ");
+            let out = resumed(&gpu, &scene, &opts, &read, &path).unwrap();
+            assert!(out.sums == whole.sums, "{what}: the resumed film differs");
+            let se = whole.film.stderr.as_ref().expect("a standard error");
+            assert_eq!(out.film.stderr.as_ref(), Some(se), "{what}");
+            assert!(se.iter().flatten().all(|v| v.is_finite()), "{what}");
+            assert!(se.iter().flatten().any(|&v| v > 0.0), "{what}");
+            assert!(
+                common::scenes::squares_leave_f32(&whole.sums.mean()),
+                "{what}: no mean whose square leaves f32's range"
+            );
+        }
     }
     common::assert_clean(&gpu);
 }

@@ -11,6 +11,12 @@
 //! negative, negative zero, denormal, NaN and infinite, absent and occluded, at splat
 //! scales 1 and 2^-20. The film's words and the non-finite and clamp counters must be
 //! the twin's exactly (integer sums do not depend on the atomics' order).
+//!
+//! `finish` against `twin::finish` on synthetic passes of radiance and splats about 1,
+//! 2^70 and 2^-80 (whose squares leave f32's range), at the brightness scale that
+//! brings them near 1, added to sums that already hold passes: a chunk of the film's
+//! pixels, and a whole large film. Σ estimate and Σ (s · estimate)² must be the twin's
+//! bit for bit (one invocation per pixel adds the passes in the twin's order).
 
 use crate::common;
 
@@ -21,7 +27,7 @@ use splitray::integrator::lvc::gpu::{
     COUNTER_CLAMPED, COUNTER_NON_FINITE,
 };
 use splitray::integrator::lvc::kernels::{AccumulateTally, Kernels};
-use splitray::integrator::lvc::twin::{accumulate, BounceRecords};
+use splitray::integrator::lvc::twin::{accumulate, finish, BounceRecords, FinishChunk};
 use splitray::integrator::lvc::{LvcOptions, Variant};
 use splitray::trace::{Hit, MISS};
 use splitray::vk::{Gpu, StreamKind};
@@ -377,6 +383,163 @@ fn splat_matches_the_fixed_point_twin() {
                 assert_eq!(want.clamped > 0, scale == 1.0, "{what}: clamps");
                 assert_ne!(want.sums, FixedFilm::from_words(&splats.film, scale).sums);
             }
+        }
+    }
+    common::assert_clean(&gpu);
+}
+
+/// Synthetic passes for `finish`: a film of `width × height` pixels whose chunk of
+/// `pixel_count` pixels from `pixel_offset` adds `passes` estimates of about
+/// 2^`exponent`, at the brightness scale 2^-`exponent`.
+struct Finish {
+    width: u32,
+    height: u32,
+    pixel_offset: usize,
+    pixel_count: usize,
+    scale: f32,
+    radiance: Vec<[f32; 4]>,
+    /// The splat film's words: whole parts below 4, so that splats are about the
+    /// radiance's size.
+    splat_words: Vec<u32>,
+    accum: Vec<[f32; 4]>,
+    accum2: Vec<[f32; 4]>,
+}
+
+impl Finish {
+    fn new(width: u32, height: u32, chunk: (usize, usize), passes: usize, exponent: i32) -> Self {
+        let (pixel_offset, pixel_count) = chunk;
+        let pixels = (width * height) as usize;
+        let unit = 2f32.powi(exponent);
+        let seed = pixels as u64 + exponent.unsigned_abs() as u64;
+        let radiance = common::uniforms(passes * pixel_count, seed)
+            .into_iter()
+            .map(|r| [r * unit, 2.0 * r * unit, 0.0, 1.0])
+            .collect();
+        let splat_words = common::random_u32s(passes * pixels * FIXED_WORDS, seed + 1)
+            .chunks_exact(FIXED_WORDS)
+            .flat_map(|w| {
+                // A third of the slots empty; high words small.
+                let empty = w[3] % 3 == 0;
+                let hi = |x: u32| if empty { 0 } else { x % 4 };
+                let lo = |x: u32| if empty { 0 } else { x };
+                [lo(w[0]), lo(w[1]), lo(w[2]), hi(w[3]), hi(w[4]), hi(w[5])]
+            })
+            .collect();
+        let start = common::uniforms(pixels, seed + 2);
+        Self {
+            width,
+            height,
+            pixel_offset,
+            pixel_count,
+            scale: 1.0 / unit,
+            radiance,
+            splat_words,
+            accum: start
+                .iter()
+                .map(|&v| [v * unit, v * unit, v, 2.0])
+                .collect(),
+            accum2: start.iter().map(|&v| [v, v, v, 0.0]).collect(),
+        }
+    }
+
+    fn splats(&self) -> FixedFilm {
+        FixedFilm::from_words(&self.splat_words, self.scale)
+    }
+
+    fn twin(&self) -> (Vec<[f32; 4]>, Vec<[f32; 4]>) {
+        let (mut accum, mut accum2) = (self.accum.clone(), self.accum2.clone());
+        let splats = self.splats();
+        let chunk = FinishChunk {
+            radiance: &self.radiance,
+            splats: &splats,
+            pixels: (self.width * self.height) as usize,
+            pixel_offset: self.pixel_offset,
+            pixel_count: self.pixel_count,
+        };
+        finish(&chunk, &mut accum, &mut accum2);
+        (accum, accum2)
+    }
+
+    fn on_gpu(&self, gpu: &Gpu, kernels: &Kernels) -> (Vec<[f32; 4]>, Vec<[f32; 4]>) {
+        let constants = LvcConstants {
+            width: self.width,
+            height: self.height,
+            brightness_scale: self.scale,
+            ..Zeroable::zeroed()
+        };
+        let buffers = [
+            gpu.upload("constants", &[constants]).unwrap(),
+            gpu.upload("radiance", &self.radiance).unwrap(),
+            gpu.upload("splat-film", &self.splat_words).unwrap(),
+            gpu.upload("accum", &self.accum).unwrap(),
+            gpu.upload("accum2", &self.accum2).unwrap(),
+        ];
+        let push = LvcPush {
+            path_count: self.radiance.len() as u32,
+            pixel_offset: self.pixel_offset as u32,
+            pixel_count: self.pixel_count as u32,
+            ..Default::default()
+        };
+        let bindings: Vec<_> = buffers.iter().map(|b| b.into()).collect();
+        let mut rec = gpu.recorder(StreamKind::Main).unwrap();
+        rec.dispatch_items(&kernels.finish, &bindings, &push, self.pixel_count as u64)
+            .unwrap();
+        gpu.wait(&rec.submit(&[]).unwrap()).unwrap();
+        (buffers[3].read().unwrap(), buffers[4].read().unwrap())
+    }
+
+    /// Σ (s · estimate)² of every pixel in f64, from the sums it started with.
+    fn second_moments(&self) -> Vec<[f64; 3]> {
+        let splats = self.splats();
+        let pixels = (self.width * self.height) as usize;
+        let mut q: Vec<[f64; 3]> = self
+            .accum2
+            .iter()
+            .map(|v| [0, 1, 2].map(|k| v[k] as f64))
+            .collect();
+        for (j, r) in self.radiance.iter().enumerate() {
+            let (pass, i) = (j / self.pixel_count, j % self.pixel_count);
+            let pixel = self.pixel_offset + i;
+            let s = splats.value(pass * pixels + pixel);
+            for k in 0..3 {
+                q[pixel][k] += ((r[k] as f64 + s[k] as f64) * self.scale as f64).powi(2);
+            }
+        }
+        q
+    }
+}
+
+fn bits(v: &[[f32; 4]]) -> Vec<u32> {
+    v.iter().flatten().map(|x| x.to_bits()).collect()
+}
+
+#[test]
+fn finish_matches_its_twin_bit_for_bit() {
+    let gpu = common::gpu();
+    let kernels = Kernels::new(&gpu, &LvcOptions::new(Variant::LvcBdpt, false), u32::MAX).unwrap();
+    for (width, height, chunk, passes) in [(13, 7, (5, 70), 3), (317, 316, (0, 100_172), 2)] {
+        for exponent in [0, 70, -80] {
+            let case = Finish::new(width, height, chunk, passes, exponent);
+            let what =
+                format!("{width}×{height}, pixels {chunk:?}, {passes} passes of 2^{exponent}");
+            let (want, want2) = case.twin();
+            let (got, got2) = case.on_gpu(&gpu, &kernels);
+            assert!(bits(&got) == bits(&want), "{what}: Σ estimate");
+            assert!(bits(&got2) == bits(&want2), "{what}: Σ (s · estimate)²");
+            // Scaled, the second moments are the f64 sums' to f32 rounding, where squares
+            // of estimates of 2^70 would overflow f32 and those of 2^-80 vanish.
+            for (p, (q, e)) in want2.iter().zip(case.second_moments()).enumerate() {
+                for k in 0..3 {
+                    let (q, e) = (q[k] as f64, e[k]);
+                    assert!((q - e).abs() <= 1e-6 * e, "{what}: pixel {p}: {q} vs {e}");
+                }
+            }
+            let (lo, hi) = (chunk.0, chunk.0 + chunk.1);
+            assert!(want[..lo] == case.accum[..lo] && want[hi..] == case.accum[hi..]);
+            assert!(
+                want[lo..hi].iter().all(|s| s[3] == 2.0 + passes as f32),
+                "{what}"
+            );
         }
     }
     common::assert_clean(&gpu);

@@ -3,7 +3,8 @@
 //! light pass runs again), camera passes cut into pixel ranges. For CIS-LBDPT,
 //! resampling one connection from one candidate is LVC-BDPT's uniform connection, up to
 //! the rounding of two different shaders. Lights a power of two brighter scale the image
-//! exactly. Then: the technique images sum to the image,
+//! and its second moments exactly, even where the estimates' squares leave f32's range.
+//! Then: the technique images sum to the image,
 //! and a render is free of hazards under synchronization validation with the three
 //! streams on distinct queues where the device has them.
 use crate::common;
@@ -84,31 +85,31 @@ fn streams_sorting_and_cache_growth_leave_the_image_bit_identical() {
     common::assert_clean(&gpu);
 }
 
-/// The scene with every emitter `factor` times as bright.
-fn brighter(scene: &Scene, factor: f32) -> Scene {
-    let mut s = scene.clone();
-    for m in &mut s.materials {
-        m.emission *= factor;
-    }
-    for l in &mut s.point_lights {
-        l.intensity *= factor;
-    }
-    s
-}
-
 #[test]
 fn emitters_a_power_of_two_brighter_scale_the_image_exactly() {
     // Scaling the lights by 2^k scales every estimate by 2^k exactly (light subpaths'
     // roulette ignores their emitted flux), light tracing's fixed-point splats included:
     // they are scaled to the scene's brightest emitter, so that splats of lights in any
     // units keep all their bits (lights of 1e-8 lost 9 % of their light-traced image).
+    // So are the second moments, which square estimates at that scale: squared as they
+    // are, estimates of lights × 2^70 overflow f32 and those of lights × 2^-80 vanish,
+    // and the standard error was infinite or zero.
     let gpu = common::gpu();
     let scene = scene();
     for variant in [Variant::LvcBdpt, Variant::CisLbdpt] {
         let expected = render(&gpu, &scene, &options(variant));
-        for exponent in [-40, 40] {
+        let expected_se = expected.stderr().unwrap();
+        assert!(
+            expected_se.iter().flatten().any(|&v| v > 0.0),
+            "{variant:?}"
+        );
+        for exponent in [-80, -40, 40, 70] {
             let factor = 2f32.powi(exponent);
-            let got = render(&gpu, &brighter(&scene, factor), &options(variant));
+            let got = render(
+                &gpu,
+                &common::scenes::brighter(&scene, factor),
+                &options(variant),
+            );
             let scaled = |sums: &[[f64; 3]], by: f64| -> Vec<[f64; 3]> {
                 sums.iter().map(|p| p.map(|v| v * by)).collect()
             };
@@ -119,6 +120,21 @@ fn emitters_a_power_of_two_brighter_scale_the_image_exactly() {
                 scaled(expected.sum_sq.as_deref().unwrap(), (factor as f64).powi(2)),
                 "{what}: second moments"
             );
+            let se = got.stderr().unwrap();
+            for (p, (g, e)) in se.iter().zip(&expected_se).enumerate() {
+                assert_eq!(
+                    *g,
+                    e.map(|v| v * factor),
+                    "{what}: pixel {p}'s standard error"
+                );
+                assert!(g.iter().all(|v| v.is_finite()), "{what}: pixel {p}: {g:?}");
+            }
+            if exponent.abs() > 60 {
+                assert!(
+                    common::scenes::squares_leave_f32(&got.mean()),
+                    "{what}: no estimate whose square leaves f32's range"
+                );
+            }
         }
     }
     common::assert_clean(&gpu);

@@ -14,7 +14,8 @@
 //!   resampled, independent and systematic draws) against `Connector` on the GPU's own
 //!   records, with the cache vertices the selection must have drawn (and, resampled,
 //!   each draw's candidate and copies from `twin::resample`); `camera_accumulate` and
-//!   `finish` against sums of the dumped contributions, and the visibility tally of every bounce, summed into the
+//!   `finish` (`twin::finish`: the film's sums and second moments) against sums of the
+//!   dumped contributions, and the visibility tally of every bounce, summed into the
 //!   integrator's counters, against `twin::accumulate`'s; with sorting on, every bounce's `order` (`sort_keys` and the
 //!   radix sort of the keys' ranks) against a stable CPU sort of the 32-bit material
 //!   keys of the same hits.
@@ -200,6 +201,7 @@ fn check_case(case: Case) -> usize {
     let pixels = case.width * case.height;
     let (mut light, mut cam) = (Agreement::default(), Agreement::default());
     let mut film = vec![[0.0f32; 4]; pixels as usize];
+    let mut film2 = film.clone();
     let mut sorted_keys = 0;
     // The material keys the sorted bounces are checked against.
     let sorted_scene = case.options.sort.then(|| PtScene::new(&case.scene));
@@ -235,28 +237,33 @@ fn check_case(case: Case) -> usize {
         );
         // finish: the film gains each pass's radiance plus its splats.
         let splats = FixedFilm::from_words(&d.splat_film, c.brightness_scale);
-        for q in 0..ch.passes {
-            for p in 0..pixels {
-                let r = radiance[(q * pixels + p) as usize];
-                let s = splats.value((q * pixels + p) as usize);
-                let e = film.get_mut(p as usize).unwrap();
-                for k in 0..3 {
-                    let v = r[k] + s[k];
-                    e[k] += v;
-                }
-                e[3] += 1.0;
-            }
-        }
+        let radiance: Vec<[f32; 4]> = radiance.iter().map(|r| [r[0], r[1], r[2], 0.0]).collect();
+        let chunk = twin::FinishChunk {
+            radiance: &radiance[..(ch.passes * pixels) as usize],
+            splats: &splats,
+            pixels: pixels as usize,
+            pixel_offset: 0,
+            pixel_count: pixels as usize,
+        };
+        twin::finish(&chunk, &mut film, &mut film2);
     }
     light.check(&format!("{} light walks", case.name));
     cam.check(&format!("{} camera walks", case.name));
     let sums = lvc.sums().unwrap();
-    for (p, e) in film.iter().enumerate() {
-        for (k, &want) in e.iter().take(3).enumerate() {
-            let got = sums.sum[p][k] as f32;
+    // The second moments are compared as the GPU sums them, at the brightness scale.
+    let s2 = (c.brightness_scale as f64).powi(2);
+    for (p, (e, e2)) in film.iter().zip(&film2).enumerate() {
+        for k in 0..3 {
+            let (got, want) = (sums.sum[p][k] as f32, e[k]);
             assert!(
                 close1(got, want, 1e-5) || (want - got).abs() < 1e-6,
                 "{}: film pixel {p}: {got} vs {want}",
+                case.name
+            );
+            let (got, want) = ((sums.sum_sq.as_ref().unwrap()[p][k] * s2) as f32, e2[k]);
+            assert!(
+                close1(got, want, 1e-4) || (want - got).abs() < 1e-6,
+                "{}: film pixel {p}: second moment {got} vs {want}",
                 case.name
             );
         }

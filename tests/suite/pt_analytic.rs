@@ -1,8 +1,10 @@
 //! The path tracer against analytic answers, its estimators against each other, and
-//! its determinism (sorting on or off gives the same film bit for bit).
+//! its determinism (sorting on or off gives the same film bit for bit; scenes a power of
+//! two larger, or with lights a power of two brighter, give the same film, scaled).
 use crate::common;
 
 use glam::Vec3;
+use splitray::film::FilmSums;
 use splitray::integrator::pt::{render_pt, PtOptions, PtOutput, PtScene, Strategy};
 use splitray::scene::{builtin, Camera, FilmSize, Material, RenderSettings, Scene, Triangle};
 use splitray::trace::TracerKind;
@@ -280,6 +282,70 @@ fn a_scene_a_power_of_two_larger_or_smaller_renders_the_same_image() {
             out.sum_rgb == expected.sum_rgb,
             "scene × 2^{exponent}: the image changed"
         );
+    }
+    common::assert_clean(&gpu);
+}
+
+/// The film of `out` (`size × size`), second moments unscaled.
+fn film_sums(out: &PtOutput, size: u32) -> FilmSums {
+    FilmSums::from_gpu(
+        size,
+        size,
+        out.passes,
+        1,
+        &out.sum_rgb,
+        Some(&out.sum_sq),
+        out.brightness_scale,
+    )
+}
+
+#[test]
+fn emitters_a_power_of_two_brighter_scale_the_image_and_its_standard_error_exactly() {
+    // Roulette and MIS look at throughputs and densities, never at emission, so lights
+    // 2^k as bright scale every sample by 2^k exactly. The second moments square samples
+    // multiplied by a power of two that puts the brightest emitter near 1: squared as
+    // they are, samples of lights × 2^70 overflow f32 and those of lights × 2^-80
+    // vanish, and the standard error was infinite or zero.
+    let gpu = common::gpu();
+    let scene = common::scenes::tricky_cornell_box();
+    let size = 16;
+    let opts = opts(3, 5, Strategy::Mis);
+    let expected = film_sums(&render(&gpu, &scene, size, TracerKind::Pdacrt, opts), size);
+    let expected_se = expected.stderr().unwrap();
+    assert!(expected_se.iter().flatten().any(|&v| v > 0.0));
+    for exponent in [-80, 70] {
+        let factor = 2f32.powi(exponent);
+        let brighter = common::scenes::brighter(&scene, factor);
+        let out = render(&gpu, &brighter, size, TracerKind::Pdacrt, opts);
+        assert_eq!(out.non_finite_dropped, 0);
+        let got = film_sums(&out, size);
+        let scaled = |sums: &[[f64; 3]], by: f64| -> Vec<[f64; 3]> {
+            sums.iter().map(|p| p.map(|v| v * by)).collect()
+        };
+        let what = format!("lights × 2^{exponent}");
+        assert_eq!(got.sum, scaled(&expected.sum, factor as f64), "{what}");
+        assert_eq!(
+            got.sum_sq.as_deref().unwrap(),
+            scaled(expected.sum_sq.as_deref().unwrap(), (factor as f64).powi(2)),
+            "{what}: second moments"
+        );
+        let se = got.stderr().unwrap();
+        for (p, (g, e)) in se.iter().zip(&expected_se).enumerate() {
+            assert_eq!(
+                *g,
+                e.map(|v| v * factor),
+                "{what}: pixel {p}'s standard error"
+            );
+            assert!(g.iter().all(|v| v.is_finite()), "{what}: pixel {p}: {g:?}");
+        }
+        // The test means something: some samples' squares leave f32's range.
+        assert!(
+            common::scenes::squares_leave_f32(&got.mean()),
+            "{what}: no mean whose square leaves f32's range"
+        );
+        // What the benchmarks and reference comparisons read agrees.
+        let (_, se_out) = out.mean_and_stderr();
+        assert_eq!(se_out, se, "{what}: PtOutput's standard error");
     }
     common::assert_clean(&gpu);
 }

@@ -1,9 +1,10 @@
 //! `pt`'s kernels against their CPU twins (`integrator::pt::twin`):
 //! - `finish` and `nee_accumulate` alone, on synthetic records: no path, one, sizes
 //!   around the workgroup's and a large one; several samples per pixel; live ids in any
-//!   order; contributions absent, occluded, and NaN or infinite radiance. Their sums
-//!   and the count of dropped samples must be the twin's bit for bit (the kernels only
-//!   add, in the twin's order).
+//!   order; contributions absent, occluded, and NaN or infinite radiance; `finish` on
+//!   radiance near 1, 2^70 and 2^-80 with the brightness scale that brings it back
+//!   near 1. Their sums and the count of dropped samples must be the twin's bit for bit
+//!   (the kernels only add, in the twin's order).
 //! - whole samples: every pixel of a film rendered by `generate`, `shade`,
 //!   `nee_accumulate` and `finish` on the GPU against `PathTwin`, which walks the same
 //!   paths with the same random numbers on the CPU, for each strategy and several
@@ -82,15 +83,20 @@ fn bits_equal(a: &[[f32; 4]], b: &[[f32; 4]]) -> bool {
             .all(|(x, y)| x.to_bits() == y.to_bits())
 }
 
-/// `finish` over `pixels` pixels and `samples` samples of each, added to sums that
+/// `finish` over `pixels` pixels and `samples` samples of each, of radiance about
+/// 2^`exponent` squared at the brightness scale 2^-`exponent`, added to sums that
 /// already hold a pass.
-fn check_finish(gpu: &Gpu, pixels: usize, samples: usize) {
-    let paths = path_states(pixels * samples, 7 + pixels as u64);
-    let mut want: Vec<[f32; 4]> = common::uniforms(pixels, 3)
-        .into_iter()
-        .map(|v| [v, v, v, 1.0])
-        .collect();
-    let mut want2 = want.clone();
+fn check_finish(gpu: &Gpu, pixels: usize, samples: usize, exponent: i32) {
+    let unit = 2f32.powi(exponent);
+    let mut paths = path_states(pixels * samples, 7 + pixels as u64);
+    for p in &mut paths {
+        for c in &mut p.radiance[..3] {
+            *c *= unit;
+        }
+    }
+    let start = common::uniforms(pixels, 3);
+    let mut want: Vec<[f32; 4]> = start.iter().map(|&v| [v * unit, v, 0.0, 1.0]).collect();
+    let mut want2: Vec<[f32; 4]> = start.iter().map(|&v| [v, v, v, 0.0]).collect();
     let buffers = [
         upload(gpu, "paths", &paths),
         upload(gpu, "accum", &want),
@@ -100,11 +106,12 @@ fn check_finish(gpu: &Gpu, pixels: usize, samples: usize) {
     let dropped = if pixels == 0 {
         0
     } else {
-        finish(&paths, &mut want, &mut want2)
+        finish(&paths, &mut want, &mut want2, 1.0 / unit)
     };
     let params = PtParams {
         pixel_count: pixels as u32,
         path_count: paths.len() as u32,
+        brightness_scale: 1.0 / unit,
         ..Zeroable::zeroed()
     };
     run(
@@ -114,7 +121,7 @@ fn check_finish(gpu: &Gpu, pixels: usize, samples: usize) {
         &params,
         pixels as u32,
     );
-    let what = format!("finish: {pixels} pixels × {samples} samples");
+    let what = format!("finish: {pixels} pixels × {samples} samples of about 2^{exponent}");
     let got: Vec<[f32; 4]> = buffers[1].read().unwrap();
     let got2: Vec<[f32; 4]> = buffers[2].read().unwrap();
     assert!(bits_equal(&got[..pixels], &want), "{what}: Σ L");
@@ -122,6 +129,26 @@ fn check_finish(gpu: &Gpu, pixels: usize, samples: usize) {
     assert_eq!(buffers[3].read::<u32>().unwrap()[0], dropped, "{what}");
     if pixels * samples >= 1000 {
         assert!(dropped > 0, "{what}: the case holds non-finite samples");
+    }
+    // Squared unscaled, radiance of 2^70 overflows f32 and radiance of 2^-80 vanishes;
+    // scaled, the second moments are the f64 sums' to f32 rounding.
+    let mut exact: Vec<[f64; 3]> = start.iter().map(|&v| [v as f64; 3]).collect();
+    for (p, path) in paths.iter().enumerate() {
+        let l = &path.radiance[..3];
+        if l.iter().all(|v| v.is_finite()) {
+            for k in 0..3 {
+                exact[p % pixels.max(1)][k] += (l[k] as f64 / unit as f64).powi(2);
+            }
+        }
+    }
+    for (p, (q, e)) in want2.iter().zip(&exact).enumerate() {
+        for k in 0..3 {
+            let (q, e) = (q[k] as f64, e[k]);
+            assert!(
+                (q - e).abs() <= 1e-6 * e,
+                "{what}: pixel {p}: Σ (s L)² {q} vs {e}"
+            );
+        }
     }
 }
 
@@ -183,7 +210,9 @@ fn finish_and_nee_accumulate_match_their_twins_bit_for_bit() {
     let gpu = common::gpu();
     for pixels in [0, 1, 63, 64, 65, 1000, 100_003] {
         for samples in [1, 3] {
-            check_finish(&gpu, pixels, samples);
+            for exponent in [0, 70, -80] {
+                check_finish(&gpu, pixels, samples, exponent);
+            }
         }
     }
     for live in [0, 1, 63, 64, 65, 1000, 100_003] {
@@ -249,7 +278,8 @@ fn check_samples(gpu: &Gpu, scene: &Scene, options: PtOptions, what: &str) {
             let (l, depth) = twin.radiance(pixel, sample);
             deepest = deepest.max(depth);
             sum += l;
-            sum2 += l * l;
+            let scaled = l * out.brightness_scale;
+            sum2 += scaled * scaled;
         }
         lit += usize::from(sum.max_element() > 0.0);
         let got = &out.sum_rgb[pixel as usize];

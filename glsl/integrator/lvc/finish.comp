@@ -2,8 +2,12 @@
 // A chunk's pass estimates into the film: per pixel of the chunk and pass, its camera
 // path's radiance plus the light-tracing splats that landed on it in that pass (already
 // divided by the pass's light paths); the film sum gets the estimate (w counts samples),
-// the second-moment sum its square (for standard errors). One invocation per pixel adds
-// the passes in order, so the sums do not depend on scheduling.
+// the second-moment sum its square (for standard errors). The square is of the estimate
+// times the brightness scale, a power of two that puts the brightest emitter near 1:
+// squared as it is, an estimate above about 1e19 would overflow f32 and one below about
+// 1e-22 vanish. The host divides the scale back out exactly (FilmSums::from_gpu). One
+// invocation per pixel adds the passes in order, so the sums do not depend on
+// scheduling.
 #include "grid.glsl"
 #include "geometry.glsl"
 #include "lvc.glsl"
@@ -28,8 +32,9 @@ void main() {
     for (uint q = 0u; q < passes; ++q) {
         vec3 splats = fixed_value(q * pixels + pixel) * (1.0 / C.brightness_scale);
         vec3 l = radiance[q * P.pixel_count + i].rgb + splats;
+        vec3 scaled = l * C.brightness_scale;
         sum += vec4(l, 1.0);
-        sum2 += vec4(l * l, 0.0);
+        sum2 += vec4(scaled * scaled, 0.0);
     }
     accum[pixel] = sum;
     accum2[pixel] = sum2;

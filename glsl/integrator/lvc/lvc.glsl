@@ -31,7 +31,8 @@ struct LvcConstants {
     uint flags;          // LVC_FLAG_*
     uint candidates;     // M: candidates per camera vertex (resampling)
     uint connections;    // N: connections per camera vertex
-    float brightness_scale;  // the power of two splat-film values are multiplied by
+    float brightness_scale;  // the power of two splat-film values and the estimates
+                             // squared into second moments are multiplied by
                              // (src/integrator/pt/lights.rs, brightness_scale)
     uint pad0;
     uint pad1;

@@ -1,6 +1,9 @@
 #version 460
 // Stage `finish`: each path's radiance becomes one sample of its pixel: the film sum
-// gets L (w counts samples) and the second-moment sum gets L^2 (for standard errors).
+// gets L (w counts samples) and the second-moment sum gets (s L)^2 (for standard
+// errors), s = params.brightness_scale, a power of two that puts the brightest emitter
+// near 1: squared as it is, radiance above about 1e19 would overflow f32 and radiance
+// below about 1e-22 vanish. The host divides s^2 back out exactly (FilmSums::from_gpu).
 // One invocation per pixel adds the chunk's samples of that pixel in sample order, so
 // the sums do not depend on scheduling. A non-finite sample would poison its pixel for
 // good: it is dropped (it counts as a sample of zero, as in pbrt-v4) and
@@ -32,8 +35,9 @@ void main() {
             l = vec3(0.0);
             atomicAdd(counters.data[0], 1u);
         }
+        vec3 scaled = l * params.brightness_scale;
         sum += vec4(l, 1.0);
-        sum2 += vec4(l * l, 0.0);
+        sum2 += vec4(scaled * scaled, 0.0);
     }
     accum.data[pixel] = sum;
     accum2.data[pixel] = sum2;

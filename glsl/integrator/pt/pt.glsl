@@ -24,7 +24,8 @@ struct PtParams {
     float ray_epsilon;   // offset of secondary-ray origins, scaled to the scene
     uint pixel_count;    // pixels in the chunk; path p takes pixel pixel_offset +
                          // p % pixel_count, sample sample_index + p / pixel_count
-    uint pad1;
+    float brightness_scale;  // finish squares radiance times this power of two
+                             // (src/integrator/pt/lights.rs, brightness_scale)
     uint pad2;
 };
 

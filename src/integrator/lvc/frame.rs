@@ -6,8 +6,10 @@
 //! - the scene tables and the tracer's geometry: the changed triangle ranges written in
 //!   place, the light table where it changed (emitter areas and edges move with their
 //!   triangles, and with them every light's probability of choice);
-//! - the constants: the camera, the ray offset (from the scene's extent) and the light
-//!   count of the posed scene;
+//! - the constants: the camera, the ray offset and the brightness scale (from the
+//!   scene's extent: point lights count at its radius) and the light count of the posed
+//!   scene; the film's second moments, summed at the old brightness scale, are
+//!   rewritten at the new one (exactly: the ratio is a power of two);
 //! - v̄, the mean cached vertices per light path, and what follows from it — the
 //!   connections' MIS count N / v̄, N_L and the passes per chunk fitted to one binding,
 //!   the cache's capacity: a function of the geometry, so the prepass runs again on the
@@ -22,6 +24,7 @@
 
 use super::plan::Plan;
 use super::{prepass_constants, LvcIntegrator};
+use crate::integrator::pt::rescale_moments;
 use crate::integrator::{IntegratorError, SceneFrame};
 
 impl LvcIntegrator<'_> {
@@ -37,6 +40,7 @@ impl LvcIntegrator<'_> {
             .move_to_frame(&self.gpu, frame, &self.light_table)?;
         let camera = &frame.camera;
         self.plan = Plan::new(&self.gpu, camera.width, camera.height, &self.options);
+        let kept_scale = self.constants.brightness_scale;
         self.constants = prepass_constants(
             &self.options,
             &self.plan,
@@ -44,6 +48,7 @@ impl LvcIntegrator<'_> {
             &frame.scene.bounds(),
             &self.light_table,
         );
+        rescale_moments(&self.accum2, kept_scale, self.constants.brightness_scale)?;
         self.constants_buffer.write(&[self.constants])?;
         self.prepass()
     }

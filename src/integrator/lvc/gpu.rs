@@ -36,8 +36,8 @@ pub struct LvcConstants {
     pub candidates: u32,
     /// N: connections per camera vertex.
     pub connections: u32,
-    /// The power of two the splat film's values are multiplied by
-    /// ([`LightTable::brightness_scale`]).
+    /// The power of two the splat film's values and the estimates squared into the
+    /// second moments are multiplied by ([`LightTable::brightness_scale`]).
     ///
     /// [`LightTable::brightness_scale`]: crate::integrator::pt::LightTable::brightness_scale
     pub brightness_scale: f32,

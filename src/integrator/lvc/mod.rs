@@ -473,12 +473,13 @@ impl Integrator for LvcIntegrator<'_> {
             1,
             &sum,
             Some(&sum_sq),
+            self.constants.brightness_scale,
         ))
     }
 
     fn restore(&mut self, sums: &FilmSums) -> Result<(), IntegratorError> {
         check_film_size(sums, self.constants.width, self.constants.height, 1)?;
-        let (sum, sum_sq) = sums.to_gpu();
+        let (sum, sum_sq) = sums.to_gpu(self.constants.brightness_scale);
         let zeros = vec![[0.0f32; 4]; self.plan.pixels as usize];
         self.gpu.wait_idle()?;
         self.accum.write(&sum)?;

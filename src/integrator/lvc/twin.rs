@@ -8,6 +8,7 @@
 
 use glam::Vec3;
 
+use super::fixed::FixedFilm;
 use super::gpu::{
     Contribution, LvcVertex, VisibilityTally, VERTEX_CONNECTIBLE, VERTEX_EXTENDS, VERTEX_VALID,
 };
@@ -332,4 +333,39 @@ pub fn accumulate(records: &BounceRecords, radiance: &mut [[f32; 4]]) -> (u32, V
         r[..3].copy_from_slice(&sum.to_array());
     }
     (non_finite, tally)
+}
+
+/// A chunk's pixels as `finish` reads them: `pixel_count` pixels from `pixel_offset` of
+/// a film of `pixels`, each pass's camera radiance at `radiance[q * pixel_count + i]`.
+pub struct FinishChunk<'a> {
+    pub radiance: &'a [[f32; 4]],
+    /// The passes' light-tracing splats, slot `q * pixels + pixel`.
+    pub splats: &'a FixedFilm,
+    pub pixels: usize,
+    pub pixel_offset: usize,
+    pub pixel_count: usize,
+}
+
+/// `finish` (finish.comp): each pass's estimate of each pixel of the chunk, its camera
+/// radiance plus its splats (unscaled), added in pass order to Σ estimate (`accum`, w
+/// counts them) and Σ (s · estimate)² (`accum2`), s = the splat film's scale (the
+/// brightness scale). `accum` and `accum2` cover the whole film.
+pub fn finish(chunk: &FinishChunk, accum: &mut [[f32; 4]], accum2: &mut [[f32; 4]]) {
+    let scale = chunk.splats.scale;
+    let passes = chunk.radiance.len() / chunk.pixel_count.max(1);
+    for i in 0..chunk.pixel_count {
+        let pixel = chunk.pixel_offset + i;
+        for q in 0..passes {
+            let splats = chunk.splats.value(q * chunk.pixels + pixel);
+            let r = chunk.radiance[q * chunk.pixel_count + i];
+            let l: [f32; 3] = std::array::from_fn(|k| r[k] + splats[k]);
+            let (sum, sum2) = (&mut accum[pixel], &mut accum2[pixel]);
+            for k in 0..3 {
+                let scaled = l[k] * scale;
+                sum[k] += l[k];
+                sum2[k] += scaled * scaled;
+            }
+            sum[3] += 1.0;
+        }
+    }
 }

@@ -2,7 +2,7 @@
 //! The light-vertex-cache integrators read the same tables ([`SceneBuffers`]) and move
 //! them the same way.
 
-use super::{upload_or_dummy, LightTable, PtIntegrator, SceneBuffers, Strategy};
+use super::{rescale_moments, upload_or_dummy, LightTable, PtIntegrator, SceneBuffers, Strategy};
 use crate::integrator::frame::{write_ranges, SceneFrame};
 use crate::integrator::pt::gpu::PtParams;
 use crate::vk::{self, Buffer, Gpu};
@@ -92,7 +92,9 @@ impl SceneBuffers {
 impl PtIntegrator<'_> {
     /// Triangles, shading normals and the tracer's geometry in the changed ranges; the
     /// light table where it changed (emitters that moved); the camera, the ray offset
-    /// (from the scene's extent) and the light count.
+    /// and the brightness scale (from the scene's extent: point lights count at its
+    /// radius), with the kept second moments rewritten at the new scale, and the light
+    /// count.
     pub(super) fn move_to_frame(&mut self, frame: &SceneFrame<'_>) -> vk::Result<()> {
         self.gpu.wait_idle()?;
         let scene = frame.scene;
@@ -108,6 +110,9 @@ impl PtIntegrator<'_> {
         (p.origin, p.forward, p.right, p.up) = (posed.origin, posed.forward, posed.right, posed.up);
         p.light_count = lights.lights.len() as u32;
         p.ray_epsilon = scene.bounds().ray_epsilon();
+        let scale = lights.brightness_scale(scene.bounds().radius());
+        rescale_moments(&self.accum2, p.brightness_scale, scale)?;
+        p.brightness_scale = scale;
         self.nee_on = self.options.strategy != Strategy::Bsdf && !lights.lights.is_empty();
         self.light_table = lights;
         Ok(())

@@ -28,7 +28,10 @@ pub struct PtParams {
     /// Pixels in the chunk: path p takes pixel `pixel_offset + p % pixel_count` and
     /// sample `sample_index + p / pixel_count`.
     pub pixel_count: u32,
-    pub pad: [u32; 2],
+    /// `finish` adds (s L)² to the second moments, s this power of two
+    /// ([`LightTable::brightness_scale`](super::LightTable::brightness_scale)).
+    pub brightness_scale: f32,
+    pub pad: u32,
 }
 
 const _: () = assert!(size_of::<PtParams>() == 128);

@@ -8,10 +8,12 @@
 //! triangle (`tri_pmf`), and the shading kernel turns pmf / area into a solid-angle
 //! density with dist² / cos θ_light.
 //!
-//! GPU films add values in number formats whose range is narrower than the units scenes
-//! come in. Values are multiplied by a power of two ([`LightTable::brightness_scale`])
-//! that puts the brightest emitter near 1 before they are added, and divided by it when
-//! read: the light vertex cache's fixed-point splats.
+//! GPU films add values in f32, whose range (about 1e-38 to 3e38, squared values half
+//! that in exponent) is narrower than the units scenes come in. Values are multiplied
+//! by a power of two ([`LightTable::brightness_scale`]) that puts the brightest emitter
+//! near 1 before they are added, and divided by it when read: the light vertex cache's
+//! fixed-point splats, and the second moments of `pt` and the light vertex cache, whose
+//! squares would otherwise overflow above about 1e19 and vanish below about 1e-22.
 
 use glam::Vec3;
 

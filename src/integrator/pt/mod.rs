@@ -171,8 +171,11 @@ impl PtScene {
 pub struct PtOutput {
     /// Per pixel: Σ L (rgb) and the number of samples (w).
     pub sum_rgb: Vec<[f32; 4]>,
-    /// Per pixel: Σ L² (rgb).
+    /// Per pixel: Σ (s L)² (rgb), s = `brightness_scale`.
     pub sum_sq: Vec<[f32; 4]>,
+    /// The power of two samples were multiplied by before they were squared
+    /// ([`LightTable::brightness_scale`]).
+    pub brightness_scale: f32,
     /// Passes (samples per pixel) taken.
     pub passes: u32,
     /// Rays cast: path rays plus shadow rays.
@@ -184,6 +187,8 @@ pub struct PtOutput {
 impl PtOutput {
     /// Per-pixel mean and standard error of the mean (rgb).
     pub fn mean_and_stderr(&self) -> (Vec<[f32; 3]>, Vec<[f32; 3]>) {
+        let scale = self.brightness_scale as f64;
+        let unscale = 1.0 / (scale * scale);
         self.sum_rgb
             .iter()
             .zip(&self.sum_sq)
@@ -193,7 +198,8 @@ impl PtOutput {
                 let mut se = [0.0; 3];
                 for c in 0..3 {
                     let m = s[c] as f64 / n;
-                    let var = (q[c] as f64 / n - m * m).max(0.0) * n / (n - 1.0).max(1.0);
+                    let sq = q[c] as f64 * unscale;
+                    let var = (sq / n - m * m).max(0.0) * n / (n - 1.0).max(1.0);
                     mean[c] = m as f32;
                     se[c] = (var / n).sqrt() as f32;
                 }
@@ -250,6 +256,23 @@ pub(crate) fn upload_or_dummy<T: bytemuck::Pod>(
     } else {
         gpu.upload(name, data)
     }
+}
+
+/// Rewrites second moments summed at brightness scale `from` (Σ (from · L)²) as sums at
+/// `to`, where a new frame changed the scale and the film is kept. Exact: the factor is
+/// a power of two.
+pub(crate) fn rescale_moments(sum_sq: &Buffer, from: f32, to: f32) -> vk::Result<()> {
+    if from == to {
+        return Ok(());
+    }
+    let by = (to as f64 / from as f64).powi(2);
+    let q: Vec<[f32; 4]> = sum_sq.read()?;
+    let times = |x: f32| (x as f64 * by) as f32;
+    let rescaled: Vec<[f32; 4]> = q
+        .iter()
+        .map(|v| [times(v[0]), times(v[1]), times(v[2]), v[3]])
+        .collect();
+    sum_sq.write(&rescaled)
 }
 
 /// The scene as the shading kernels read it (`pt`'s and the light-vertex-cache
@@ -387,6 +410,7 @@ impl<'t> PtIntegrator<'t> {
         params.rr_depth = options.rr_depth;
         params.light_count = scene.lights.lights.len() as u32;
         params.ray_epsilon = scene.ray_epsilon;
+        params.brightness_scale = scene.lights.brightness_scale(scene.bounds.radius());
         params.flags = match options.strategy {
             Strategy::Mis => FLAG_NEE | FLAG_BSDF,
             Strategy::Nee => FLAG_NEE,
@@ -427,6 +451,7 @@ impl<'t> PtIntegrator<'t> {
         Ok(PtOutput {
             sum_rgb: self.accum.read()?,
             sum_sq: self.accum2.read()?,
+            brightness_scale: self.params.brightness_scale,
             passes: self.passes,
             rays_traced: self.rays_traced,
             non_finite_dropped: self.counters.read::<u32>()?[0] as u64,
@@ -620,12 +645,13 @@ impl Integrator for PtIntegrator<'_> {
             1,
             &out.sum_rgb,
             Some(&out.sum_sq),
+            out.brightness_scale,
         ))
     }
 
     fn restore(&mut self, sums: &FilmSums) -> Result<(), IntegratorError> {
         check_film_size(sums, self.params.width, self.params.height, 1)?;
-        let (sum, sum_sq) = sums.to_gpu();
+        let (sum, sum_sq) = sums.to_gpu(self.params.brightness_scale);
         let zeros = vec![[0.0f32; 4]; self.pixels];
         self.accum.write(&sum)?;
         self.accum2.write(sum_sq.as_deref().unwrap_or(&zeros))?;

@@ -339,8 +339,14 @@ pub fn nee_accumulate(
 
 /// `finish.comp`: path p of a chunk of `paths.len()` paths over `accum.len()` pixels is
 /// a sample of pixel p mod pixels; each pixel adds its samples in order to Σ L (w counts
-/// them) and Σ L². Returns how many samples were dropped as non-finite (added as 0).
-pub fn finish(paths: &[PathState], accum: &mut [[f32; 4]], accum2: &mut [[f32; 4]]) -> u32 {
+/// them) and Σ (s L)², s = `brightness_scale`. Returns how many samples were dropped as
+/// non-finite (added as 0).
+pub fn finish(
+    paths: &[PathState],
+    accum: &mut [[f32; 4]],
+    accum2: &mut [[f32; 4]],
+    brightness_scale: f32,
+) -> u32 {
     let pixels = accum.len();
     let mut dropped = 0;
     for (p, path) in paths.iter().enumerate() {
@@ -349,10 +355,11 @@ pub fn finish(paths: &[PathState], accum: &mut [[f32; 4]], accum2: &mut [[f32; 4
             l = Vec3::ZERO;
             dropped += 1;
         }
+        let scaled = l * brightness_scale;
         let (sum, sum2) = (&mut accum[p % pixels], &mut accum2[p % pixels]);
         for k in 0..3 {
             sum[k] += l[k];
-            sum2[k] += l[k] * l[k];
+            sum2[k] += scaled[k] * scaled[k];
         }
         sum[3] += 1.0;
     }

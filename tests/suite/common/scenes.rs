@@ -68,3 +68,23 @@ pub fn scaled(scene: &Scene, factor: f32) -> Scene {
     }
     s
 }
+
+/// The scene with every emitter `factor` times as bright.
+pub fn brighter(scene: &Scene, factor: f32) -> Scene {
+    let mut s = scene.clone();
+    for m in &mut s.materials {
+        m.emission *= factor;
+    }
+    for l in &mut s.point_lights {
+        l.intensity *= factor;
+    }
+    s
+}
+
+/// Whether squaring some pixel's mean in f32 overflows or vanishes: films whose second
+/// moments were sums of such squares lost those pixels' standard error.
+pub fn squares_leave_f32(mean: &[[f32; 3]]) -> bool {
+    mean.iter()
+        .flatten()
+        .any(|&m| m > 0.0 && (m * m == 0.0 || (m * m).is_infinite()))
+}
