@@ -69,35 +69,51 @@ vec3 permute_to_z(vec3 a, uint kz) { return kz == 0u ? a.yzx : (kz == 1u ? a.zxy
 // rounding lets happen. `precise` keeps the compiler from fusing multiplies into adds
 // here, which would break that antisymmetry.
 //
-// Returns t in (tmin, tmax) or +inf, with the barycentrics (u, v) of v1 and v2. Mirrored
-// operation for operation by `intersect_triangle` in src/trace/cpu.rs, so the CPU twin
-// agrees to rounding (the division is the only operation Vulkan does not round
-// correctly). A ray in the triangle's plane (det == 0), a degenerate triangle, and a ray
-// with an infinite or NaN origin or direction, or a zero direction, never hit (an
-// infinite direction would otherwise make the shear 0 and hit at t = 0).
-float intersect_triangle(vec3 o, vec3 d, float tmin, float tmax, vec3 p0, vec3 p1, vec3 p2,
-                         out float u, out float v) {
-    u = 0.0;
-    v = 0.0;
+// The ray's part (the axis permutation and the shear, with a division) is computed once
+// per ray by `shear_ray`; `intersect_sheared` is the per-triangle part. Mirrored
+// operation for operation by `ShearedRay` in src/trace/cpu.rs, so the CPU twin agrees
+// to rounding (the division is the only operation Vulkan does not round correctly).
+
+// A ray ready for the watertight test: its origin, the axis that becomes z (3 for a ray
+// that meets nothing: an infinite or NaN origin or direction, or a zero direction, which
+// would otherwise make the shear 0 and hit at t = 0) and the shear (sx, sy, sz).
+struct ShearedRay {
+    vec3 origin;
+    uint kz;
+    vec3 shear;
+};
+
+ShearedRay shear_ray(vec3 o, vec3 d) {
     vec3 ad = abs(d);
     uint kz = ad.x > ad.y ? (ad.x > ad.z ? 0u : 2u) : (ad.y > ad.z ? 1u : 2u);
     vec3 dp = permute_to_z(d, kz);
-    if (!(finite(o) && finite(d)) || dp.z == 0.0) return 1.0 / 0.0;
+    if (!(finite(o) && finite(d)) || dp.z == 0.0) return ShearedRay(o, 3u, vec3(0.0));
     precise float sz = 1.0 / dp.z;
     precise float sx = -dp.x * sz;
     precise float sy = -dp.y * sz;
-    vec3 a = permute_to_z(p0 - o, kz);
-    vec3 b = permute_to_z(p1 - o, kz);
-    vec3 c = permute_to_z(p2 - o, kz);
-    precise float ax = a.x + sx * a.z, ay = a.y + sy * a.z;
-    precise float bx = b.x + sx * b.z, by = b.y + sy * b.z;
-    precise float cx = c.x + sx * c.z, cy = c.y + sy * c.z;
+    return ShearedRay(o, kz, vec3(sx, sy, sz));
+}
+
+// Returns t in (tmin, tmax) or +inf, with the barycentrics (u, v) of p1 and p2. A ray in
+// the triangle's plane (det == 0) and a degenerate triangle never hit.
+float intersect_sheared(ShearedRay r, float tmin, float tmax, vec3 p0, vec3 p1, vec3 p2,
+                        out float u, out float v) {
+    u = 0.0;
+    v = 0.0;
+    if (r.kz > 2u) return 1.0 / 0.0;
+    vec3 a = permute_to_z(p0 - r.origin, r.kz);
+    vec3 b = permute_to_z(p1 - r.origin, r.kz);
+    vec3 c = permute_to_z(p2 - r.origin, r.kz);
+    precise float ax = a.x + r.shear.x * a.z, ay = a.y + r.shear.y * a.z;
+    precise float bx = b.x + r.shear.x * b.z, by = b.y + r.shear.y * b.z;
+    precise float cx = c.x + r.shear.x * c.z, cy = c.y + r.shear.y * c.z;
     precise float e0 = bx * cy - by * cx;
     precise float e1 = cx * ay - cy * ax;
     precise float e2 = ax * by - ay * bx;
     if ((e0 < 0.0 || e1 < 0.0 || e2 < 0.0) && (e0 > 0.0 || e1 > 0.0 || e2 > 0.0)) return 1.0 / 0.0;
     precise float det = e0 + e1 + e2;
     if (det == 0.0) return 1.0 / 0.0;
+    precise float sz = r.shear.z;
     precise float scaled_t = (e0 * (sz * a.z) + e1 * (sz * b.z)) + e2 * (sz * c.z);
     precise float inv_det = 1.0 / det;
     precise float t = scaled_t * inv_det;
@@ -105,6 +121,12 @@ float intersect_triangle(vec3 o, vec3 d, float tmin, float tmax, vec3 p0, vec3 p
     u = e1 * inv_det;
     v = e2 * inv_det;
     return t;
+}
+
+// The test for one ray and one triangle.
+float intersect_triangle(vec3 o, vec3 d, float tmin, float tmax, vec3 p0, vec3 p1, vec3 p2,
+                         out float u, out float v) {
+    return intersect_sheared(shear_ray(o, d), tmin, tmax, p0, p1, p2, u, v);
 }
 
 #endif

@@ -35,6 +35,7 @@ void main() {
     bool has_ray = ray_index < pc.ray_count;
     Ray ray;
     if (has_ray) ray = rays.data[ray_index];
+    ShearedRay sheared = shear_ray(ray.origin, ray.dir);
     float best_t = 1.0 / 0.0;
     uint best_tri = MISS;
     float best_u = 0.0, best_v = 0.0;
@@ -52,8 +53,8 @@ void main() {
         if (!done) {
             for (uint j = 0; j < count; ++j) {
                 float u, v;
-                float t = intersect_triangle(ray.origin, ray.dir, ray.tmin, min(ray.tmax, best_t),
-                                             staged[j].v0.xyz, staged[j].v1.xyz, staged[j].v2.xyz, u, v);
+                float t = intersect_sheared(sheared, ray.tmin, min(ray.tmax, best_t),
+                                            staged[j].v0.xyz, staged[j].v1.xyz, staged[j].v2.xyz, u, v);
                 // Strictly closer only: the first (smallest-index) of equal-t hits stays.
                 if (t < best_t) {
                     best_t = t;

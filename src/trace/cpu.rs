@@ -5,10 +5,89 @@ use rayon::prelude::*;
 
 use super::types::{GpuTriangle, Hit, Ray, MISS};
 
-/// The watertight ray–triangle test (Woop, Benthin and Wald 2013), mirroring
-/// `intersect_triangle` in glsl/common/geometry.glsl operation for operation (its comment
-/// gives the method and why). Returns t in (tmin, tmax) or +inf, and the barycentrics
-/// (u, v) of vertices 1 and 2 (zero for a miss).
+/// A ray ready for the watertight ray–triangle test (Woop, Benthin and Wald 2013): the
+/// per-ray part, computed once for all the triangles it meets. Mirrors `ShearedRay`,
+/// `shear_ray` and `intersect_sheared` in glsl/common/geometry.glsl operation for
+/// operation (its comment gives the method and why).
+#[derive(Clone, Copy, Debug)]
+pub struct ShearedRay {
+    origin: Vec3,
+    /// The axis that becomes z; 3 for a ray that meets nothing (an infinite or NaN origin
+    /// or direction, or a zero direction).
+    kz: usize,
+    /// (sx, sy, sz).
+    shear: Vec3,
+}
+
+impl ShearedRay {
+    #[inline]
+    pub fn new(o: Vec3, d: Vec3) -> Self {
+        let ad = d.abs();
+        let kz = if ad.x > ad.y {
+            if ad.x > ad.z {
+                0
+            } else {
+                2
+            }
+        } else if ad.y > ad.z {
+            1
+        } else {
+            2
+        };
+        let dp = permute_to_z(d, kz);
+        if !(o.is_finite() && d.is_finite()) || dp.z == 0.0 {
+            return Self {
+                origin: o,
+                kz: 3,
+                shear: Vec3::ZERO,
+            };
+        }
+        let sz = 1.0 / dp.z;
+        Self {
+            origin: o,
+            kz,
+            shear: Vec3::new(-dp.x * sz, -dp.y * sz, sz),
+        }
+    }
+
+    /// t in (tmin, tmax) or +inf, and the barycentrics (u, v) of vertices 1 and 2 (zero
+    /// for a miss).
+    #[inline]
+    pub fn intersect(&self, tmin: f32, tmax: f32, tri: &GpuTriangle) -> (f32, f32, f32) {
+        const MISSED: (f32, f32, f32) = (f32::INFINITY, 0.0, 0.0);
+        if self.kz > 2 {
+            return MISSED;
+        }
+        let [a, b, c] = tri
+            .vertices()
+            .map(|p| permute_to_z(p - self.origin, self.kz));
+        let (sx, sy, sz) = (self.shear.x, self.shear.y, self.shear.z);
+        let (ax, ay) = (a.x + sx * a.z, a.y + sy * a.z);
+        let (bx, by) = (b.x + sx * b.z, b.y + sy * b.z);
+        let (cx, cy) = (c.x + sx * c.z, c.y + sy * c.z);
+        let e0 = bx * cy - by * cx;
+        let e1 = cx * ay - cy * ax;
+        let e2 = ax * by - ay * bx;
+        if (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) && (e0 > 0.0 || e1 > 0.0 || e2 > 0.0) {
+            return MISSED;
+        }
+        let det = e0 + e1 + e2;
+        if det == 0.0 {
+            return MISSED;
+        }
+        let scaled_t = (e0 * (sz * a.z) + e1 * (sz * b.z)) + e2 * (sz * c.z);
+        let inv_det = 1.0 / det;
+        let t = scaled_t * inv_det;
+        if !(t > tmin && t < tmax) {
+            return MISSED;
+        }
+        (t, e1 * inv_det, e2 * inv_det)
+    }
+}
+
+/// The watertight test of one ray and one triangle ([`ShearedRay`]; GLSL twin:
+/// `intersect_triangle`). Returns t in (tmin, tmax) or +inf, and the barycentrics (u, v)
+/// of vertices 1 and 2 (zero for a miss).
 #[inline]
 pub fn intersect_triangle(
     o: Vec3,
@@ -17,46 +96,7 @@ pub fn intersect_triangle(
     tmax: f32,
     tri: &GpuTriangle,
 ) -> (f32, f32, f32) {
-    const MISSED: (f32, f32, f32) = (f32::INFINITY, 0.0, 0.0);
-    let ad = d.abs();
-    let kz = if ad.x > ad.y {
-        if ad.x > ad.z {
-            0
-        } else {
-            2
-        }
-    } else if ad.y > ad.z {
-        1
-    } else {
-        2
-    };
-    let dp = permute_to_z(d, kz);
-    if !(o.is_finite() && d.is_finite()) || dp.z == 0.0 {
-        return MISSED;
-    }
-    let sz = 1.0 / dp.z;
-    let (sx, sy) = (-dp.x * sz, -dp.y * sz);
-    let [a, b, c] = tri.vertices().map(|p| permute_to_z(p - o, kz));
-    let (ax, ay) = (a.x + sx * a.z, a.y + sy * a.z);
-    let (bx, by) = (b.x + sx * b.z, b.y + sy * b.z);
-    let (cx, cy) = (c.x + sx * c.z, c.y + sy * c.z);
-    let e0 = bx * cy - by * cx;
-    let e1 = cx * ay - cy * ax;
-    let e2 = ax * by - ay * bx;
-    if (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) && (e0 > 0.0 || e1 > 0.0 || e2 > 0.0) {
-        return MISSED;
-    }
-    let det = e0 + e1 + e2;
-    if det == 0.0 {
-        return MISSED;
-    }
-    let scaled_t = (e0 * (sz * a.z) + e1 * (sz * b.z)) + e2 * (sz * c.z);
-    let inv_det = 1.0 / det;
-    let t = scaled_t * inv_det;
-    if !(t > tmin && t < tmax) {
-        return MISSED;
-    }
-    (t, e1 * inv_det, e2 * inv_det)
+    ShearedRay::new(o, d).intersect(tmin, tmax, tri)
 }
 
 /// `a` with the axis `kz` last and the other two in cyclic order (`permute_to_z` in
@@ -77,11 +117,10 @@ pub fn closest_hit(ray: &Ray, triangles: &[GpuTriangle]) -> Hit {
     if ray.is_empty() {
         return Hit::NONE;
     }
-    let o = Vec3::from(ray.origin);
-    let d = Vec3::from(ray.dir);
+    let sheared = ShearedRay::new(Vec3::from(ray.origin), Vec3::from(ray.dir));
     let mut best = Hit::NONE;
     for (i, tri) in triangles.iter().enumerate() {
-        let (t, u, v) = intersect_triangle(o, d, ray.tmin, ray.tmax.min(best.t), tri);
+        let (t, u, v) = sheared.intersect(ray.tmin, ray.tmax.min(best.t), tri);
         if t < best.t {
             best = Hit {
                 t,
@@ -96,13 +135,10 @@ pub fn closest_hit(ray: &Ray, triangles: &[GpuTriangle]) -> Hit {
 
 /// Whether anything blocks the ray within (tmin, tmax).
 pub fn occluded(ray: &Ray, triangles: &[GpuTriangle]) -> bool {
-    let o = Vec3::from(ray.origin);
-    let d = Vec3::from(ray.dir);
-    triangles.iter().any(|tri| {
-        intersect_triangle(o, d, ray.tmin, ray.tmax, tri)
-            .0
-            .is_finite()
-    })
+    let sheared = ShearedRay::new(Vec3::from(ray.origin), Vec3::from(ray.dir));
+    triangles
+        .iter()
+        .any(|tri| sheared.intersect(ray.tmin, ray.tmax, tri).0.is_finite())
 }
 
 /// Brute-force closest hits of many rays, in parallel on the CPU (in chunks, each a

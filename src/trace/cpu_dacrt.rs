@@ -203,17 +203,12 @@ impl Dacrt<'_> {
                 continue;
             }
             let ray = &self.rays[r];
+            let sheared = cpu::ShearedRay::new(ray.o, ray.d);
             let mut best = self.hits[r];
             let mut tests = 0u64;
             for &t in tris {
                 tests += 1;
-                let (th, u, v) = cpu::intersect_triangle(
-                    ray.o,
-                    ray.d,
-                    ray.tmin,
-                    ray.tmax,
-                    &self.triangles[t as usize],
-                );
+                let (th, u, v) = sheared.intersect(ray.tmin, ray.tmax, &self.triangles[t as usize]);
                 if th < best.t || (th == best.t && th.is_finite() && t < best.triangle) {
                     best = Hit {
                         t: th,

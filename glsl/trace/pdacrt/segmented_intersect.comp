@@ -103,7 +103,9 @@ void main() {
     uint lid = gl_LocalInvocationID.x;
     uint round_rays = RAYS_PER_INVOCATION * WORKGROUP_SIZE;
     for (uint ray_base = 0u; ray_base < s.ray_count; ray_base += round_rays) {
-        Ray r[RAYS_PER_INVOCATION];
+        // Each ray's part of the triangle test is done once, here, not per triangle.
+        ShearedRay r[RAYS_PER_INVOCATION];
+        vec2 segment[RAYS_PER_INVOCATION];  // (tmin, tmax)
         uint ray_id[RAYS_PER_INVOCATION];
         float best_t[RAYS_PER_INVOCATION];
         uint best[RAYS_PER_INVOCATION];
@@ -114,7 +116,9 @@ void main() {
             best[m] = MISS;
             if (k < s.ray_count) {
                 ray_id[m] = term_rays.data[s.ray_start + k];
-                r[m] = rays.data[pc.ray_offset + ray_id[m]];
+                Ray ray = rays.data[pc.ray_offset + ray_id[m]];
+                r[m] = shear_ray(ray.origin, ray.dir);
+                segment[m] = vec2(ray.tmin, ray.tmax);
                 mine = m + 1u;
             }
         }
@@ -130,8 +134,8 @@ void main() {
             for (uint m = 0u; m < RAYS_PER_INVOCATION; ++m) {
                 if (m >= mine) break;
                 float u, v;
-                float t = intersect_triangle(r[m].origin, r[m].dir, r[m].tmin, r[m].tmax,
-                                             tri.v0.xyz, tri.v1.xyz, tri.v2.xyz, u, v);
+                float t = intersect_sheared(r[m], segment[m].x, segment[m].y, tri.v0.xyz,
+                                            tri.v1.xyz, tri.v2.xyz, u, v);
                 if (t < best_t[m] || (t == best_t[m] && t < 1.0 / 0.0 && id < best[m])) {
                     best_t[m] = t;
                     best[m] = id;
@@ -159,6 +163,7 @@ void main() {
             ray_id = term_rays.data[s.ray_start + k];
             r = rays.data[pc.ray_offset + ray_id];
         }
+        ShearedRay sheared = shear_ray(r.origin, r.dir);
         float best_t = 1.0 / 0.0;
         uint best = MISS;
         for (uint tri_base = 0u; tri_base < s.tri_count; tri_base += BATCH) {
@@ -172,8 +177,8 @@ void main() {
             if (has_ray) {
                 for (uint j = 0u; j < count; ++j) {
                     float u, v;
-                    float t = intersect_triangle(r.origin, r.dir, r.tmin, r.tmax, staged[j].v0.xyz,
-                                                 staged[j].v1.xyz, staged[j].v2.xyz, u, v);
+                    float t = intersect_sheared(sheared, r.tmin, r.tmax, staged[j].v0.xyz,
+                                                staged[j].v1.xyz, staged[j].v2.xyz, u, v);
                     if (t < best_t || (t == best_t && t < 1.0 / 0.0 && staged_id[j] < best)) {
                         best_t = t;
                         best = staged_id[j];

@@ -52,6 +52,8 @@ impl PtParams {
             up,
             width: frame.width,
             height: frame.height,
+            // No scaling until the integrator sets the scene's (`finish` squares s·L).
+            brightness_scale: 1.0,
             ..Default::default()
         }
     }

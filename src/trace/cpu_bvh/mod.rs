@@ -239,6 +239,7 @@ impl CpuBvh {
             primitive_id: 0,
             hitmask: 0,
         };
+        let sheared = cpu::ShearedRay::new(origin, dir);
         let mut best = Hit::NONE;
         let mut node;
         'search: {
@@ -249,13 +250,7 @@ impl CpuBvh {
                 node.intersect(&box_ray, ray.tmax.min(best.t), state.oct_inv4),
                 {
                     let i = state.primitive_id as usize;
-                    let (t, u, v) = cpu::intersect_triangle(
-                        origin,
-                        dir,
-                        ray.tmin,
-                        ray.tmax,
-                        &self.triangles[i],
-                    );
+                    let (t, u, v) = sheared.intersect(ray.tmin, ray.tmax, &self.triangles[i]);
                     if t <= best.t && t.is_finite() {
                         let index = self.scene_index[i];
                         if t < best.t || index < best.triangle {
