@@ -34,72 +34,12 @@ fn turned_cube() -> Vec<GpuTriangle> {
     triangles
 }
 
-/// An icosphere of radius 3 about (1, 2, 3): the icosahedron with each face split in four
-/// `levels` times, new vertices pushed out to the sphere. Shared vertices are computed
-/// once, so both triangles of an edge hold the same bits.
+/// An icosphere of radius 3 about (1, 2, 3) (`scene::shapes::icosphere`: a vertex
+/// shared by two triangles is computed the same way, so it is the same bits in both).
 fn icosphere(levels: u32) -> Vec<GpuTriangle> {
-    let g = (1.0 + 5f32.sqrt()) / 2.0;
-    let mut vertices: Vec<Vec3> = [
-        [-1.0, g, 0.0],
-        [1.0, g, 0.0],
-        [-1.0, -g, 0.0],
-        [1.0, -g, 0.0],
-        [0.0, -1.0, g],
-        [0.0, 1.0, g],
-        [0.0, -1.0, -g],
-        [0.0, 1.0, -g],
-        [g, 0.0, -1.0],
-        [g, 0.0, 1.0],
-        [-g, 0.0, -1.0],
-        [-g, 0.0, 1.0],
-    ]
-    .iter()
-    .map(|&p| Vec3::from(p).normalize())
-    .collect();
-    let mut faces: Vec<[usize; 3]> = vec![
-        [0, 11, 5],
-        [0, 5, 1],
-        [0, 1, 7],
-        [0, 7, 10],
-        [0, 10, 11],
-        [1, 5, 9],
-        [5, 11, 4],
-        [11, 10, 2],
-        [10, 7, 6],
-        [7, 1, 8],
-        [3, 9, 4],
-        [3, 4, 2],
-        [3, 2, 6],
-        [3, 6, 8],
-        [3, 8, 9],
-        [4, 9, 5],
-        [2, 4, 11],
-        [6, 2, 10],
-        [8, 6, 7],
-        [9, 8, 1],
-    ];
-    for _ in 0..levels {
-        let mut midpoints = std::collections::HashMap::new();
-        let mut midpoint = |a: usize, b: usize, vertices: &mut Vec<Vec3>| {
-            *midpoints.entry((a.min(b), a.max(b))).or_insert_with(|| {
-                vertices.push(((vertices[a] + vertices[b]) * 0.5).normalize());
-                vertices.len() - 1
-            })
-        };
-        faces = faces
-            .iter()
-            .flat_map(|&[a, b, c]| {
-                let ab = midpoint(a, b, &mut vertices);
-                let bc = midpoint(b, c, &mut vertices);
-                let ca = midpoint(c, a, &mut vertices);
-                [[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]
-            })
-            .collect();
-    }
-    let place = |p: Vec3| p * 3.0 + Vec3::new(1.0, 2.0, 3.0);
-    faces
+    splitray::scene::shapes::icosphere(levels)
         .iter()
-        .map(|f| GpuTriangle::new(f.map(|i| place(vertices[i]))))
+        .map(|t| GpuTriangle::new(t.map(|p| p * 3.0 + Vec3::new(1.0, 2.0, 3.0))))
         .collect()
 }
 
