@@ -110,25 +110,8 @@ fn emitters_a_power_of_two_brighter_scale_the_image_exactly() {
                 &common::scenes::brighter(&scene, factor),
                 &options(variant),
             );
-            let scaled = |sums: &[[f64; 3]], by: f64| -> Vec<[f64; 3]> {
-                sums.iter().map(|p| p.map(|v| v * by)).collect()
-            };
             let what = format!("{variant:?}, lights × 2^{exponent}");
-            assert_eq!(got.sum, scaled(&expected.sum, factor as f64), "{what}");
-            assert_eq!(
-                got.sum_sq.as_deref().unwrap(),
-                scaled(expected.sum_sq.as_deref().unwrap(), (factor as f64).powi(2)),
-                "{what}: second moments"
-            );
-            let se = got.stderr().unwrap();
-            for (p, (g, e)) in se.iter().zip(&expected_se).enumerate() {
-                assert_eq!(
-                    *g,
-                    e.map(|v| v * factor),
-                    "{what}: pixel {p}'s standard error"
-                );
-                assert!(g.iter().all(|v| v.is_finite()), "{what}: pixel {p}: {g:?}");
-            }
+            common::scenes::assert_scaled_exactly(&got, &expected, factor, &what);
             if exponent.abs() > 60 {
                 assert!(
                     common::scenes::squares_leave_f32(&got.mean()),

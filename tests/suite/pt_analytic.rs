@@ -319,25 +319,9 @@ fn emitters_a_power_of_two_brighter_scale_the_image_and_its_standard_error_exact
         let out = render(&gpu, &brighter, size, TracerKind::Pdacrt, opts);
         assert_eq!(out.non_finite_dropped, 0);
         let got = film_sums(&out, size);
-        let scaled = |sums: &[[f64; 3]], by: f64| -> Vec<[f64; 3]> {
-            sums.iter().map(|p| p.map(|v| v * by)).collect()
-        };
         let what = format!("lights × 2^{exponent}");
-        assert_eq!(got.sum, scaled(&expected.sum, factor as f64), "{what}");
-        assert_eq!(
-            got.sum_sq.as_deref().unwrap(),
-            scaled(expected.sum_sq.as_deref().unwrap(), (factor as f64).powi(2)),
-            "{what}: second moments"
-        );
+        common::scenes::assert_scaled_exactly(&got, &expected, factor, &what);
         let se = got.stderr().unwrap();
-        for (p, (g, e)) in se.iter().zip(&expected_se).enumerate() {
-            assert_eq!(
-                *g,
-                e.map(|v| v * factor),
-                "{what}: pixel {p}'s standard error"
-            );
-            assert!(g.iter().all(|v| v.is_finite()), "{what}: pixel {p}: {g:?}");
-        }
         // The test means something: some samples' squares leave f32's range.
         assert!(
             common::scenes::squares_leave_f32(&got.mean()),

@@ -88,3 +88,32 @@ pub fn squares_leave_f32(mean: &[[f32; 3]]) -> bool {
         .flatten()
         .any(|&m| m > 0.0 && (m * m == 0.0 || (m * m).is_infinite()))
 }
+
+/// Asserts that `got`, rendered with the lights `factor` (a power of two) as bright as
+/// `expected`'s, is `expected` scaled exactly: sums by `factor`, second moments by its
+/// square, and every pixel's standard error by `factor`, finite.
+pub fn assert_scaled_exactly(
+    got: &splitray::film::FilmSums,
+    expected: &splitray::film::FilmSums,
+    factor: f32,
+    what: &str,
+) {
+    let scaled = |sums: &[[f64; 3]], by: f64| -> Vec<[f64; 3]> {
+        sums.iter().map(|p| p.map(|v| v * by)).collect()
+    };
+    assert_eq!(got.sum, scaled(&expected.sum, factor as f64), "{what}");
+    assert_eq!(
+        got.sum_sq.as_deref().unwrap(),
+        scaled(expected.sum_sq.as_deref().unwrap(), (factor as f64).powi(2)),
+        "{what}: second moments"
+    );
+    let expected_se = expected.stderr().unwrap();
+    for (p, (g, e)) in got.stderr().unwrap().iter().zip(&expected_se).enumerate() {
+        assert_eq!(
+            *g,
+            e.map(|v| v * factor),
+            "{what}: pixel {p}'s standard error"
+        );
+        assert!(g.iter().all(|v| v.is_finite()), "{what}: pixel {p}: {g:?}");
+    }
+}
