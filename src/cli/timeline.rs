@@ -94,11 +94,12 @@ pub fn run(args: &TimelineArgs) -> anyhow::Result<()> {
         from_ms: args.from,
         to_ms: args.to,
     };
-    let bytes = if ext == "png" {
-        timeline::draw::png(&trace, &options)?
+    let drawn = if ext == "png" {
+        timeline::draw::png(&trace, &options)
     } else {
-        timeline::draw::svg(&trace, &options)?.into_bytes()
+        timeline::draw::svg(&trace, &options).map(String::into_bytes)
     };
+    let bytes = drawn.with_context(|| format!("{}", args.input.display()))?;
     // The error names the file.
     write_bytes_atomically(&args.output, &bytes)?;
     print!("{}", trace.summary());

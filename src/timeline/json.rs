@@ -132,8 +132,18 @@ fn id(event: &Value, key: &str, index: usize) -> Result<u32, TimelineError> {
     Ok(n as u32)
 }
 
-fn ns(micros: f64) -> i64 {
-    (micros * 1000.0).round() as i64
+/// `key` of event `index`, microseconds, as nanoseconds: refused where it is not finite
+/// or beyond the ±106 days that i64 nanoseconds hold (a cast would clamp it silently,
+/// and a clamped slice would stretch the chart over nothing).
+fn time_ns(event: &Value, key: &str, index: usize) -> Result<i64, TimelineError> {
+    let micros = number(event, key, index)?;
+    let ns = (micros * 1000.0).round();
+    if !ns.is_finite() || ns.abs() >= i64::MAX as f64 {
+        return Err(TimelineError::Format(format!(
+            "event {index}: \"{key}\" {micros:e} µs is not a time a trace can hold"
+        )));
+    }
+    Ok(ns as i64)
 }
 
 fn track(tracks: &mut Vec<Track>, pid: u32, tid: u32) -> &mut Track {
@@ -217,10 +227,15 @@ fn read_slice(
             .and_then(Value::as_str)
             .unwrap_or("")
             .to_string(),
-        start_ns: ns(number(e, "ts", index)?),
-        dur_ns: ns(number(e, "dur", index)?),
+        start_ns: time_ns(e, "ts", index)?,
+        dur_ns: time_ns(e, "dur", index)?,
         args,
     };
+    if slice.dur_ns < 0 || slice.start_ns.checked_add(slice.dur_ns).is_none() {
+        return Err(TimelineError::Format(format!(
+            "event {index}: a slice of negative duration or ending past the time a trace can hold"
+        )));
+    }
     track(
         &mut trace.tracks,
         id(e, "pid", index)?,
@@ -239,7 +254,7 @@ fn read_counter_samples(
     name: &str,
     args: Map<String, Value>,
 ) -> Result<(), TimelineError> {
-    let (pid, ts) = (id(e, "pid", index)?, ns(number(e, "ts", index)?));
+    let (pid, ts) = (id(e, "pid", index)?, time_ns(e, "ts", index)?);
     for (series, value) in args {
         let Some(value) = value.as_f64() else {
             continue;
@@ -414,5 +429,27 @@ mod tests {
         );
         assert!(err("[{\"ph\":\"X\",\"pid\":-1,\"tid\":1,\"ts\":0,\"dur\":1}]").contains("pid"));
         assert_eq!(from_json("[]").unwrap(), Trace::default());
+    }
+
+    #[test]
+    fn times_a_trace_cannot_hold_are_refused() {
+        let slice = |ts: &str, dur: &str| {
+            from_json(&format!(
+                "[{{\"ph\":\"X\",\"pid\":1,\"tid\":1,\"ts\":{ts},\"dur\":{dur}}}]"
+            ))
+            .map_err(|e| e.to_string())
+        };
+        assert!(slice("0", "-5").unwrap_err().contains("negative duration"));
+        assert!(slice("1e308", "1").unwrap_err().contains("\"ts\" 1e308"));
+        assert!(slice("0", "1e20").unwrap_err().contains("\"dur\""));
+        assert!(slice("5e15", "5e15").unwrap_err().contains("event 0"));
+        let counter = "[{\"ph\":\"C\",\"pid\":1,\"ts\":-1e300,\"name\":\"c\",\"args\":{\"v\":1}}]";
+        assert!(from_json(counter)
+            .unwrap_err()
+            .to_string()
+            .contains("\"ts\""));
+        // Times before the capture began are times too.
+        let end = slice("-1", "1").unwrap().tracks[0].slices[0].clone();
+        assert_eq!((end.start_ns, end.dur_ns), (-1000, 1000));
     }
 }
