@@ -1,6 +1,6 @@
 //! A render from start to finish: scene → GPU data → tracer → AOVs → integrator passes
 //! → film, with the statistics a user profiles by. The pass loop is the same for every
-//! integrator ([`run_passes`]); a [`RenderPlan`] makes it continue a [`Checkpoint`],
+//! integrator (`run_passes`); a [`RenderPlan`] makes it continue a [`Checkpoint`],
 //! take one [`Shard`]'s passes, or save its film as it goes.
 
 pub mod checkpoint;

@@ -167,7 +167,7 @@ impl<'a> Connector<'a> {
     }
 
     /// s = 1 from camera vertex `j`'s BSDF towards the light point, `e` (evaluated by
-    /// [`Connector::endpoint`] or by CBPT's kernels): the sample as if unoccluded, `None`
+    /// `Connector::endpoint` or by CBPT's kernels): the sample as if unoccluded, `None`
     /// when it carries nothing.
     pub fn weigh_light_point(
         &self,
@@ -242,7 +242,7 @@ impl<'a> Connector<'a> {
 
     /// s ≥ 2, t ≥ 2 from the two endpoints' BSDFs towards each other, `ez` (camera
     /// vertex `j`, radiance) and `ey` (light vertex `i`, importance), evaluated by
-    /// [`Connector::endpoint`] or by CBPT's kernels: the sample as if unoccluded, `None`
+    /// `Connector::endpoint` or by CBPT's kernels: the sample as if unoccluded, `None`
     /// when it carries nothing.
     pub fn weigh_connection(
         &self,

@@ -56,8 +56,8 @@ impl PathSampler {
 }
 
 /// The dimension layout of the bidirectional integrators. Camera subpaths start like
-/// `pt`'s paths (dimensions 0 and 1 jitter the pixel), then take [`PER_VERTEX`]
-/// dimensions per vertex; light subpaths live above [`LIGHT_BASE`].
+/// `pt`'s paths (dimensions 0 and 1 jitter the pixel), then take [`dims::PER_VERTEX`]
+/// dimensions per vertex; light subpaths live above [`dims::LIGHT_BASE`].
 pub mod dims {
     /// Dimensions each subpath vertex owns.
     pub const PER_VERTEX: u32 = 8;

@@ -9,7 +9,7 @@
 //! - [`FilmSums`] ([`sums`]): the per-pass sums every integrator accumulates (mean and
 //!   standard error), which checkpoints save and shards merge.
 //! - [`write_outputs`]: both at once.
-//! - [`Reference`] ([`reference`]): a converged image to measure a film's error against,
+//! - [`Reference`] ([`reference`](mod@reference)): a converged image to measure a film's error against,
 //!   less the reference's own noise where its standard errors are known.
 //! - [`DeviceFilm`] ([`device`]): an integrator's film where it lives on the GPU.
 //!

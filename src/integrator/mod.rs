@@ -7,7 +7,7 @@
 //! random numbers are a function of (seed, pass index) only: the film after passes
 //! `0..n` is the same however the passes were grouped into calls, interrupted or resumed.
 //!
-//! The ray workloads of the PDACRT paper's Tables 1–2 are integrators too ([`eye`]):
+//! The ray workloads of the PDACRT paper's Tables 1–2 are integrators too (module `eye`):
 //! `primary` (eye-light shading), `ao` (8 ambient-occlusion rays per hit), `shadow` (one
 //! point light), `reflection` (one mirror bounce) and `path` (7 diffuse bounces). `pt` is
 //! the physically based wavefront path tracer of [`pt`]; `bpt` and `light` the CPU

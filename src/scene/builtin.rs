@@ -33,7 +33,7 @@
 //! ## `lamps`
 //! A room lit by three hanging lamps whose area lights sit deep inside their shades, with
 //! layered materials and procedural objects of some thousands of triangles: see
-//! [`lamps`](self::lamps) (its own module).
+//! `lamps` (its own module).
 
 mod lamps;
 

@@ -11,7 +11,7 @@
 //! kernel packs the answers 32 to a word.
 //!
 //! Two population couples can be in flight (Algorithm 2): each has its own vertex
-//! buffers and host zones ([`Slot`], the white and black of Fig. 4), so step t's upload
+//! buffers and host zones (`Slot`, the white and black of Fig. 4), so step t's upload
 //! and batches can be submitted while step t − 1's are still running.
 
 use std::sync::Arc;

@@ -52,7 +52,7 @@ pub struct Wavefront {
     pub count_alive: Buffer,
     /// A camera bounce's [`VisibilityTally`].
     pub tally: Buffer,
-    /// The two counts (bytes 0–7) and the tally (from [`TALLY_READBACK_OFFSET`]).
+    /// The two counts (bytes 0–7) and the tally (from `TALLY_READBACK_OFFSET`).
     pub counts_readback: Buffer,
     pub compact: Compact,
     compact_scratch: Buffer,

@@ -1,9 +1,9 @@
 //! Wavefront OBJ + MTL loading (through `tobj`) and export.
 //!
-//! Before `tobj` sees a file it is pre-scanned ([`prescan`]), so that malformed numbers,
+//! Before `tobj` sees a file it is pre-scanned (`prescan`), so that malformed numbers,
 //! NaN / inf coordinates and out-of-range face indices are reported with their line number
 //! (and so that inputs on which `tobj` would panic never reach it), and rewritten where
-//! `tobj` would read it otherwise than the OBJ format means ([`for_tobj`]: libraries named
+//! `tobj` would read it otherwise than the OBJ format means (`for_tobj`: libraries named
 //! after a `usemtl` or several to a line, trailing comments, one-number texture
 //! coordinates, vertex colours on some vertices only). Faces are triangulated;
 //! vertex normals are kept when every vertex of a `tobj` mesh has one. Faces without a

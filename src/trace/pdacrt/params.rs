@@ -174,7 +174,7 @@ impl PdacrtParams {
     ///   (primary) and 92–94 → 61–65 ms (shadow), `swarm` 186–194 → 127–134 and 155 →
     ///   110–112, the bunny at 1024² 244–261 → 187–196 and 187–207 → 135–157
     ///   (docs/PERFORMANCE.md).
-    /// - The batch must fit shared memory ([`STAGED_TRIANGLE_BYTES`] per staged triangle).
+    /// - The batch must fit shared memory (`STAGED_TRIANGLE_BYTES` per staged triangle).
     pub fn for_device(gpu: &Gpu) -> Self {
         let mut p = Self::default();
         let shared = u64::from(gpu.info().limits.max_compute_shared_memory_size);
