@@ -536,26 +536,18 @@ fn ray_query_matches_brute_force_in_the_cornell_box() {
     common::assert_clean(&gpu);
 }
 
-/// The bunny at 512×512 from its framing camera: ray-query against brute force on a
-/// subset and against cpu-dacrt on all rays, with both tracers' throughput printed.
+/// The bunny at 512×512 from its framing camera: cpu-dacrt against brute force on a
+/// subset, its occlusion against its closest hits on all rays, and ray-query against
+/// cpu-dacrt on all rays for both queries. (Throughput is `splitray bench trace`'s.)
 #[test]
-fn bunny_512_throughput_and_agreement() {
+fn bunny_512_ray_query_and_cpu_dacrt_agree() {
     let Some(scene) = bunny() else { return };
     let tris = scene.gpu_triangles();
     let rays = common::camera_rays(&scene.camera, 512, 512);
-    let n = rays.len() as f64;
 
     let gpu = common::gpu();
     let mut dacrt = CpuDacrtTracer::new(&gpu, &tris);
     let dacrt_hits = common::trace_hits(&gpu, &mut dacrt, &rays, Query::ClosestHit);
-    let t = dacrt.last_trace_time().as_secs_f64();
-    eprintln!(
-        "cpu-dacrt bunny 512x512 closest hit: {:.3} s = {:.3} Mrays/s (1 thread, {:?}, {:?})",
-        t,
-        n / t / 1e6,
-        dacrt.params(),
-        dacrt.last_stats()
-    );
     // Brute force on every 61st ray.
     let sample: Vec<usize> = (0..rays.len()).step_by(61).collect();
     let sample_rays: Vec<Ray> = sample.iter().map(|&i| rays[i]).collect();
@@ -563,13 +555,10 @@ fn bunny_512_throughput_and_agreement() {
     for (k, &i) in sample.iter().enumerate() {
         assert_eq!(dacrt_hits[i], expected[k], "ray {i}");
     }
-    let start = Instant::now();
-    let (_, _) = cpu_dacrt::trace(&rays, &tris, Query::Occlusion, &dacrt.params());
-    let t = start.elapsed().as_secs_f64();
-    eprintln!(
-        "cpu-dacrt bunny 512x512 occlusion: {t:.3} s = {:.3} Mrays/s",
-        n / t / 1e6
-    );
+    let (occluded, _) = cpu_dacrt::trace(&rays, &tris, Query::Occlusion, &dacrt.params());
+    for (i, (o, d)) in occluded.iter().zip(&dacrt_hits).enumerate() {
+        assert_eq!(o.is_hit(), d.is_hit(), "cpu-dacrt occlusion of ray {i}");
+    }
 
     if !gpu.ray_query() {
         eprintln!(
@@ -580,33 +569,14 @@ fn bunny_512_throughput_and_agreement() {
         return;
     }
     let mut rq = RayQueryTracer::new(&gpu, &tris).unwrap();
-    eprintln!(
-        "ray-query bunny build (BLAS+TLAS, {} triangles): {:.3} s, {} bytes",
-        tris.len(),
-        rq.build_time().as_secs_f64(),
-        rq.acceleration_structure_bytes()
-    );
     let ray_buf = gpu.upload("rays", &rays).unwrap();
     let hit_buf = gpu.zeroed::<Hit>("hits", rays.len()).unwrap();
     for query in [Query::ClosestHit, Query::Occlusion] {
-        // Warm-up, then timed.
         gpu.wait(
             &rq.trace(&ray_buf, &hit_buf, rays.len() as u32, query, &[])
                 .unwrap(),
         )
         .unwrap();
-        let start = Instant::now();
-        gpu.wait(
-            &rq.trace(&ray_buf, &hit_buf, rays.len() as u32, query, &[])
-                .unwrap(),
-        )
-        .unwrap();
-        let t = start.elapsed().as_secs_f64();
-        eprintln!(
-            "ray-query bunny 512x512 {query:?} on '{}': {t:.3} s = {:.3} Mrays/s",
-            gpu.info().name,
-            n / t / 1e6
-        );
         let hits = hit_buf.read::<Hit>().unwrap();
         match query {
             Query::ClosestHit => {
@@ -618,11 +588,6 @@ fn bunny_512_throughput_and_agreement() {
                     assert_eq!(h.is_hit(), d.is_hit(), "occlusion of ray {i}");
                 }
             }
-        }
-    }
-    for rec in gpu.take_profile().records.iter() {
-        if rec.name.contains("ray-query") || rec.name.contains("ray_query") {
-            eprintln!("  gpu profile: {} {:.3} ms", rec.name, rec.duration_ms());
         }
     }
     drop(rq);
