@@ -18,7 +18,7 @@ struct FrameParams {
     uint jitter;        // 0: through pixel centres; 1: uniformly jittered in the pixel
     uint ao_rays;       // ambient-occlusion rays per hit
     float ao_radius;
-    float ray_epsilon;  // offset of secondary-ray origins, scaled to the scene
+    float ray_epsilon;  // offset of secondary-ray origins (Aabb::ray_epsilon)
     uint bounce;        // path integrator: which bounce this pass shades (0 = camera hit)
     uint pad0;
     vec4 light;         // shadow integrator: point light position, w = intensity (W/sr)

@@ -160,7 +160,8 @@ pub fn secondary_batches(
     trace: &mut dyn FnMut(&[Ray]) -> Vec<Hit>,
 ) -> Vec<RayBatch> {
     let radius = scene.bounds().radius().max(1e-6);
-    let eps = 1e-4 * radius;
+    // The integrators' offset, so that `bench` casts the rays they would.
+    let eps = scene.bounds().ray_epsilon(scene.camera.position);
     let points = surface_points(primary, primary_hits, triangles, eps);
     match workload {
         Workload::Primary => vec![],

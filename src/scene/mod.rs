@@ -338,17 +338,26 @@ impl Aabb {
         self.extent().length() * 0.5
     }
 
-    /// How far a ray that leaves a surface inside these bounds starts off it (along the
-    /// geometric normal), so that it does not hit that surface again: 1e-4 of the
-    /// radius, a scale-free fraction that holds for scenes in any units, and at least
-    /// 32 float steps of the largest coordinate, so that the offset clears the rounding
-    /// of hit points far from the origin. Always positive.
-    pub fn ray_epsilon(&self) -> f32 {
+    /// How far a ray that leaves a surface inside these bounds, in a scene seen from
+    /// `eye`, starts off it (along the geometric normal) so that it does not hit that
+    /// surface again: 32 float steps of the largest coordinate of the bounds and the eye.
+    ///
+    /// A computed hit point lies off its triangle's plane by the rounding of what it was
+    /// computed from (the ray's origin, the triangle's vertices): a few float steps of
+    /// the largest of those coordinates, which never exceed the bounds and the eye. 32
+    /// steps leave a margin of about four over that. The offset is not a fraction of the
+    /// scene's extent: a wide ground plane would make it as large as the objects on it,
+    /// and their shadow rays would start above them (`ray_offset` test: a unit cube on a
+    /// plane 2·10⁴ wide). Always positive.
+    pub fn ray_epsilon(&self, eye: Vec3) -> f32 {
         const FLOAT_STEPS: f32 = 32.0 * f32::EPSILON;
-        let farthest = self.min.abs().max(self.max.abs()).max_element();
-        (1e-4 * self.radius())
-            .max(FLOAT_STEPS * farthest)
-            .max(f32::MIN_POSITIVE)
+        let farthest = self
+            .min
+            .abs()
+            .max(self.max.abs())
+            .max(eye.abs())
+            .max_element();
+        (FLOAT_STEPS * farthest).max(f32::MIN_POSITIVE)
     }
 
     pub fn contains(&self, p: Vec3) -> bool {

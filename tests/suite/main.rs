@@ -49,6 +49,7 @@ mod pt_analytic;
 mod pt_kernels;
 mod pt_materials;
 mod pt_mitsuba;
+mod ray_offset;
 mod reference_compare;
 mod render;
 mod scene_load;

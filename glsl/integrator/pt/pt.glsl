@@ -21,7 +21,7 @@ struct PtParams {
     uint rr_depth;       // Russian roulette from this depth on (Mitsuba's rr_depth)
     uint light_count;    // entries of the light table
     uint flags;          // PT_FLAG_*
-    float ray_epsilon;   // offset of secondary-ray origins, scaled to the scene
+    float ray_epsilon;   // offset of secondary-ray origins (Aabb::ray_epsilon)
     uint pixel_count;    // pixels in the chunk; path p takes pixel pixel_offset +
                          // p % pixel_count, sample sample_index + p / pixel_count
     float brightness_scale;  // finish squares radiance times this power of two

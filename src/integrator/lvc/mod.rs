@@ -109,7 +109,7 @@ fn prepass_constants(
     lights: &LightTable,
 ) -> LvcConstants {
     let mut constants = LvcConstants::new(camera);
-    constants.ray_epsilon = bounds.ray_epsilon();
+    constants.ray_epsilon = bounds.ray_epsilon(camera.origin);
     constants.brightness_scale = lights.brightness_scale(bounds.radius());
     constants.seed = fold_seed(options.seed);
     constants.light_paths = plan.light_paths;
