@@ -93,3 +93,24 @@ fn the_render_loop_stops_at_a_pass_boundary_when_asked() {
     assert!(out.film.depth.is_some() && out.film.triangle_id.is_some());
     common::assert_clean(&gpu);
 }
+
+/// The GPU integrators other than the light-vertex-cache ones (whose three streams
+/// `lvc_determinism` checks) render under synchronization validation without a message:
+/// the eye integrators, `pt` with the tracer's level loops, and `cbpt` with its
+/// double-buffered batches. Where a device has several queues the streams run on
+/// distinct ones and hazards between queues are checked too.
+#[test]
+fn gpu_integrators_are_clean_under_synchronization_validation() {
+    let gpu = common::gpu_with(splitray::vk::StreamPlacement::Spread, true);
+    let scene = builtin("cornell-box").unwrap();
+    for kind in [
+        IntegratorKind::Primary,
+        IntegratorKind::Pt,
+        IntegratorKind::Cbpt,
+    ] {
+        let options = common::small_render_options(&scene, kind, 8);
+        let out = splitray::render::render(&gpu, &scene, &options, &mut |_| {}).unwrap();
+        assert_eq!(out.metadata.spp, 8, "{kind}");
+        common::assert_clean(&gpu);
+    }
+}
