@@ -161,7 +161,7 @@ pub fn secondary_batches(
 ) -> Vec<RayBatch> {
     let radius = scene.bounds().radius().max(1e-6);
     // The integrators' offset, so that `bench` casts the rays they would.
-    let eps = scene.bounds().ray_epsilon(scene.camera.position);
+    let eps = scene.bounds().ray_epsilon([scene.camera.position]);
     let points = surface_points(primary, primary_hits, triangles, eps);
     match workload {
         Workload::Primary => vec![],

@@ -159,7 +159,7 @@ fn set_scene_params(
     (frame.origin, frame.forward, frame.right, frame.up) =
         (posed.origin, posed.forward, posed.right, posed.up);
     frame.ao_radius = ao_radius_fraction * bounds.radius();
-    frame.ray_epsilon = bounds.ray_epsilon(camera.origin);
+    frame.ray_epsilon = bounds.ray_epsilon([camera.origin]);
     frame.light = light.into();
 }
 

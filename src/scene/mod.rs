@@ -338,24 +338,23 @@ impl Aabb {
         self.extent().length() * 0.5
     }
 
-    /// How far a ray that leaves a surface inside these bounds, in a scene seen from
-    /// `eye`, starts off it (along the geometric normal) so that it does not hit that
-    /// surface again: 32 float steps of the largest coordinate of the bounds and the eye.
+    /// How far a ray that leaves a surface inside these bounds starts off it (along the
+    /// geometric normal) so that it does not hit that surface again, where rays also
+    /// start from `sources` (the camera, point lights): 32 float steps of the largest
+    /// coordinate of the bounds and the sources.
     ///
     /// A computed hit point lies off its triangle's plane by the rounding of what it was
     /// computed from (the ray's origin, the triangle's vertices): a few float steps of
-    /// the largest of those coordinates, which never exceed the bounds and the eye. 32
-    /// steps leave a margin of about four over that. The offset is not a fraction of the
-    /// scene's extent: a wide ground plane would make it as large as the objects on it,
-    /// and their shadow rays would start above them (`ray_offset` test: a unit cube on a
-    /// plane 2·10⁴ wide). Always positive.
-    pub fn ray_epsilon(&self, eye: Vec3) -> f32 {
+    /// the largest of those coordinates, which never exceed the bounds and the sources.
+    /// 32 steps leave a margin of about four over that. The offset is not a fraction of
+    /// the scene's extent: a wide ground plane would make it as large as the objects on
+    /// it, and their shadow rays would start above them (`ray_offset` test: a unit cube
+    /// on a plane 2·10⁴ wide). Always positive.
+    pub fn ray_epsilon(&self, sources: impl IntoIterator<Item = Vec3>) -> f32 {
         const FLOAT_STEPS: f32 = 32.0 * f32::EPSILON;
-        let farthest = self
-            .min
-            .abs()
-            .max(self.max.abs())
-            .max(eye.abs())
+        let farthest = sources
+            .into_iter()
+            .fold(self.min.abs().max(self.max.abs()), |m, p| m.max(p.abs()))
             .max_element();
         (FLOAT_STEPS * farthest).max(f32::MIN_POSITIVE)
     }
@@ -399,6 +398,14 @@ impl Scene {
             .iter()
             .map(|t| crate::trace::GpuTriangle::new(t.p))
             .collect()
+    }
+
+    /// The ray offset of the integrators that trace from the camera and from the point
+    /// lights ([`Aabb::ray_epsilon`]).
+    pub fn ray_epsilon(&self) -> f32 {
+        let lights = self.point_lights.iter().map(|l| l.position);
+        self.bounds()
+            .ray_epsilon(std::iter::once(self.camera.position).chain(lights))
     }
 
     /// Bounding box of all triangle vertices (empty box for no triangles).
@@ -556,5 +563,34 @@ mod tests {
         let half = (c.fov_y.to_radians() * 0.5).sin();
         assert!(b.radius() / d <= half);
         assert!(c.position.z > b.max.z);
+    }
+
+    #[test]
+    fn the_ray_offset_follows_the_farthest_coordinate_rays_start_from() {
+        let steps = |x: f32| 32.0 * f32::EPSILON * x;
+        let b = Aabb {
+            min: Vec3::new(-1e4, 0.0, -1e4),
+            max: Vec3::new(1e4, 1.0, 1e4),
+        };
+        // As wide as the plane, not a fraction of it.
+        assert_eq!(b.ray_epsilon([]), steps(1e4));
+        assert_eq!(b.ray_epsilon([Vec3::new(0.0, -3e5, 2.0)]), steps(3e5));
+        let mut scene = builtin("cornell-box").unwrap();
+        let (camera, farthest) = (scene.camera.position, scene.bounds().max.max_element());
+        assert_eq!(
+            scene.ray_epsilon(),
+            steps(farthest.max(camera.abs().max_element()))
+        );
+        // Light paths start at point lights: one far away counts.
+        scene.point_lights.push(PointLight {
+            position: Vec3::new(0.0, 5e6, 0.0),
+            intensity: Vec3::ONE,
+        });
+        assert_eq!(scene.ray_epsilon(), steps(5e6));
+        let tiny = Aabb {
+            min: Vec3::ZERO,
+            max: Vec3::ZERO,
+        };
+        assert_eq!(tiny.ray_epsilon([]), f32::MIN_POSITIVE);
     }
 }

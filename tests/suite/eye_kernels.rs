@@ -61,7 +61,7 @@ impl Twin {
         let hits = cpu::closest_hits(&rays, &triangles);
         let seed = fold_seed(options(&scene, SIDE, SIDE, 1, IntegratorKind::Ao).seed);
         Self {
-            ray_epsilon: scene.bounds().ray_epsilon(scene.camera.position),
+            ray_epsilon: scene.bounds().ray_epsilon([scene.camera.position]),
             scene,
             triangles,
             rays,

@@ -402,7 +402,7 @@ fn reflection_integrator_shows_what_the_cpu_sees_in_the_mirror() {
     let tris = scene.gpu_triangles();
     let primary = primary_rays(&scene, w, h);
     let hits = cpu::closest_hits(&primary, &tris);
-    let eps = scene.bounds().ray_epsilon(scene.camera.position);
+    let eps = scene.bounds().ray_epsilon([scene.camera.position]);
     let mut agree = 0;
     let mut compared = 0;
     for (i, (r, hit)) in primary.iter().zip(&hits).enumerate() {

@@ -45,7 +45,7 @@ impl LvcIntegrator<'_> {
             &self.options,
             &self.plan,
             camera,
-            &frame.scene.bounds(),
+            (&frame.scene.bounds(), frame.scene.ray_epsilon()),
             &self.light_table,
         );
         rescale_moments(&self.accum2, kept_scale, self.constants.brightness_scale)?;

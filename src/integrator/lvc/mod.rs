@@ -97,19 +97,20 @@ pub fn lvc_counts(
     }
 }
 
-/// The constants of a render through `camera` before its prepass: the camera, the ray
-/// offset and the splat film's scale from the scene's `bounds` and `lights`, the light
-/// count, N_L of the plan before the prepass fits it, and provisional counts (the
-/// prepass's vertices do not depend on them).
+/// The constants of a render through `camera` before its prepass: the camera, the
+/// scene's ray offset ([`Scene::ray_epsilon`](crate::scene::Scene::ray_epsilon)), the
+/// splat film's scale from the scene's `bounds` and `lights`, the light count, N_L of
+/// the plan before the prepass fits it, and provisional counts (the prepass's vertices
+/// do not depend on them).
 fn prepass_constants(
     options: &LvcOptions,
     plan: &Plan,
     camera: &CameraFrame,
-    bounds: &Aabb,
+    (bounds, ray_epsilon): (&Aabb, f32),
     lights: &LightTable,
 ) -> LvcConstants {
     let mut constants = LvcConstants::new(camera);
-    constants.ray_epsilon = bounds.ray_epsilon(camera.origin);
+    constants.ray_epsilon = ray_epsilon;
     constants.brightness_scale = lights.brightness_scale(bounds.radius());
     constants.seed = fold_seed(options.seed);
     constants.light_paths = plan.light_paths;
@@ -237,7 +238,13 @@ impl<'t> LvcIntegrator<'t> {
     ) -> Result<Self, IntegratorError> {
         options.check()?;
         let plan = Plan::new(gpu, camera.width, camera.height, options);
-        let constants = prepass_constants(options, &plan, camera, &scene.bounds, &scene.lights);
+        let constants = prepass_constants(
+            options,
+            &plan,
+            camera,
+            (&scene.bounds, scene.ray_epsilon),
+            &scene.lights,
+        );
         let pixels = plan.pixels as usize;
         let max_light_paths = plan.chunk_light_paths(plan.passes_per_chunk);
         let mut integrator = Self {

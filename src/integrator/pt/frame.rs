@@ -109,7 +109,7 @@ impl PtIntegrator<'_> {
         let p = &mut self.params;
         (p.origin, p.forward, p.right, p.up) = (posed.origin, posed.forward, posed.right, posed.up);
         p.light_count = lights.lights.len() as u32;
-        p.ray_epsilon = scene.bounds().ray_epsilon(frame.camera.origin);
+        p.ray_epsilon = scene.ray_epsilon();
         let scale = lights.brightness_scale(scene.bounds().radius());
         rescale_moments(&self.accum2, p.brightness_scale, scale)?;
         p.brightness_scale = scale;

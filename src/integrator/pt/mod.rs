@@ -162,7 +162,7 @@ impl PtScene {
             normals,
             lights: LightTable::new(scene),
             bounds: scene.bounds(),
-            ray_epsilon: scene.bounds().ray_epsilon(scene.camera.position),
+            ray_epsilon: scene.ray_epsilon(),
         }
     }
 }
