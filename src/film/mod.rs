@@ -9,8 +9,8 @@
 //! - [`FilmSums`] ([`sums`]): the per-pass sums every integrator accumulates (mean and
 //!   standard error), which checkpoints save and shards merge.
 //! - [`write_outputs`]: both at once.
-//! - [`Reference`] ([`reference`](mod@reference)): a converged image to measure a film's error against,
-//!   less the reference's own noise where its standard errors are known.
+//! - [`Reference`] ([`reference`](mod@reference)): a converged image to measure a film's
+//!   error against, less the reference's own noise where its standard errors are known.
 //! - [`DeviceFilm`] ([`device`]): an integrator's film where it lives on the GPU.
 //!
 //! Every file is written atomically ([`atomic`]): to a temporary file in the target's
