@@ -1,7 +1,7 @@
 //! Rays leave surfaces by an offset that follows float rounding, not the scene's extent
 //! (`Aabb::ray_epsilon`): a unit cube standing on a ground plane 2·10⁴ wide casts its
-//! shadow. An offset of a fixed fraction of the scene's radius (1e-4: 1.4 here) started
-//! the floor's shadow rays above the cube, and the cube cast none.
+//! shadow. An offset of a fixed fraction of the scene's radius (1e-4 of it is 1.4 here)
+//! would start the floor's shadow rays above the cube, and the cube would cast none.
 
 use crate::common;
 use crate::render::options;
@@ -108,7 +108,7 @@ fn floor_pixels(scene: &Scene) -> Vec<(usize, bool)> {
     pixels
 }
 
-/// Luminance-free brightness: the mean of a pixel's channels.
+/// A pixel's brightness: the mean of its channels.
 fn brightness(film: &splitray::film::Film, pixel: usize) -> f32 {
     film.mean_rgb(pixel).iter().sum::<f32>() / 3.0
 }
