@@ -400,12 +400,11 @@ impl Scene {
             .collect()
     }
 
-    /// The ray offset of the integrators that trace from the camera and from the point
-    /// lights ([`Aabb::ray_epsilon`]).
-    pub fn ray_epsilon(&self) -> f32 {
+    /// The points off the surfaces that the light transport integrators start rays
+    /// from: the camera and the point lights ([`Aabb::ray_epsilon`]'s sources).
+    pub fn ray_sources(&self) -> impl Iterator<Item = Vec3> + '_ {
         let lights = self.point_lights.iter().map(|l| l.position);
-        self.bounds()
-            .ray_epsilon(std::iter::once(self.camera.position).chain(lights))
+        std::iter::once(self.camera.position).chain(lights)
     }
 
     /// Bounding box of all triangle vertices (empty box for no triangles).
@@ -576,9 +575,10 @@ mod tests {
         assert_eq!(b.ray_epsilon([]), steps(1e4));
         assert_eq!(b.ray_epsilon([Vec3::new(0.0, -3e5, 2.0)]), steps(3e5));
         let mut scene = builtin("cornell-box").unwrap();
+        let offset = |s: &Scene| s.bounds().ray_epsilon(s.ray_sources());
         let (camera, farthest) = (scene.camera.position, scene.bounds().max.max_element());
         assert_eq!(
-            scene.ray_epsilon(),
+            offset(&scene),
             steps(farthest.max(camera.abs().max_element()))
         );
         // Light paths start at point lights: one far away counts.
@@ -586,7 +586,7 @@ mod tests {
             position: Vec3::new(0.0, 5e6, 0.0),
             intensity: Vec3::ONE,
         });
-        assert_eq!(scene.ray_epsilon(), steps(5e6));
+        assert_eq!(offset(&scene), steps(5e6));
         let tiny = Aabb {
             min: Vec3::ZERO,
             max: Vec3::ZERO,

@@ -103,11 +103,8 @@ impl Aabb {
     };
 
     fn of_triangle(t: &GpuTriangle) -> Aabb {
-        let [v0, v1, v2] = t.vertices();
-        Aabb {
-            lo: v0.min(v1).min(v2),
-            hi: v0.max(v1).max(v2),
-        }
+        let (lo, hi) = t.bounds();
+        Aabb { lo, hi }
     }
 
     fn union(self, o: Aabb) -> Aabb {

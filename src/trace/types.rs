@@ -87,6 +87,12 @@ impl GpuTriangle {
         [self.v0, self.v1, self.v2].map(|v| Vec3::from_slice(&v[..3]))
     }
 
+    /// The corners (min, max) of the triangle's axis-aligned box.
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        let [v0, v1, v2] = self.vertices();
+        (v0.min(v1).min(v2), v0.max(v1).max(v2))
+    }
+
     /// The edge from vertex 0 to vertex 1.
     pub fn e1(&self) -> Vec3 {
         Vec3::from_slice(&self.v1[..3]) - self.v0()

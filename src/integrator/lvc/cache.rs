@@ -1,8 +1,9 @@
 //! The light vertex cache (Davidovič et al. 2014; thesis §4.3): every connectible surface
 //! vertex of a chunk's light subpaths, never dropped and never overwritten.
 //!
-//! **Sizing.** A prepass traces a fraction of the light paths ([`super::plan::prepass_paths`]) and
-//! measures v̄, the mean number of cached vertices per light path; a chunk of P light
+//! **Sizing.** A prepass traces a fraction of the light paths
+//! ([`super::plan::prepass_paths`]) and measures v̄, the mean number of cached vertices
+//! per light path; a chunk of P light
 //! paths gets ⌈1.1 · v̄ · P⌉ + 64 slots (the thesis's 1.1 × the average, and room for the
 //! fluctuation of small chunks). A light pass that needs more slots than that writes
 //! none past the end, reports how many it needed, and the caller grows the cache to fit

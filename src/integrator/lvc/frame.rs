@@ -41,11 +41,13 @@ impl LvcIntegrator<'_> {
         let camera = &frame.camera;
         self.plan = Plan::new(&self.gpu, camera.width, camera.height, &self.options);
         let kept_scale = self.constants.brightness_scale;
+        let bounds = frame.scene.bounds();
         self.constants = prepass_constants(
             &self.options,
             &self.plan,
             camera,
-            (&frame.scene.bounds(), frame.scene.ray_epsilon()),
+            &bounds,
+            bounds.ray_epsilon(frame.scene.ray_sources()),
             &self.light_table,
         );
         rescale_moments(&self.accum2, kept_scale, self.constants.brightness_scale)?;

@@ -98,15 +98,16 @@ pub fn lvc_counts(
 }
 
 /// The constants of a render through `camera` before its prepass: the camera, the
-/// scene's ray offset ([`Scene::ray_epsilon`](crate::scene::Scene::ray_epsilon)), the
-/// splat film's scale from the scene's `bounds` and `lights`, the light count, N_L of
-/// the plan before the prepass fits it, and provisional counts (the prepass's vertices
-/// do not depend on them).
+/// scene's `ray_epsilon` ([`Aabb::ray_epsilon`] from the camera and the point lights),
+/// the splat film's scale from the scene's `bounds` and `lights`, the light count, N_L
+/// of the plan before the prepass fits it, and provisional counts (the prepass's
+/// vertices do not depend on them).
 fn prepass_constants(
     options: &LvcOptions,
     plan: &Plan,
     camera: &CameraFrame,
-    (bounds, ray_epsilon): (&Aabb, f32),
+    bounds: &Aabb,
+    ray_epsilon: f32,
     lights: &LightTable,
 ) -> LvcConstants {
     let mut constants = LvcConstants::new(camera);
@@ -242,7 +243,8 @@ impl<'t> LvcIntegrator<'t> {
             options,
             &plan,
             camera,
-            (&scene.bounds, scene.ray_epsilon),
+            &scene.bounds,
+            scene.ray_epsilon,
             &scene.lights,
         );
         let pixels = plan.pixels as usize;

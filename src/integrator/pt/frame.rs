@@ -109,8 +109,9 @@ impl PtIntegrator<'_> {
         let p = &mut self.params;
         (p.origin, p.forward, p.right, p.up) = (posed.origin, posed.forward, posed.right, posed.up);
         p.light_count = lights.lights.len() as u32;
-        p.ray_epsilon = scene.ray_epsilon();
-        let scale = lights.brightness_scale(scene.bounds().radius());
+        let bounds = scene.bounds();
+        p.ray_epsilon = bounds.ray_epsilon(scene.ray_sources());
+        let scale = lights.brightness_scale(bounds.radius());
         rescale_moments(&self.accum2, p.brightness_scale, scale)?;
         p.brightness_scale = scale;
         self.nee_on = self.options.strategy != Strategy::Bsdf && !lights.lights.is_empty();

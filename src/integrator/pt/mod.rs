@@ -154,6 +154,8 @@ impl PtScene {
         } else {
             vec![[0.0; 4]; 3]
         };
+        let bounds = scene.bounds();
+        let ray_epsilon = bounds.ray_epsilon(scene.ray_sources());
         Self {
             triangles: scene.gpu_triangles(),
             triangle_material: scene.triangles.iter().map(|t| t.material).collect(),
@@ -161,8 +163,8 @@ impl PtScene {
             bsdfs,
             normals,
             lights: LightTable::new(scene),
-            bounds: scene.bounds(),
-            ray_epsilon: scene.ray_epsilon(),
+            bounds,
+            ray_epsilon,
         }
     }
 }

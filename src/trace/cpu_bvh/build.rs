@@ -9,7 +9,7 @@ use obvhs::cwbvh::CwBvh;
 use obvhs::ploc::PlocBuilder;
 use obvhs::BvhBuildParams;
 
-use super::node::{triangle_bounds, Child, WideNode};
+use super::node::{Child, WideNode};
 use super::CpuBvh;
 use crate::trace::GpuTriangle;
 
@@ -27,7 +27,7 @@ pub(super) fn build(triangles: &[GpuTriangle], params: BvhBuildParams) -> CpuBvh
     }
     let bounds: Vec<(Vec3, Vec3)> = kept
         .iter()
-        .map(|&i| triangle_bounds(&triangles[i as usize]))
+        .map(|&i| triangles[i as usize].bounds())
         .collect();
     let aabbs: Vec<Aabb> = bounds
         .iter()

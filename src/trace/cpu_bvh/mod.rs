@@ -41,8 +41,8 @@
 //! ([`is_hittable`]): a hit on one would have no normal to shade with. Here alone the BVH
 //! departs from brute force, whose determinant (the sum of the three edge functions of
 //! the watertight test) is rounded and can be non-zero on such a triangle, so that it
-//! sometimes reports a hit on one. A ray with a NaN component or a non-finite origin or direction
-//! misses without being traced, as it does in brute force.
+//! sometimes reports a hit on one. A ray with a NaN component or a non-finite origin or
+//! direction misses without being traced, as it does in brute force.
 
 mod build;
 mod node;

@@ -5,8 +5,6 @@
 use glam::Vec3;
 use obvhs::cwbvh::node::{extract_byte64, CwBvhNode};
 
-use crate::trace::GpuTriangle;
-
 /// One node of the wide BVH. `child_base_idx`, `primitive_base_idx` and `imask` are read
 /// by obvhs's `traverse!` loop under exactly these names; `child_meta` encodes which
 /// children are leaves, their primitive ranges and their traversal priority (obvhs's
@@ -193,10 +191,4 @@ pub(super) enum Child {
     Leaf { start: u32, count: u32 },
     /// A node index.
     Node(u32),
-}
-
-/// Bounds of a triangle.
-pub(super) fn triangle_bounds(t: &GpuTriangle) -> (Vec3, Vec3) {
-    let [v0, v1, v2] = t.vertices();
-    (v0.min(v1).min(v2), v0.max(v1).max(v2))
 }

@@ -154,16 +154,14 @@ pub struct PdacrtTracer {
     stats: TraceStats,
 }
 
-/// The box around the triangles' vertices and the padding
-/// of every box test: 1e-5 of the larger of the scene's extent and its distance from the
-/// origin, well above float rounding of coordinates that size.
+/// The box around the triangles and the padding of every box test: 1e-5 of the larger
+/// of the scene's extent and its distance from the origin, well above float rounding of
+/// coordinates that size.
 fn scene_box(triangles: &[GpuTriangle]) -> (Vec3, Vec3, f32) {
     let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
-    for t in triangles {
-        for p in t.vertices() {
-            lo = lo.min(p);
-            hi = hi.max(p);
-        }
+    for (t_lo, t_hi) in triangles.iter().map(GpuTriangle::bounds) {
+        lo = lo.min(t_lo);
+        hi = hi.max(t_hi);
     }
     if triangles.is_empty() {
         (lo, hi) = (Vec3::ZERO, Vec3::ZERO);
