@@ -9,6 +9,7 @@
 #include "grid.glsl"
 #include "geometry.glsl"
 #include "frame.glsl"
+#include "film_sum.glsl"
 #include "material.glsl"
 #include "random.glsl"
 
@@ -53,13 +54,13 @@ void main() {
     if (hit.triangle == MISS || ray.tmax == 0.0) {
         rays.data[i] = Ray(ray.origin, 0.0, ray.dir, 0.0);
         throughput.data[i] = vec4(0.0);
-        accum.data[pixel] += added;
+        FILM_ADD(accum.data, pixel, frame.width * frame.height, added);
         return;
     }
     Triangle tri = triangles.data[hit.triangle];
     Material m = materials.data[triangle_material.data[hit.triangle]];
     added.rgb = t_in * m.emission.rgb;
-    accum.data[pixel] += added;
+    FILM_ADD(accum.data, pixel, frame.width * frame.height, added);
     vec3 t_out = t_in * m.diffuse.rgb;
     if (frame.bounce >= MAX_BOUNCES || max(t_out.r, max(t_out.g, t_out.b)) == 0.0) {
         rays.data[i] = Ray(ray.origin, 0.0, ray.dir, 0.0);

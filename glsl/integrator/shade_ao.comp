@@ -4,6 +4,7 @@
 #include "grid.glsl"
 #include "geometry.glsl"
 #include "frame.glsl"
+#include "film_sum.glsl"
 
 layout(push_constant) uniform Push {
     FrameParams frame;
@@ -27,5 +28,5 @@ void main() {
         }
         visible = float(open) / float(max(frame.ao_rays, 1u));
     }
-    accum.data[pixel] += vec4(vec3(visible), 1.0);
+    FILM_ADD(accum.data, pixel, frame.width * frame.height, vec4(vec3(visible), 1.0));
 }

@@ -5,6 +5,7 @@
 #include "grid.glsl"
 #include "geometry.glsl"
 #include "frame.glsl"
+#include "film_sum.glsl"
 #include "material.glsl"
 
 layout(push_constant) uniform Push {
@@ -35,5 +36,5 @@ void main() {
         Material m = materials.data[triangle_material.data[hit.triangle]];
         color = m.emission.rgb + m.diffuse.rgb * abs(dot(n, rays.data[i].dir));
     }
-    accum.data[pixel] += vec4(color, 1.0);
+    FILM_ADD(accum.data, pixel, frame.width * frame.height, vec4(color, 1.0));
 }

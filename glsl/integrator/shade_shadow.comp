@@ -4,6 +4,7 @@
 #include "grid.glsl"
 #include "geometry.glsl"
 #include "frame.glsl"
+#include "film_sum.glsl"
 
 layout(push_constant) uniform Push {
     FrameParams frame;
@@ -20,5 +21,5 @@ void main() {
     if (i >= frame.pixel_count) return;
     vec3 color = contribution.data[2u * i].rgb;
     if (shadow_hits.data[i].triangle == MISS) color += contribution.data[2u * i + 1u].rgb;
-    accum.data[frame.pixel_offset + i] += vec4(color, 1.0);
+    FILM_ADD(accum.data, frame.pixel_offset + i, frame.width * frame.height, vec4(color, 1.0));
 }

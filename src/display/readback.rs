@@ -5,7 +5,7 @@
 //! reader's own, which nothing else writes, so the host reads it once the copy is done
 //! without waiting for the render's later work.
 
-use crate::film::DeviceFilm;
+use crate::film::{compensated, DeviceFilm};
 use crate::vk::{self, Buffer, MemoryKind, StreamKind};
 
 /// Reads one [`DeviceFilm`] to the host, as often as asked.
@@ -31,16 +31,18 @@ impl FilmReader {
         let mut rec = gpu.recorder(StreamKind::Main)?;
         rec.copy(&film.sums, 0, &self.staging, 0, film.sums.size());
         let copied = rec.submit(&[])?;
-        let sums = self.staging.read_after::<[f32; 4]>(&copied)?;
-        Ok(sums.iter().take(film.pixel_count()).map(mean_of).collect())
+        let film_sums = self.staging.read_after::<[f32; 4]>(&copied)?;
+        let (sums, rests) = film_sums.split_at(film.pixel_count());
+        Ok(sums.iter().zip(rests).map(|(s, r)| mean_of(s, r)).collect())
     }
 }
 
-/// `xyz / w` in `f64`, rounded once to `f32` (as `FilmSums::mean` divides).
-pub fn mean_of(s: &[f32; 4]) -> [f32; 3] {
-    if s[3] > 0.0 {
-        let w = s[3] as f64;
-        [s[0], s[1], s[2]].map(|c| (c as f64 / w) as f32)
+/// The estimate of a pixel whose sums are `s` and remainders `r`: `xyz / w`, each the
+/// pair's sum in `f64`, rounded once to `f32` (as `FilmSums::mean` divides).
+pub fn mean_of(s: &[f32; 4], r: &[f32; 4]) -> [f32; 3] {
+    let [x, y, z, w] = std::array::from_fn(|c| compensated::join(s[c], r[c]));
+    if w > 0.0 {
+        [x, y, z].map(|c| (c / w) as f32)
     } else {
         [0.0; 3]
     }

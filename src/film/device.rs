@@ -7,7 +7,9 @@ use crate::vk::Buffer;
 
 /// A film kept on the GPU as one `vec4` per pixel (row 0 at the top, `y * width + x`):
 /// the sum of the pixel's samples' RGB in `xyz` and their number (or total weight) in
-/// `w`, so the pixel's estimate is `xyz / w`.
+/// `w`, so the pixel's estimate is `xyz / w`; then as many `vec4` of the sums'
+/// remainders ([`compensated`](super::compensated)). The sums alone are the f32
+/// nearest to the exact ones, which is all a display needs.
 ///
 /// Only submissions to the main stream write it, and each leaves every pixel's `vec4`
 /// whole: work recorded on the main stream (which runs in submission order) reads a

@@ -11,7 +11,8 @@
 //! - [`write_outputs`]: both at once.
 //! - [`Reference`] ([`reference`](mod@reference)): a converged image to measure a film's
 //!   error against, less the reference's own noise where its standard errors are known.
-//! - [`DeviceFilm`] ([`device`]): an integrator's film where it lives on the GPU.
+//! - [`DeviceFilm`] ([`device`]): an integrator's film where it lives on the GPU, each
+//!   sum in two floats ([`compensated`]).
 //!
 //! Every file is written atomically ([`atomic`]): to a temporary file in the target's
 //! folder, renamed over the target only on success, removed on failure.
@@ -19,6 +20,7 @@
 
 pub mod accum;
 pub mod atomic;
+pub mod compensated;
 pub mod device;
 mod error;
 pub mod exr_out;

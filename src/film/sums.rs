@@ -6,12 +6,13 @@
 //! the per-pixel sums of the pass estimates and of their squares give both the image
 //! (their mean) and its standard error — for integrators whose samples within a pass are
 //! correlated (CBPT) as much as for one-sample passes (`pt`). Sums are `f64`: integrators
-//! that accumulate in `f32` on the GPU convert exactly, so a film can be saved and
-//! restored without changing a bit. The GPU's second moments are of estimates multiplied
-//! by a power of two (the square of an f32 estimate leaves f32's range above about 1e19
-//! and below about 1e-22); the conversions take it out and put it back exactly.
+//! that accumulate on the GPU, in pairs of `f32` ([`compensated`](super::compensated)),
+//! convert exactly, so a film can be saved and restored without changing a bit. The
+//! GPU's second moments are of estimates multiplied by a power of two (the square of an
+//! f32 estimate leaves f32's range above about 1e19 and below about 1e-22); the
+//! conversions take it out and put it back exactly.
 
-use super::{Film, FilmError};
+use super::{compensated, Film, FilmError};
 
 /// Per-pixel sums of the pass estimates (row 0 at the top, `y * width + x`).
 #[derive(Clone, Debug, PartialEq)]
@@ -50,8 +51,9 @@ impl FilmSums {
         }
     }
 
-    /// Sums of GPU accumulators: `sum` holds Σ L in rgb (its w is ignored), `sum_sq`
-    /// Σ (s L)² in rgb, s = `moment_scale`, a power of two
+    /// Sums of GPU accumulators, each a film of sums and remainders
+    /// ([`compensated`](super::compensated)): `sum` holds Σ L in rgb (its w is
+    /// ignored), `sum_sq` Σ (s L)² in rgb, s = `moment_scale`, a power of two
     /// ([`LightTable::brightness_scale`]; 1 where there are no second moments).
     ///
     /// [`LightTable::brightness_scale`]: crate::integrator::pt::LightTable::brightness_scale
@@ -72,8 +74,8 @@ impl FilmSums {
             height,
             passes,
             samples_per_pass,
-            sum: widen(sum, 1.0),
-            sum_sq: sum_sq.map(|q| widen(q, unscale)),
+            sum: compensated::film_rgb(sum, 1.0),
+            sum_sq: sum_sq.map(|q| compensated::film_rgb(q, unscale)),
         }
     }
 
@@ -83,8 +85,10 @@ impl FilmSums {
     pub fn to_gpu(&self, moment_scale: f32) -> (Vec<[f32; 4]>, Option<Vec<[f32; 4]>>) {
         let scale = squared_scale(moment_scale);
         (
-            narrow(&self.sum, 1.0, self.passes as f32),
-            self.sum_sq.as_deref().map(|q| narrow(q, scale, 0.0)),
+            compensated::film_of(&self.sum, 1.0, self.passes as f64),
+            self.sum_sq
+                .as_deref()
+                .map(|q| compensated::film_of(q, scale, 0.0)),
         )
     }
 
@@ -193,27 +197,6 @@ fn squared_scale(s: f32) -> f64 {
     s * s
 }
 
-/// The rgb of GPU sums, times `by`.
-fn widen(v: &[[f32; 4]], by: f64) -> Vec<[f64; 3]> {
-    v.iter()
-        .map(|s| [s[0] as f64 * by, s[1] as f64 * by, s[2] as f64 * by])
-        .collect()
-}
-
-/// Sums times `by` as the GPU holds them, with `w` in the fourth lane.
-fn narrow(v: &[[f64; 3]], by: f64, w: f32) -> Vec<[f32; 4]> {
-    v.iter()
-        .map(|s| {
-            [
-                (s[0] * by) as f32,
-                (s[1] * by) as f32,
-                (s[2] * by) as f32,
-                w,
-            ]
-        })
-        .collect()
-}
-
 /// ε of [`relative_mse`]: the usual guard against dividing by black pixels (Rousselle
 /// et al. 2011).
 pub const RELATIVE_MSE_GUARD: f64 = 0.01;
@@ -265,8 +248,19 @@ mod tests {
 
     #[test]
     fn gpu_round_trip_is_exact() {
-        let sum = [[0.1f32, 1e30, -3.5e-20, 4.0], [7.0, 8.0, 9.0, 4.0]];
-        let sq = [[0.3f32, 2.0, 5.0, 0.0], [1.0, 1.0, 1.0, 0.0]];
+        // Two pixels' sums, then their remainders.
+        let sum = [
+            [0.1f32, 1e30, -3.5e-20, 4.0],
+            [7.0, 8.0, 9.0, 4.0],
+            [1.0e-9, 2.0e22, 0.0, 0.0],
+            [0.0, -2.0f32.powi(-30), 0.0, 0.0],
+        ];
+        let sq = [
+            [0.3f32, 2.0, 5.0, 0.0],
+            [1.0, 1.0, 1.0, 0.0],
+            [0.0; 4],
+            [0.0; 4],
+        ];
         let s = FilmSums::from_gpu(2, 1, 4, 1, &sum, Some(&sq), 1.0);
         let (back, back_sq) = s.to_gpu(1.0);
         assert_eq!(back, sum.to_vec());
@@ -283,8 +277,18 @@ mod tests {
             expected.add_pass(&[[unit, 2.0 * unit, 0.0], [0.0; 3]]);
             expected.add_pass(&[[3.0 * unit, 2.0 * unit, 0.0], [0.0; 3]]);
             let u = unit as f32;
-            let sum = [[4.0 * u, 4.0 * u, 0.0, 2.0], [0.0, 0.0, 0.0, 2.0]];
-            let sq = [[1.0 + 9.0, 4.0 + 4.0, 0.0, 0.0], [0.0; 4]];
+            let sum = [
+                [4.0 * u, 4.0 * u, 0.0, 2.0],
+                [0.0, 0.0, 0.0, 2.0],
+                [0.0; 4],
+                [0.0; 4],
+            ];
+            let sq = [
+                [1.0 + 9.0, 4.0 + 4.0, 0.0, 0.0],
+                [0.0; 4],
+                [0.0; 4],
+                [0.0; 4],
+            ];
             let got = FilmSums::from_gpu(2, 1, 2, 1, &sum, Some(&sq), scale);
             assert_eq!(got, expected, "2^{exponent}");
             // The estimates 1 and 3 (× 2^k) have a standard error of the mean of 1.

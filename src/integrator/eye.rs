@@ -137,7 +137,8 @@ pub struct EyeIntegrator {
     triangles: Buffer,
     triangle_material: Buffer,
     materials: Buffer,
-    /// Per pixel Σ L (rgb) and samples (w): the film, shared with previews.
+    /// Per pixel Σ L (rgb) and samples (w), then their remainders
+    /// ([`compensated`](crate::film::compensated)): the film, shared with previews.
     accum: Arc<Buffer>,
     slots: [RaySlot; 2],
     frame: FrameParams,
@@ -203,7 +204,8 @@ impl EyeIntegrator {
             triangles: gpu.upload("shade-triangles", inputs.triangles)?,
             triangle_material: gpu.upload("triangle-material", inputs.triangle_material)?,
             materials: gpu.upload("materials", inputs.materials)?,
-            accum: Arc::new(gpu.zeroed::<[f32; 4]>("accum", pixels)?),
+            // Sums and their remainders (film_sum.glsl).
+            accum: Arc::new(gpu.zeroed::<[f32; 4]>("accum", 2 * pixels)?),
             slots: [
                 RaySlot::new(gpu, 0, chunk as u64, per_pixel as u64)?,
                 RaySlot::new(gpu, 1, chunk as u64, per_pixel as u64)?,

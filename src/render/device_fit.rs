@@ -103,16 +103,18 @@ pub fn planned_buffers(size: &RenderSize<'_>, integrator: IntegratorKind) -> Vec
             triangles * 4,
         ));
     }
+    // Films hold a sum and its remainder per pixel (film::compensated).
+    let film = 2 * pixels * vec4;
     for name in gpu_film {
-        buffers.push(PlannedBuffer::by_address(name, pixels * vec4));
+        buffers.push(PlannedBuffer::by_address(name, film));
     }
     if integrator.lvc_variant().is_some() {
         // The light-vertex-cache kernels take their films through one binding; the
         // splat film holds at least one pass of fixed-point words per pixel.
         let splat = pixels * crate::integrator::lvc::fixed::FIXED_WORDS as u64 * 4;
         for (name, bytes) in [
-            ("lvc-accum", pixels * vec4),
-            ("lvc-accum2", pixels * vec4),
+            ("lvc-accum", film),
+            ("lvc-accum2", film),
             ("lvc-splat-film", splat),
         ] {
             buffers.push(PlannedBuffer {
@@ -263,7 +265,8 @@ mod tests {
 
     #[test]
     fn films_of_the_light_vertex_cache_integrators_stay_within_one_binding() {
-        // 2048²: 64 MiB of vec4 and 96 MiB of six-word splats; 4096² is past 128 MiB.
+        // 2048²: 128 MiB of vec4 sums and remainders and 96 MiB of six-word splats, within
+        // one binding; 4096² is past 128 MiB.
         let small = size(1000, 2048);
         let large = size(1000, 4096);
         for kind in [IntegratorKind::LvcBdpt, IntegratorKind::CisLbdpt] {
@@ -284,8 +287,9 @@ mod tests {
         let b = planned_buffers(&size(1000, 100), IntegratorKind::Pt);
         let bytes = |name: &str| b.iter().find(|p| p.name == name).map(|p| p.bytes);
         assert_eq!(bytes("triangles"), Some(48_000));
-        assert_eq!(bytes("pt-accum"), Some(160_000));
-        assert_eq!(bytes("pt-accum2"), Some(160_000));
+        // A sum and its remainder per pixel.
+        assert_eq!(bytes("pt-accum"), Some(320_000));
+        assert_eq!(bytes("pt-accum2"), Some(320_000));
         assert_eq!(bytes("triangle-material"), Some(4000));
         // The CPU integrators (and cbpt, which combines on the CPU) keep their film on
         // the host.

@@ -14,13 +14,15 @@
 //!
 //! `finish` against `twin::finish` on synthetic passes of radiance and splats about 1,
 //! 2^70 and 2^-80 (whose squares leave f32's range), at the brightness scale that
-//! brings them near 1, added to sums that already hold passes: a chunk of the film's
-//! pixels, and a whole large film. Σ estimate and Σ (s · estimate)² must be the twin's
-//! bit for bit (one invocation per pixel adds the passes in the twin's order).
+//! brings them near 1, added to sums (and remainders) that already hold passes: a chunk
+//! of the film's pixels, and a whole large film. Σ estimate and Σ (s · estimate)² must
+//! be the twin's bit for bit (one invocation per pixel adds the passes in the twin's
+//! order), and Σ estimate must hold every estimate's bits.
 
 use crate::common;
 
 use bytemuck::Zeroable;
+use splitray::film::compensated;
 use splitray::integrator::lvc::fixed::{FixedFilm, FIXED_MAX, FIXED_WORDS};
 use splitray::integrator::lvc::gpu::{
     Contribution, LvcConstants, LvcPush, VisibilityTally, CONTRIBUTION_NONE, COUNTERS,
@@ -401,6 +403,7 @@ struct Finish {
     /// The splat film's words: whole parts below 4, so that splats are about the
     /// radiance's size.
     splat_words: Vec<u32>,
+    /// The films it starts from: their sums, then the remainders.
     accum: Vec<[f32; 4]>,
     accum2: Vec<[f32; 4]>,
 }
@@ -426,6 +429,26 @@ impl Finish {
             })
             .collect();
         let start = common::uniforms(pixels, seed + 2);
+        // Sums of about 2^exponent with remainders well inside their last bit.
+        let rest = |v: f32, k: i32| v * 2f32.powi(k);
+        let accum = start
+            .iter()
+            .map(|&v| [v * unit, v * unit, v, 2.0])
+            .chain(
+                start
+                    .iter()
+                    .map(|&v| [rest(v * unit, -30), -rest(v * unit, -31), rest(v, -26), 0.0]),
+            )
+            .collect();
+        let accum2 = start
+            .iter()
+            .map(|&v| [v, v, v, 0.0])
+            .chain(
+                start
+                    .iter()
+                    .map(|&v| [rest(v, -27), 0.0, -rest(v, -40), 0.0]),
+            )
+            .collect();
         Self {
             width,
             height,
@@ -434,11 +457,8 @@ impl Finish {
             scale: 1.0 / unit,
             radiance,
             splat_words,
-            accum: start
-                .iter()
-                .map(|&v| [v * unit, v * unit, v, 2.0])
-                .collect(),
-            accum2: start.iter().map(|&v| [v, v, v, 0.0]).collect(),
+            accum,
+            accum2,
         }
     }
 
@@ -488,24 +508,23 @@ impl Finish {
         (buffers[3].read().unwrap(), buffers[4].read().unwrap())
     }
 
-    /// Σ (s · estimate)² of every pixel in f64, from the sums it started with.
-    fn second_moments(&self) -> Vec<[f64; 3]> {
+    /// Σ estimate and Σ (s · estimate)² of every pixel in f64, from the sums it started
+    /// with, each estimate rounded to f32 as the kernel adds it.
+    fn exact_sums(&self) -> (Vec<[f64; 3]>, Vec<[f64; 3]>) {
         let splats = self.splats();
         let pixels = (self.width * self.height) as usize;
-        let mut q: Vec<[f64; 3]> = self
-            .accum2
-            .iter()
-            .map(|v| [0, 1, 2].map(|k| v[k] as f64))
-            .collect();
+        let mut sum = compensated::film_rgb(&self.accum, 1.0);
+        let mut q = compensated::film_rgb(&self.accum2, 1.0);
         for (j, r) in self.radiance.iter().enumerate() {
             let (pass, i) = (j / self.pixel_count, j % self.pixel_count);
             let pixel = self.pixel_offset + i;
             let s = splats.value(pass * pixels + pixel);
             for k in 0..3 {
+                sum[pixel][k] += (r[k] + s[k]) as f64;
                 q[pixel][k] += ((r[k] as f64 + s[k] as f64) * self.scale as f64).powi(2);
             }
         }
-        q
+        (sum, q)
     }
 }
 
@@ -526,16 +545,32 @@ fn finish_matches_its_twin_bit_for_bit() {
             let (got, got2) = case.on_gpu(&gpu, &kernels);
             assert!(bits(&got) == bits(&want), "{what}: Σ estimate");
             assert!(bits(&got2) == bits(&want2), "{what}: Σ (s · estimate)²");
-            // Scaled, the second moments are the f64 sums' to f32 rounding, where squares
-            // of estimates of 2^70 would overflow f32 and those of 2^-80 vanish.
-            for (p, (q, e)) in want2.iter().zip(case.second_moments()).enumerate() {
+            // The sums keep the estimates' every bit: each addition rounds a pair by
+            // half its quantum (2^-48 of the sum at most, or 2^-127 below 2^-79, where
+            // the quantum stops at 2^-126) and its remainder's own sum by about 2^-47
+            // of the sum. Scaled,
+            // the second moments are the f64 sums' to f32 rounding of each square, where
+            // squares of estimates of 2^70 would overflow f32 and those of 2^-80 vanish.
+            let (exact, exact2) = case.exact_sums();
+            let (sums, sums2) = (
+                compensated::film_rgb(&want, 1.0),
+                compensated::film_rgb(&want2, 1.0),
+            );
+            for p in 0..sums.len() {
                 for k in 0..3 {
-                    let (q, e) = (q[k] as f64, e[k]);
+                    let (s, e) = (sums[p][k], exact[p][k]);
+                    let bound = passes as f64 * (e.abs() * 2f64.powi(-46) + 2f64.powi(-126));
+                    assert!((s - e).abs() <= bound, "{what}: pixel {p}: {s} vs {e}");
+                    let (q, e) = (sums2[p][k], exact2[p][k]);
                     assert!((q - e).abs() <= 1e-6 * e, "{what}: pixel {p}: {q} vs {e}");
                 }
             }
+            // Pixels outside the chunk, and their remainders, are left alone.
+            let pixels = (width * height) as usize;
             let (lo, hi) = (chunk.0, chunk.0 + chunk.1);
-            assert!(want[..lo] == case.accum[..lo] && want[hi..] == case.accum[hi..]);
+            for range in [0..lo, hi..pixels + lo, pixels + hi..2 * pixels] {
+                assert!(want[range.clone()] == case.accum[range], "{what}");
+            }
             assert!(
                 want[lo..hi].iter().all(|s| s[3] == 2.0 + passes as f32),
                 "{what}"

@@ -31,6 +31,7 @@ use common::lvc_dump::{render, BounceDump, ChunkDump};
 use glam::Vec3;
 use splitray::bidir::random::{fold_seed, random01, PathSampler};
 use splitray::bidir::{Connector, CpuScene, PinholeCamera, WalkSettings};
+use splitray::film::compensated;
 use splitray::integrator::lvc::fixed::FixedFilm;
 use splitray::integrator::lvc::gpu::{dims, Contribution, LvcVertex, VERTEX_CONNECTIBLE};
 use splitray::integrator::lvc::options::{MAX_CANDIDATES, MAX_CONNECTIONS};
@@ -200,7 +201,8 @@ fn check_case(case: Case) -> usize {
     let scale = case.scene.bounds().radius();
     let pixels = case.width * case.height;
     let (mut light, mut cam) = (Agreement::default(), Agreement::default());
-    let mut film = vec![[0.0f32; 4]; pixels as usize];
+    // Sums, then their remainders (film::compensated).
+    let mut film = vec![[0.0f32; 4]; 2 * pixels as usize];
     let mut film2 = film.clone();
     let mut sorted_keys = 0;
     // The material keys the sorted bounces are checked against.
@@ -252,15 +254,22 @@ fn check_case(case: Case) -> usize {
     let sums = lvc.sums().unwrap();
     // The second moments are compared as the GPU sums them, at the brightness scale.
     let s2 = (c.brightness_scale as f64).powi(2);
+    let (film, film2) = (
+        compensated::film_rgb(&film, 1.0),
+        compensated::film_rgb(&film2, 1.0),
+    );
     for (p, (e, e2)) in film.iter().zip(&film2).enumerate() {
         for k in 0..3 {
-            let (got, want) = (sums.sum[p][k] as f32, e[k]);
+            let (got, want) = (sums.sum[p][k] as f32, e[k] as f32);
             assert!(
                 close1(got, want, 1e-5) || (want - got).abs() < 1e-6,
                 "{}: film pixel {p}: {got} vs {want}",
                 case.name
             );
-            let (got, want) = ((sums.sum_sq.as_ref().unwrap()[p][k] * s2) as f32, e2[k]);
+            let (got, want) = (
+                (sums.sum_sq.as_ref().unwrap()[p][k] * s2) as f32,
+                e2[k] as f32,
+            );
             assert!(
                 close1(got, want, 1e-4) || (want - got).abs() < 1e-6,
                 "{}: film pixel {p}: second moment {got} vs {want}",

@@ -6,6 +6,8 @@ use crate::common;
 use glam::Vec3;
 use splitray::film::FilmSums;
 use splitray::integrator::pt::{render_pt, PtOptions, PtOutput, PtScene, Strategy};
+use splitray::integrator::IntegratorKind;
+use splitray::render::{create_integrator, RenderOptions};
 use splitray::scene::{builtin, Camera, FilmSize, Material, RenderSettings, Scene, Triangle};
 use splitray::trace::TracerKind;
 use splitray::vk::Gpu;
@@ -155,7 +157,7 @@ fn furnace_depth_limits_give_partial_sums_for_every_strategy() {
         opts(2, 0, Strategy::Mis),
     );
     assert!(out
-        .sum_rgb
+        .pixel_sums()
         .iter()
         .all(|s| s[..3] == [0.0; 3] && s[3] == 2.0));
     // max_depth 1: only emission seen directly, with no noise at all.
@@ -248,6 +250,60 @@ fn sorting_never_changes_the_image_and_seeds_decide_it() {
 }
 
 #[test]
+fn a_film_of_a_million_samples_keeps_every_bit_of_the_next_ones() {
+    // Seen at depth 1 the furnace's every sample is its emission, 0.1 (as an f32). A
+    // film resumed at 2^20 samples sums near 104857.6, where an f32 sum steps by 2^-7:
+    // each new 0.1 would be rounded to 13 steps, 1.6 % too much, and the mean would move
+    // 3 ulps off 0.1 after 16 of them. The film's sums in two floats keep every bit.
+    let gpu = common::gpu();
+    let le = 0.1f32;
+    let scene = furnace(0.5, le);
+    let (size, start, more) = (8u32, 1u32 << 20, 16u32);
+    let mut options = RenderOptions::resolve(
+        &scene,
+        Some(size),
+        Some(size),
+        Some(start + more),
+        Some(7),
+        Some(IntegratorKind::Pt),
+        Some(TracerKind::BruteForce),
+    )
+    .unwrap();
+    options.max_depth = 1;
+    let mut pt = create_integrator(&gpu, &scene, &options).unwrap();
+    let pixels = (size * size) as usize;
+    let le = le as f64;
+    let mut film = FilmSums::new(size, size, 1, true);
+    film.passes = start;
+    film.sum = vec![[le * start as f64; 3]; pixels];
+    film.sum_sq = Some(vec![[le * le * start as f64; 3]; pixels]);
+    pt.restore(&film).unwrap();
+    pt.render_passes(start, more).unwrap();
+    let sums = pt.sums().unwrap();
+    assert_eq!(sums.passes, start + more);
+    // The kernel squares each sample in f32.
+    let (n, square) = ((start + more) as f64, (0.1f32 * 0.1f32) as f64);
+    let (sum, sum_sq) = (le * n, le * le * start as f64 + square * more as f64);
+    let sums_sq = sums.sum_sq.as_ref().unwrap();
+    for (s, q) in sums.sum.iter().flatten().zip(sums_sq.iter().flatten()) {
+        assert!(
+            (s - sum).abs() <= sum * 2f64.powi(-46),
+            "Σ L = {s}, not {sum}"
+        );
+        assert!(
+            (q - sum_sq).abs() <= sum_sq * 2f64.powi(-46),
+            "Σ L² = {q}, not {sum_sq}"
+        );
+    }
+    assert!(sums.mean().iter().flatten().all(|&m| m == le as f32));
+    // Every sample alike: the standard error is nothing but the sums' rounding.
+    let se = sums.stderr().unwrap();
+    assert!(se.iter().flatten().all(|&e| e < 1e-9), "{:?}", se[0]);
+    drop(pt);
+    common::assert_clean(&gpu);
+}
+
+#[test]
 fn time_limit_stops_after_the_pass_it_ran_out_in() {
     let gpu = common::gpu();
     let scene = furnace(0.5, 1.0);
@@ -261,7 +317,7 @@ fn time_limit_stops_after_the_pass_it_ran_out_in() {
     let start = std::time::Instant::now();
     let out = render(&gpu, &scene, 8, TracerKind::BruteForce, o);
     assert!(out.passes >= 1 && out.passes < 100_000);
-    assert!(out.sum_rgb.iter().all(|s| s[3] == out.passes as f32));
+    assert!(out.pixel_sums().iter().all(|s| s[3] == out.passes as f32));
     assert!(start.elapsed().as_secs_f64() < 30.0);
     common::assert_clean(&gpu);
 }

@@ -16,6 +16,7 @@ use crate::common;
 use bytemuck::Zeroable;
 use glam::Vec3;
 use splitray::bidir::CpuScene;
+use splitray::film::compensated;
 use splitray::integrator::pt::gpu::{PathState, PtParams};
 use splitray::integrator::pt::twin::{finish, nee_accumulate, PathTwin};
 use splitray::integrator::pt::{render_pt, PtOptions, PtScene, Strategy};
@@ -84,8 +85,8 @@ fn bits_equal(a: &[[f32; 4]], b: &[[f32; 4]]) -> bool {
 }
 
 /// `finish` over `pixels` pixels and `samples` samples of each, of radiance about
-/// 2^`exponent` squared at the brightness scale 2^-`exponent`, added to sums that
-/// already hold a pass.
+/// 2^`exponent` squared at the brightness scale 2^-`exponent`, added to sums (and
+/// remainders) that already hold a pass.
 fn check_finish(gpu: &Gpu, pixels: usize, samples: usize, exponent: i32) {
     let unit = 2f32.powi(exponent);
     let mut paths = path_states(pixels * samples, 7 + pixels as u64);
@@ -95,8 +96,30 @@ fn check_finish(gpu: &Gpu, pixels: usize, samples: usize, exponent: i32) {
         }
     }
     let start = common::uniforms(pixels, 3);
-    let mut want: Vec<[f32; 4]> = start.iter().map(|&v| [v * unit, v, 0.0, 1.0]).collect();
-    let mut want2: Vec<[f32; 4]> = start.iter().map(|&v| [v, v, v, 0.0]).collect();
+    // Remainders well inside their sums' last bit (film::compensated).
+    let rest = |v: f32, k: i32| v * 2f32.powi(k);
+    let mut want: Vec<[f32; 4]> = start
+        .iter()
+        .map(|&v| [v * unit, v, 0.0, 1.0])
+        .chain(
+            start
+                .iter()
+                .map(|&v| [rest(v * unit, -28), -rest(v, -33), 0.0, 0.0]),
+        )
+        .collect();
+    let mut want2: Vec<[f32; 4]> = start
+        .iter()
+        .map(|&v| [v, v, v, 0.0])
+        .chain(
+            start
+                .iter()
+                .map(|&v| [0.0, rest(v, -26), -rest(v, -45), 0.0]),
+        )
+        .collect();
+    let (sums, sums2) = (
+        compensated::film_rgb(&want, 1.0),
+        compensated::film_rgb(&want2, 1.0),
+    );
     let buffers = [
         upload(gpu, "paths", &paths),
         upload(gpu, "accum", &want),
@@ -109,6 +132,8 @@ fn check_finish(gpu: &Gpu, pixels: usize, samples: usize, exponent: i32) {
         finish(&paths, &mut want, &mut want2, 1.0 / unit)
     };
     let params = PtParams {
+        width: pixels as u32,
+        height: 1,
         pixel_count: pixels as u32,
         path_count: paths.len() as u32,
         brightness_scale: 1.0 / unit,
@@ -124,26 +149,40 @@ fn check_finish(gpu: &Gpu, pixels: usize, samples: usize, exponent: i32) {
     let what = format!("finish: {pixels} pixels × {samples} samples of about 2^{exponent}");
     let got: Vec<[f32; 4]> = buffers[1].read().unwrap();
     let got2: Vec<[f32; 4]> = buffers[2].read().unwrap();
-    assert!(bits_equal(&got[..pixels], &want), "{what}: Σ L");
-    assert!(bits_equal(&got2[..pixels], &want2), "{what}: Σ L²");
+    assert!(bits_equal(&got[..2 * pixels], &want), "{what}: Σ L");
+    assert!(bits_equal(&got2[..2 * pixels], &want2), "{what}: Σ L²");
     assert_eq!(buffers[3].read::<u32>().unwrap()[0], dropped, "{what}");
     if pixels * samples >= 1000 {
         assert!(dropped > 0, "{what}: the case holds non-finite samples");
     }
-    // Squared unscaled, radiance of 2^70 overflows f32 and radiance of 2^-80 vanishes;
-    // scaled, the second moments are the f64 sums' to f32 rounding.
-    let mut exact: Vec<[f64; 3]> = start.iter().map(|&v| [v as f64; 3]).collect();
+    // Σ L keeps every sample's bits: each addition rounds by half the pair's quantum
+    // (2^-48 of the sum at most, 2^-127 below 2^-79) and its remainder's sum by about
+    // 2^-47 of the sum. Squared unscaled, radiance of 2^70 overflows f32 and radiance of
+    // 2^-80 vanishes; scaled, the second moments are the f64 sums' to f32 rounding of
+    // each square.
+    let (mut exact, mut exact2) = (sums, sums2);
     for (p, path) in paths.iter().enumerate() {
         let l = &path.radiance[..3];
         if l.iter().all(|v| v.is_finite()) {
             for k in 0..3 {
-                exact[p % pixels.max(1)][k] += (l[k] as f64 / unit as f64).powi(2);
+                exact[p % pixels.max(1)][k] += l[k] as f64;
+                exact2[p % pixels.max(1)][k] += (l[k] as f64 / unit as f64).powi(2);
             }
         }
     }
-    for (p, (q, e)) in want2.iter().zip(&exact).enumerate() {
+    let (got, got2) = (
+        compensated::film_rgb(&want, 1.0),
+        compensated::film_rgb(&want2, 1.0),
+    );
+    let bound = |e: f64| (samples as f64) * (e.abs() * 2f64.powi(-46) + 2f64.powi(-126));
+    for p in 0..pixels {
         for k in 0..3 {
-            let (q, e) = (q[k] as f64, e[k]);
+            let (s, e) = (got[p][k], exact[p][k]);
+            assert!(
+                (s - e).abs() <= bound(e),
+                "{what}: pixel {p}: Σ L {s} vs {e}"
+            );
+            let (q, e) = (got2[p][k], exact2[p][k]);
             assert!(
                 (q - e).abs() <= 1e-6 * e,
                 "{what}: pixel {p}: Σ (s L)² {q} vs {e}"

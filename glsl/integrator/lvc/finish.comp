@@ -7,10 +7,12 @@
 // squared as it is, an estimate above about 1e19 would overflow f32 and one below about
 // 1e-22 vanish. The host divides the scale back out exactly (FilmSums::from_gpu). One
 // invocation per pixel adds the passes in order, so the sums do not depend on
-// scheduling.
+// scheduling. Both films hold each sum in two floats (film_sum.glsl): one per pixel of
+// the film, then their remainders.
 #include "grid.glsl"
 #include "geometry.glsl"
 #include "lvc.glsl"
+#include "film_sum.glsl"
 
 layout(push_constant) uniform Push { LvcPush P; };
 layout(std430, set = 0, binding = 0) readonly buffer Constants { LvcConstants C; };
@@ -27,15 +29,21 @@ void main() {
     uint pixel = P.pixel_offset + i;
     uint pixels = C.width * C.height;
     uint passes = P.path_count / P.pixel_count;
+    uint rest = pixel + pixels;
     vec4 sum = accum[pixel];
+    vec4 sum_rest = accum[rest];
     vec4 sum2 = accum2[pixel];
+    vec4 sum2_rest = accum2[rest];
     for (uint q = 0u; q < passes; ++q) {
         vec3 splats = fixed_value(q * pixels + pixel) * (1.0 / C.brightness_scale);
         vec3 l = radiance[q * P.pixel_count + i].rgb + splats;
-        vec3 scaled = l * C.brightness_scale;
-        sum += vec4(l, 1.0);
-        sum2 += vec4(scaled * scaled, 0.0);
+        precise vec3 scaled = l * C.brightness_scale;
+        precise vec3 squared = scaled * scaled;
+        film_add(sum, sum_rest, vec4(l, 1.0));
+        film_add(sum2, sum2_rest, vec4(squared, 0.0));
     }
     accum[pixel] = sum;
+    accum[rest] = sum_rest;
     accum2[pixel] = sum2;
+    accum2[rest] = sum2_rest;
 }

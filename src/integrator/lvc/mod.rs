@@ -266,8 +266,9 @@ impl<'t> LvcIntegrator<'t> {
                 "lvc-splat-film",
                 plan.passes_per_chunk as usize * pixels * fixed::FIXED_WORDS,
             )?,
-            accum: gpu.zeroed::<[f32; 4]>("lvc-accum", pixels)?,
-            accum2: gpu.zeroed::<[f32; 4]>("lvc-accum2", pixels)?,
+            // Sums and their remainders (film_sum.glsl).
+            accum: gpu.zeroed::<[f32; 4]>("lvc-accum", 2 * pixels)?,
+            accum2: gpu.zeroed::<[f32; 4]>("lvc-accum2", 2 * pixels)?,
             counters_buffer: gpu.zeroed::<u32>("lvc-counters", gpu::COUNTERS)?,
             counters: LvcCounters::default(),
             techniques: options
@@ -489,7 +490,7 @@ impl Integrator for LvcIntegrator<'_> {
     fn restore(&mut self, sums: &FilmSums) -> Result<(), IntegratorError> {
         check_film_size(sums, self.constants.width, self.constants.height, 1)?;
         let (sum, sum_sq) = sums.to_gpu(self.constants.brightness_scale);
-        let zeros = vec![[0.0f32; 4]; self.plan.pixels as usize];
+        let zeros = vec![[0.0f32; 4]; 2 * self.plan.pixels as usize];
         self.gpu.wait_idle()?;
         self.accum.write(&sum)?;
         self.accum2.write(sum_sq.as_deref().unwrap_or(&zeros))?;

@@ -17,6 +17,7 @@ use crate::bidir::random::{pcg_hash, PathSampler};
 use crate::bidir::scene::SurfaceHit;
 use crate::bidir::walk::{camera_subpath, light_subpath};
 use crate::bidir::{Connector, Counters, CpuScene, PinholeCamera, Sample, Vertex, WalkSettings};
+use crate::film::compensated;
 use crate::integrator::pt::PtScene;
 use crate::trace::{CpuBvh, Hit, Ray, MISS};
 
@@ -349,7 +350,8 @@ pub struct FinishChunk<'a> {
 /// `finish` (finish.comp): each pass's estimate of each pixel of the chunk, its camera
 /// radiance plus its splats (unscaled), added in pass order to Σ estimate (`accum`, w
 /// counts them) and Σ (s · estimate)² (`accum2`), s = the splat film's scale (the
-/// brightness scale). `accum` and `accum2` cover the whole film.
+/// brightness scale). `accum` and `accum2` cover the whole film: its sums, then their
+/// remainders ([`compensated`]).
 pub fn finish(chunk: &FinishChunk, accum: &mut [[f32; 4]], accum2: &mut [[f32; 4]]) {
     let scale = chunk.splats.scale;
     let passes = chunk.radiance.len() / chunk.pixel_count.max(1);
@@ -359,13 +361,9 @@ pub fn finish(chunk: &FinishChunk, accum: &mut [[f32; 4]], accum2: &mut [[f32; 4
             let splats = chunk.splats.value(q * chunk.pixels + pixel);
             let r = chunk.radiance[q * chunk.pixel_count + i];
             let l: [f32; 3] = std::array::from_fn(|k| r[k] + splats[k]);
-            let (sum, sum2) = (&mut accum[pixel], &mut accum2[pixel]);
-            for k in 0..3 {
-                let scaled = l[k] * scale;
-                sum[k] += l[k];
-                sum2[k] += scaled * scaled;
-            }
-            sum[3] += 1.0;
+            let squared = l.map(|v| (v * scale) * (v * scale));
+            compensated::add_to_film(accum, pixel, [l[0], l[1], l[2], 1.0]);
+            compensated::add_to_film(accum2, pixel, [squared[0], squared[1], squared[2], 0.0]);
         }
     }
 }

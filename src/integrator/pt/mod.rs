@@ -171,13 +171,16 @@ impl PtScene {
 
 /// What the passes produced.
 pub struct PtOutput {
-    /// Per pixel: Σ L (rgb) and the number of samples (w).
+    /// Per pixel Σ L (rgb) and the number of samples (w), then their remainders: a film
+    /// of sums in two floats ([`compensated`](crate::film::compensated)).
     pub sum_rgb: Vec<[f32; 4]>,
-    /// Per pixel: Σ (s L)² (rgb), s = `brightness_scale`.
+    /// Per pixel Σ (s L)² (rgb), s = `brightness_scale`, then their remainders.
     pub sum_sq: Vec<[f32; 4]>,
     /// The power of two samples were multiplied by before they were squared
     /// ([`LightTable::brightness_scale`]).
     pub brightness_scale: f32,
+    /// The film's width and height.
+    pub size: [u32; 2],
     /// Passes (samples per pixel) taken.
     pub passes: u32,
     /// Rays cast: path rays plus shadow rays.
@@ -187,27 +190,33 @@ pub struct PtOutput {
 }
 
 impl PtOutput {
-    /// Per-pixel mean and standard error of the mean (rgb).
+    /// Per pixel Σ L (rgb) and the number of samples (w), each the f32 nearest to the
+    /// sum (the first half of [`PtOutput::sum_rgb`]).
+    pub fn pixel_sums(&self) -> &[[f32; 4]] {
+        &self.sum_rgb[..self.sum_rgb.len() / 2]
+    }
+
+    /// The film's sums (one sample per pass).
+    pub fn sums(&self) -> FilmSums {
+        let [width, height] = self.size;
+        FilmSums::from_gpu(
+            width,
+            height,
+            self.passes,
+            1,
+            &self.sum_rgb,
+            Some(&self.sum_sq),
+            self.brightness_scale,
+        )
+    }
+
+    /// Per-pixel mean and standard error of the mean (rgb; zero before two passes).
     pub fn mean_and_stderr(&self) -> (Vec<[f32; 3]>, Vec<[f32; 3]>) {
-        let scale = self.brightness_scale as f64;
-        let unscale = 1.0 / (scale * scale);
-        self.sum_rgb
-            .iter()
-            .zip(&self.sum_sq)
-            .map(|(s, q)| {
-                let n = s[3].max(1.0) as f64;
-                let mut mean = [0.0; 3];
-                let mut se = [0.0; 3];
-                for c in 0..3 {
-                    let m = s[c] as f64 / n;
-                    let sq = q[c] as f64 * unscale;
-                    let var = (sq / n - m * m).max(0.0) * n / (n - 1.0).max(1.0);
-                    mean[c] = m as f32;
-                    se[c] = (var / n).sqrt() as f32;
-                }
-                (mean, se)
-            })
-            .unzip()
+        let sums = self.sums();
+        let stderr = sums
+            .stderr()
+            .unwrap_or_else(|| vec![[0.0; 3]; sums.pixel_count()]);
+        (sums.mean(), stderr)
     }
 }
 
@@ -262,7 +271,7 @@ pub(crate) fn upload_or_dummy<T: bytemuck::Pod>(
 
 /// Rewrites second moments summed at brightness scale `from` (Σ (from · L)²) as sums at
 /// `to`, where a new frame changed the scale and the film is kept. Exact: the factor is
-/// a power of two.
+/// a power of two, which keeps the sums' remainders canonical too.
 pub(crate) fn rescale_moments(sum_sq: &Buffer, from: f32, to: f32) -> vk::Result<()> {
     if from == to {
         return Ok(());
@@ -433,8 +442,9 @@ impl<'t> PtIntegrator<'t> {
             pipelines: Pipelines::new(gpu, crate::bsdf::layer_kinds(&scene.bsdfs))?,
             scene: SceneBuffers::new(gpu, scene)?,
             wave: Wavefront::new(gpu, chunk, options.sort)?,
-            accum: Arc::new(gpu.zeroed::<[f32; 4]>("pt-accum", pixels)?),
-            accum2: gpu.zeroed::<[f32; 4]>("pt-accum2", pixels)?,
+            // Sums and their remainders (film_sum.glsl).
+            accum: Arc::new(gpu.zeroed::<[f32; 4]>("pt-accum", 2 * pixels)?),
+            accum2: gpu.zeroed::<[f32; 4]>("pt-accum2", 2 * pixels)?,
             counters: gpu.zeroed::<u32>("pt-counters", 1)?,
             params,
             pixels,
@@ -454,6 +464,7 @@ impl<'t> PtIntegrator<'t> {
             sum_rgb: self.accum.read()?,
             sum_sq: self.accum2.read()?,
             brightness_scale: self.params.brightness_scale,
+            size: [self.params.width, self.params.height],
             passes: self.passes,
             rays_traced: self.rays_traced,
             non_finite_dropped: self.counters.read::<u32>()?[0] as u64,
@@ -638,23 +649,13 @@ impl Integrator for PtIntegrator<'_> {
     }
 
     fn sums(&mut self) -> Result<FilmSums, IntegratorError> {
-        let out = self.output()?;
-        let (w, h) = (self.params.width, self.params.height);
-        Ok(FilmSums::from_gpu(
-            w,
-            h,
-            out.passes,
-            1,
-            &out.sum_rgb,
-            Some(&out.sum_sq),
-            out.brightness_scale,
-        ))
+        Ok(self.output()?.sums())
     }
 
     fn restore(&mut self, sums: &FilmSums) -> Result<(), IntegratorError> {
         check_film_size(sums, self.params.width, self.params.height, 1)?;
         let (sum, sum_sq) = sums.to_gpu(self.params.brightness_scale);
-        let zeros = vec![[0.0f32; 4]; self.pixels];
+        let zeros = vec![[0.0f32; 4]; 2 * self.pixels];
         self.accum.write(&sum)?;
         self.accum2.write(sum_sq.as_deref().unwrap_or(&zeros))?;
         self.passes = sums.passes;

@@ -19,6 +19,7 @@ use crate::bidir::random::{fold_seed, random01};
 use crate::bidir::scene::SurfaceHit;
 use crate::bidir::{CpuScene, PinholeCamera};
 use crate::bsdf::{BsdfParams, Frame, TransportMode};
+use crate::film::compensated;
 use crate::scene::CameraFrame;
 use crate::trace::{Hit, Ray, MISS};
 
@@ -337,17 +338,18 @@ pub fn nee_accumulate(
     }
 }
 
-/// `finish.comp`: path p of a chunk of `paths.len()` paths over `accum.len()` pixels is
-/// a sample of pixel p mod pixels; each pixel adds its samples in order to Σ L (w counts
-/// them) and Σ (s L)², s = `brightness_scale`. Returns how many samples were dropped as
-/// non-finite (added as 0).
+/// `finish.comp`: path p of a chunk of `paths.len()` paths over the n pixels of the
+/// films is a sample of pixel p mod n; each pixel adds its samples in order to Σ L (w
+/// counts them) and Σ (s L)², s = `brightness_scale`. Both films hold n sums, then their
+/// remainders ([`compensated`]). Returns how many samples were dropped as non-finite
+/// (added as 0).
 pub fn finish(
     paths: &[PathState],
     accum: &mut [[f32; 4]],
     accum2: &mut [[f32; 4]],
     brightness_scale: f32,
 ) -> u32 {
-    let pixels = accum.len();
+    let pixels = accum.len() / 2;
     let mut dropped = 0;
     for (p, path) in paths.iter().enumerate() {
         let mut l = Vec3::from_slice(&path.radiance[..3]);
@@ -356,12 +358,9 @@ pub fn finish(
             dropped += 1;
         }
         let scaled = l * brightness_scale;
-        let (sum, sum2) = (&mut accum[p % pixels], &mut accum2[p % pixels]);
-        for k in 0..3 {
-            sum[k] += l[k];
-            sum2[k] += scaled[k] * scaled[k];
-        }
-        sum[3] += 1.0;
+        let squared = scaled * scaled;
+        compensated::add_to_film(accum, p % pixels, [l.x, l.y, l.z, 1.0]);
+        compensated::add_to_film(accum2, p % pixels, squared.extend(0.0).into());
     }
     dropped
 }
