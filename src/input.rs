@@ -8,10 +8,28 @@
 //! path is then opened without blocking (`O_NONBLOCK`, which reads of a regular file
 //! ignore) and the opened file's own metadata checked again: a file replaced by a FIFO
 //! between the two is refused as well, not waited on.
+//!
+//! Every file opened here is remembered ([`files_read`]), so that a command can refuse
+//! an output path that would overwrite one of its inputs — a scene's meshes and material
+//! libraries as much as the files named on its command line.
 
+use std::collections::BTreeSet;
 use std::fs::File;
 use std::io::{self, Read};
-use std::path::Path;
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+/// The paths of the files this process opened through [`open`].
+static FILES_READ: Mutex<BTreeSet<PathBuf>> = Mutex::new(BTreeSet::new());
+
+/// Every file this process has read through this module so far, as the paths it was
+/// opened by.
+pub fn files_read() -> Vec<PathBuf> {
+    // The set is never left half-changed (one insert at a time), so a panic elsewhere
+    // while it was held does not spoil it.
+    let read = FILES_READ.lock().unwrap_or_else(|p| p.into_inner());
+    read.iter().cloned().collect()
+}
 
 /// Fails unless `path` (followed through symbolic links) is a regular file; the error
 /// says what it is instead.
@@ -52,7 +70,12 @@ fn describe(kind: &std::fs::FileType) -> &'static str {
 pub fn open(path: &Path) -> io::Result<File> {
     // The path's metadata first: opening a device can itself have effects.
     check_regular_file(path)?;
-    open_without_blocking(path)
+    let file = open_without_blocking(path)?;
+    FILES_READ
+        .lock()
+        .unwrap_or_else(|p| p.into_inner())
+        .insert(path.to_path_buf());
+    Ok(file)
 }
 
 /// Opens `path` for reading without waiting for a FIFO's writer, and fails unless what
@@ -100,6 +123,7 @@ mod tests {
         let file = dir.path().join("a.txt");
         std::fs::write(&file, "text").unwrap();
         assert_eq!(read_to_string(&file).unwrap(), "text");
+        assert!(files_read().contains(&file));
         let error = read(dir.path()).unwrap_err();
         assert_eq!(error.to_string(), "it is a folder, not a regular file");
         #[cfg(unix)]

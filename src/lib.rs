@@ -17,10 +17,12 @@
 //! - [`scene_export`]: the resolved scene as JSON, for reference renderers.
 //! - [`bench`](mod@bench): the measurements behind `splitray bench`.
 //! - [`timeline`]: per-stream and per-thread timelines (Chrome trace-event JSON, SVG).
+//! - [`console`]: what the command line prints, never fatal to it.
 
 pub mod bench;
 pub mod bidir;
 pub mod bsdf;
+pub mod console;
 pub mod display;
 pub mod film;
 pub mod input;

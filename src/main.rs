@@ -12,7 +12,7 @@ fn main() -> ExitCode {
     match cli::run(args) {
         Ok(code) => code,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            splitray::errln!("error: {e:#}");
             ExitCode::FAILURE
         }
     }

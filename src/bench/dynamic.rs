@@ -13,7 +13,6 @@
 //! a sample of its rays (CPU, the same intersection arithmetic) before its time counts.
 
 use std::fmt;
-use std::io::Write as _;
 use std::ops::Range;
 use std::time::Instant;
 
@@ -479,10 +478,9 @@ pub fn run(
             n,
             k,
         )?;
-        eprint!(".");
-        let _ = std::io::stderr().flush();
+        crate::err!(".");
     }
-    eprintln!();
+    crate::errln!();
 
     let frames = opts.frames as f64;
     Ok(DynamicReport {

@@ -247,7 +247,7 @@ pub fn equal_spp(
             // Each timing as it comes, on stderr: a run cut short by a job's time limit
             // keeps what it measured. The GPU's busy time beside it tells host time
             // (waits, recording) from GPU time.
-            eprintln!(
+            crate::errln!(
                 "equal spp, round {}/{}: {} {} stream(s) {}: {seconds:.3} s, GPU busy {busy_ms:.0} ms \
                  (streams summed)",
                 round + 1,

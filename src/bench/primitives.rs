@@ -96,7 +96,7 @@ pub struct PrimitivesReport {
 
 impl PrimitivesReport {
     pub fn print(&self) {
-        print!("{self}");
+        crate::out!("{self}");
     }
 }
 
@@ -219,7 +219,7 @@ fn gpu_batch(
     gpu.wait_idle()?;
     let profile = gpu.take_profile();
     if print_profile && std::env::var_os("SPLITRAY_BENCH_PROFILE").is_some() {
-        eprint!("{}", profile.table());
+        crate::err!("{}", profile.table());
     }
     let runs: Vec<f64> = profile
         .records

@@ -4,7 +4,6 @@
 //! rays before anything is timed.
 
 use std::fmt;
-use std::io::Write as _;
 use std::path::Path;
 use std::time::Instant;
 
@@ -615,10 +614,9 @@ impl<'a> Bench<'a> {
                 c.kernels = log.summary();
                 c.profile = log.tree();
             }
-            eprint!(".");
-            let _ = std::io::stderr().flush();
+            crate::err!(".");
         }
-        eprintln!();
+        crate::errln!();
         Ok(())
     }
 

@@ -563,7 +563,7 @@ fn run_primitives(
         },
     )
     .map_err(|e| anyhow::anyhow!("{e}"))?;
-    print!("{report}");
+    splitray::out!("{report}");
     write_json(json, &report)
 }
 
@@ -594,7 +594,7 @@ fn run_pt(gpu: &Gpu, what: &BenchCommand, scene: &Scene) -> anyhow::Result<()> {
         },
     )
     .map_err(|e| anyhow::anyhow!("{e}"))?;
-    print!("{report}");
+    splitray::out!("{report}");
     write_json(json, &report)
 }
 
@@ -647,7 +647,7 @@ fn run_bdpt(
                 },
             },
         )?;
-        print!("{report}");
+        splitray::out!("{report}");
         reports.push(report);
     }
     write_json(json, &reports)
@@ -695,7 +695,7 @@ fn run_cbpt(
             reference,
         },
     )?;
-    print!("{report}");
+    splitray::out!("{report}");
     write_json(json, &report)
 }
 
@@ -730,7 +730,7 @@ fn run_dynamic(gpu: &Gpu, what: &BenchCommand, animated: &AnimatedScene) -> anyh
         },
     )
     .map_err(|e| anyhow::anyhow!("{e}"))?;
-    print!("{report}");
+    splitray::out!("{report}");
     write_json(json, &report)
 }
 
@@ -767,11 +767,11 @@ fn run_trace(gpu: &Gpu, what: &BenchCommand, scene: &Scene) -> anyhow::Result<()
         dump_hits.as_deref(),
     )
     .map_err(|e| anyhow::anyhow!("{e}"))?;
-    print!("{report}");
+    splitray::out!("{report}");
     if *profile {
         for row in &report.rows {
-            println!("\n{} GPU scopes (last frame):", row.tracer);
-            print!("{}", row.profile.table());
+            splitray::outln!("\n{} GPU scopes (last frame):", row.tracer);
+            splitray::out!("{}", row.profile.table());
         }
     }
     let pdacrt_ran = report
@@ -780,7 +780,9 @@ fn run_trace(gpu: &Gpu, what: &BenchCommand, scene: &Scene) -> anyhow::Result<()
         .any(|r| r.tracer == TracerKind::Pdacrt.name());
     match (*levels, pdacrt_ran) {
         (true, true) => print_levels(&report.pdacrt_levels),
-        (true, false) => println!("--levels: PDACRT's levels, but pdacrt was not among --tracers"),
+        (true, false) => {
+            splitray::outln!("--levels: PDACRT's levels, but pdacrt was not among --tracers")
+        }
         (false, _) => {}
     }
     write_json(json, &report)
@@ -840,13 +842,20 @@ fn pdacrt_params(gpu: &Gpu, what: &BenchCommand) -> PdacrtParams {
 
 /// Prints `--levels`' table of PDACRT's per-level statistics.
 fn print_levels(levels: &[LevelStats]) {
-    println!("PDACRT levels (last frame):");
-    println!(
+    splitray::outln!("PDACRT levels (last frame):");
+    splitray::outln!(
         "{:>5} {:>6} {:>8} {:>10} {:>10} {:>6} {:>9} {:>8}",
-        "chunk", "level", "nodes", "triangles", "rays", "dup", "terminal", "ms"
+        "chunk",
+        "level",
+        "nodes",
+        "triangles",
+        "rays",
+        "dup",
+        "terminal",
+        "ms"
     );
     for l in levels {
-        println!(
+        splitray::outln!(
             "{:>5} {:>6} {:>8} {:>10} {:>10} {:>6.2} {:>9} {:>8.2}{}",
             l.chunk,
             l.level,

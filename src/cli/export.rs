@@ -35,7 +35,7 @@ pub fn run(args: &ExportArgs) -> anyhow::Result<()> {
     json.push(b'\n');
     // The error names the file.
     splitray::film::atomic::write_bytes_atomically(&args.output, &json)?;
-    println!(
+    splitray::outln!(
         "{}: {} triangles, {} materials, {} point lights, film {}x{} -> {}",
         export.name,
         export.triangles.len(),

@@ -58,7 +58,7 @@ fn report(instance: &Instance, device: Option<&str>) -> anyhow::Result<InfoRepor
 }
 
 fn print_queue_families(families: &[QueueFamilyInfo]) {
-    println!("    queue families:");
+    splitray::outln!("    queue families:");
     for q in families {
         let mut caps = vec![];
         if q.graphics {
@@ -70,7 +70,7 @@ fn print_queue_families(families: &[QueueFamilyInfo]) {
         if q.transfer {
             caps.push("transfer");
         }
-        println!(
+        splitray::outln!(
             "      {}: {} queue(s), {}, timestamps {} bits",
             q.index,
             q.count,
@@ -81,10 +81,10 @@ fn print_queue_families(families: &[QueueFamilyInfo]) {
 }
 
 fn print_streams(streams: &StreamMapping) {
-    println!("    streams:");
+    splitray::outln!("    streams:");
     for kind in StreamKind::ALL {
         let s = streams.slot(kind);
-        println!(
+        splitray::outln!(
             "      {:<9} -> family {} queue {}",
             kind.name(),
             s.family,
@@ -92,12 +92,12 @@ fn print_streams(streams: &StreamMapping) {
         );
     }
     if streams.is_single_queue() {
-        println!("      (one queue: streams are ordered by timeline semaphores on it)");
+        splitray::outln!("      (one queue: streams are ordered by timeline semaphores on it)");
     }
 }
 
 fn print_limits(l: &LimitsInfo) {
-    println!(
+    splitray::outln!(
         "    limits: maxStorageBufferRange {} MiB (kernels pass larger buffers by address), largest buffer {} MiB (maxBufferSize {} MiB, maxMemoryAllocationSize {} MiB), device-local memory {} MiB, shared memory {} KiB, workgroup invocations {}, subgroup size {} ({}..{}), push constants {} B, timestampPeriod {} ns",
         l.max_storage_buffer_range >> 20,
         l.max_buffer_size.min(l.max_memory_allocation_size) >> 20,
@@ -115,7 +115,7 @@ fn print_limits(l: &LimitsInfo) {
 }
 
 fn print_calibrated_timestamps(time_domains: &[String]) {
-    println!(
+    splitray::outln!(
         "    calibrated timestamps: {}",
         if time_domains.is_empty() {
             "none (timelines align GPU times at submission)".to_string()
@@ -126,7 +126,7 @@ fn print_calibrated_timestamps(time_domains: &[String]) {
 }
 
 fn print_features(c: &CapabilityInfo) {
-    println!(
+    splitray::outln!(
         "    features: timeline semaphores {}, synchronization2 {}, maintenance4 {}, push descriptors {}, buffer device address {}, ray query {}, subgroup arithmetic {}, subgroup ballot+shuffle {}, full subgroups {}, 64-bit buffer atomics {}, host query reset {}",
         c.timeline_semaphore,
         c.synchronization2,
@@ -144,7 +144,7 @@ fn print_features(c: &CapabilityInfo) {
 
 fn print_device(d: &DeviceReport) {
     let i = &d.info;
-    println!(
+    splitray::outln!(
         "\n[{}] {}{}\n    type {}, Vulkan {}, driver {} {}",
         i.index,
         i.name,
@@ -155,7 +155,7 @@ fn print_device(d: &DeviceReport) {
         i.driver_info
     );
     if !d.missing_requirements.is_empty() {
-        println!(
+        splitray::outln!(
             "    cannot run splitray: lacks {}",
             d.missing_requirements.join(", ")
         );
@@ -172,10 +172,10 @@ pub fn run(args: &InfoArgs) -> anyhow::Result<()> {
         Instance::new(InstanceDesc::default()).context("cannot create a Vulkan instance")?;
     let report = report(&instance, args.device.as_deref())?;
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
+        splitray::outln!("{}", serde_json::to_string_pretty(&report)?);
         return Ok(());
     }
-    println!(
+    splitray::outln!(
         "validation layer: {}",
         if report.validation_layer_available {
             "available"

@@ -28,9 +28,12 @@ pub fn run(args: &MergeArgs) -> anyhow::Result<()> {
     let merged = merge_parts(&args.parts)?;
     let written = files.write(&merged.film, &merged.metadata)?;
     let film = &merged.film;
-    println!(
-        "merged {} parts: {}x{} {} spp (passes {}), {} on {}",
-        args.parts.len(),
+    let parts = match args.parts.len() {
+        1 => "1 part".to_string(),
+        n => format!("{n} parts"),
+    };
+    splitray::outln!(
+        "merged {parts}: {}x{} {} spp (passes {}), {} on {}",
         film.width(),
         film.height(),
         merged.sums.spp(),
@@ -41,7 +44,7 @@ pub fn run(args: &MergeArgs) -> anyhow::Result<()> {
     if let Some(stderr) = &film.stderr {
         let mean_stderr = stderr.iter().flatten().map(|&v| v as f64).sum::<f64>()
             / (3 * stderr.len()).max(1) as f64;
-        println!("standard error: {mean_stderr:.4e} on average over pixels and channels");
+        splitray::outln!("standard error: {mean_stderr:.4e} on average over pixels and channels");
     }
     if !merged.missing_shards.is_empty() {
         let names: Vec<String> = merged
@@ -49,7 +52,7 @@ pub fn run(args: &MergeArgs) -> anyhow::Result<()> {
             .iter()
             .map(|s| s.to_string())
             .collect();
-        eprintln!(
+        splitray::errln!(
             "warning: no part is shard {}: the image holds fewer samples than its render asked for",
             names.join(", ")
         );
@@ -62,13 +65,13 @@ pub fn run(args: &MergeArgs) -> anyhow::Result<()> {
                 .iter()
                 .map(|g| format!("{}..{}", g.start, g.end))
                 .collect();
-            eprintln!(
+            splitray::errln!(
                 "warning: no part holds passes {}: the image holds fewer samples than its passes' span",
                 names.join(", ")
             );
         }
     }
-    println!(
+    splitray::outln!(
         "wrote {} and {}",
         written.exr.display(),
         written.png.display()

@@ -92,7 +92,7 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::ExportScene(args) => exiting_at_a_signal(|| export::run(&args)),
         Command::Scenes => {
             for (name, description) in splitray::scene::builtin_names() {
-                println!("{name:<14} {description}");
+                splitray::outln!("{name:<14} {description}");
             }
             Ok(())
         }

@@ -25,6 +25,12 @@ pub fn check_output(path: &Path, extensions: &[&str], wanted: &str) -> anyhow::R
     if !extensions.contains(&ext.as_str()) {
         bail!("{}: the output must be {wanted}", path.display());
     }
+    if splitray::film::atomic::ends_in_a_separator(path) {
+        bail!(
+            "{}: the output must be {wanted}, not a folder (the path ends in a separator)",
+            path.display()
+        );
+    }
     let folder = folder_of(path);
     if folder.exists() && !folder.is_dir() {
         bail!("{}: {} is not a folder", path.display(), folder.display());
@@ -186,5 +192,10 @@ mod tests {
         std::fs::write(d.join("plain"), "").unwrap();
         let file = exr(&d.join("plain/a.exr")).unwrap_err();
         assert!(file.ends_with("plain is not a folder"), "{file}");
+        let folder = exr(Path::new("a.exr/")).unwrap_err();
+        assert!(
+            folder.contains("not a folder (the path ends in a separator)"),
+            "{folder}"
+        );
     }
 }

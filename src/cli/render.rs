@@ -37,6 +37,11 @@ mod watch;
 const DEFAULT_SCENE: &str = "cornell-box";
 
 #[derive(Debug, Args)]
+#[command(group(
+    clap::ArgGroup::new("checkpoint_or_resume")
+        .args(["checkpoint", "resume"])
+        .multiple(true)
+))]
 pub struct RenderArgs {
     /// A built-in scene name (see `splitray scenes`), a scene .toml or an .obj mesh
     /// (default: cornell-box; with --resume, the checkpoint's scene). Its size is bounded
@@ -147,19 +152,21 @@ pub struct RenderArgs {
     /// stopped; `splitray render --resume FILE` continues it.
     #[arg(long, value_name = "FILE")]
     checkpoint: Option<PathBuf>,
-    /// Seconds of rendering between two checkpoints (saved at a pass boundary).
+    /// Seconds of rendering between two checkpoints (saved at a pass boundary), of
+    /// --checkpoint or of the one --resume continues.
     #[arg(
         long,
         value_name = "SECONDS",
         default_value_t = 300.0,
-        requires = "checkpoint",
+        requires = "checkpoint_or_resume",
         allow_negative_numbers = true
     )]
     checkpoint_every: f64,
     /// Continue the render saved in this checkpoint: to --spp N samples per pixel in all,
     /// for --time S more seconds, or else to the target it was started with. Scene, size
     /// and settings come from the checkpoint; options given that change the image must
-    /// match it, and a scene file that changed since is refused.
+    /// match it, and a scene file that changed since is refused. The render goes on saving
+    /// to this checkpoint, unless --checkpoint names another.
     #[arg(long, value_name = "FILE")]
     resume: Option<PathBuf>,
     /// Render the I-th of N statistically independent parts of the image (numbered from
@@ -246,7 +253,8 @@ fn output_path(args: &RenderArgs, scene_name: &str, shard: Shard) -> anyhow::Res
 
 /// Refuses outputs that would overwrite one another or an input ([`refuse_clashing_paths`]):
 /// `exr` (a frame's, for a sequence), its PNG, the stats, checkpoint and timeline; the
-/// reference and the checkpoint resumed.
+/// reference, the checkpoint resumed and every file the scene was read from (called once
+/// the scene is loaded).
 fn refuse_clashes<'a>(args: &'a RenderArgs, exr: &'a Path) -> anyhow::Result<()> {
     let png = exr.with_extension("png");
     let file = |what, path: &'a Option<PathBuf>| path.as_deref().map(|p| Role::file(what, p));
@@ -262,13 +270,22 @@ fn refuse_clashes<'a>(args: &'a RenderArgs, exr: &'a Path) -> anyhow::Result<()>
     .into_iter()
     .flatten()
     .collect();
-    let inputs: Vec<Role> = [
+    let mut inputs: Vec<Role> = [
         file("--reference", &args.reference),
         checkpoint("--resume", &args.resume),
     ]
     .into_iter()
     .flatten()
     .collect();
+    // The scene file, its meshes and material libraries: every other file read so far.
+    let read = splitray::input::files_read();
+    let named = |path: &Path| inputs.iter().any(|i| same_file(i.path, path));
+    let scene_files: Vec<Role> = read
+        .iter()
+        .filter(|path| !named(path))
+        .map(|path| Role::file("a file of the scene", path))
+        .collect();
+    inputs.extend(scene_files);
     refuse_clashing_paths(&outputs, &inputs)?;
     match &args.bdpt_techniques {
         Some(dir) => refuse_technique_clashes(outputs.iter().chain(&inputs), dir),
@@ -313,6 +330,9 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<ExitCode> {
     refuse_clashes(args, &output)?;
     let mut files =
         RenderFiles::create(&output, args.stats.as_deref(), args.checkpoint.as_deref())?;
+    if let (None, Some(resumed)) = (&args.checkpoint, &args.resume) {
+        files.checkpoint = keep_saving(resumed);
+    }
     let mut watching = watch::Watching::open(
         args,
         &job.scene.name,
@@ -421,6 +441,19 @@ fn absolute_scene_path(spec: String) -> String {
     }
 }
 
+/// The checkpoint a render resumed without `--checkpoint` goes on saving to, so that its
+/// new samples are kept; where it cannot (a read-only folder) the render goes on without
+/// saving, and says so.
+fn keep_saving(resumed: &Path) -> Option<CheckpointFile> {
+    CheckpointFile::create(resumed)
+        .map_err(|e| {
+            splitray::errln!(
+                "note: {e}: the checkpoint resumed is not saved over, so the samples this                  render adds are kept only in its image (--checkpoint FILE saves them)"
+            )
+        })
+        .ok()
+}
+
 /// Renders `job` behind a progress bar, saving `checkpoint_file` as it goes and showing
 /// the film to whoever watches; a signal or a closed preview window stops it.
 fn render_watched(
@@ -448,6 +481,7 @@ fn render_watched(
     };
     let bar = progress_bar(options, &label);
     let pixels = options.width as f64 * options.height as f64;
+    let saving = checkpoint_file.is_some();
     let mut save = |snapshot: &FilmSnapshot<'_>| -> Result<(), RenderError> {
         if let Some(file) = checkpoint_file.as_mut() {
             file.save(&Checkpoint::new(scene_spec, options, snapshot))?;
@@ -459,7 +493,7 @@ fn render_watched(
         resume: resume
             .as_ref()
             .map(|(checkpoint, path)| Resume { checkpoint, path }),
-        checkpoint: args.checkpoint.is_some().then_some(CheckpointHook {
+        checkpoint: saving.then_some(CheckpointHook {
             every_s: args.checkpoint_every,
             save: &mut save,
         }),
@@ -487,13 +521,13 @@ fn render_watched(
 /// signal came first, an error otherwise.
 fn nothing_rendered(window_closed: bool, stopped_by: Option<i32>) -> anyhow::Result<ExitCode> {
     if window_closed && stopped_by.is_none() {
-        eprintln!("preview window closed before the first pass; nothing written");
+        splitray::errln!("preview window closed before the first pass; nothing written");
         return Ok(ExitCode::SUCCESS);
     }
     let Some(signal) = stopped_by else {
         bail!("the render holds no passes; nothing was written");
     };
-    eprintln!(
+    splitray::errln!(
         "{}: stopped before the first pass; nothing written",
         signals::name(signal)
     );
@@ -573,7 +607,7 @@ fn save_last_checkpoint(
         &job.options,
         &result.snapshot(),
     ))?;
-    println!(
+    splitray::outln!(
         "checkpoint {} holds {} spp: `splitray render --resume {} --spp N` continues it",
         path.display(),
         result.sums.spp(),
@@ -586,7 +620,7 @@ fn save_last_checkpoint(
 fn write_image(image: ImageFiles, result: &RenderOutput) -> anyhow::Result<PathBuf> {
     let _span = tracing::info_span!("write outputs").entered();
     let written = image.write(&result.film, &result.metadata)?;
-    println!(
+    splitray::outln!(
         "wrote {} and {}",
         written.exr.display(),
         written.png.display()
@@ -603,14 +637,14 @@ fn report_early_stop(
     exr: &Path,
 ) {
     if let Some(signal) = stopped_by {
-        eprintln!(
+        splitray::errln!(
             "{}: the render stopped at {} spp; {} records the samples reached",
             signals::name(signal),
             result.sums.spp(),
             exr.display()
         );
     } else if window_closed && result.stats.stopped_early {
-        eprintln!(
+        splitray::errln!(
             "preview window closed: the render stopped at {} spp; {} records the samples \
              reached",
             result.sums.spp(),
@@ -693,7 +727,7 @@ fn show_progress(
 
 fn print_summary(result: &RenderOutput, profile: bool) {
     let s = &result.stats;
-    println!(
+    splitray::outln!(
         "{}: {}x{} {} spp, {} + {} on {} in {:.3} s: {} rays, {:.2} Mrays/s, peak GPU memory {:.1} MiB",
         s.scene,
         s.width,
@@ -709,15 +743,15 @@ fn print_summary(result: &RenderOutput, profile: bool) {
     );
     if let Some(mse) = s.relative_mse {
         match s.relative_mse_excess {
-            Some(excess) => println!(
+            Some(excess) => splitray::outln!(
                 "relative MSE against the reference: {mse:.6e} ({excess:.6e} without the \
                  reference's own noise)"
             ),
-            None => println!("relative MSE against the reference: {mse:.6e}"),
+            None => splitray::outln!("relative MSE against the reference: {mse:.6e}"),
         }
     }
     if profile {
-        print!("{}", s.profile.table());
+        splitray::out!("{}", s.profile.table());
     }
 }
 
@@ -761,7 +795,7 @@ fn write_technique_images(
         let path = dir.join(format!("{}.exr", image.name));
         splitray::film::write_exr(&path, &film, &meta)?;
     }
-    println!(
+    splitray::outln!(
         "wrote {} technique images to {}",
         images.len(),
         dir.display()

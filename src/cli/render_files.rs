@@ -55,7 +55,8 @@ pub struct CheckpointFile {
 }
 
 impl CheckpointFile {
-    fn create(path: &Path) -> Result<Self, FilmError> {
+    /// The checkpoint file at `path`, its first temporary file created.
+    pub fn create(path: &Path) -> Result<Self, FilmError> {
         Ok(Self {
             path: path.to_path_buf(),
             next: Some(AtomicFile::create(path)?),

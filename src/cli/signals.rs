@@ -1,11 +1,13 @@
-//! SIGINT and SIGTERM (through `signal-hook`): during a render, and during the other
-//! commands that write files.
+//! SIGINT, SIGTERM and SIGHUP (through `signal-hook`): during a render, and during the
+//! other commands that write files. SIGHUP (the terminal or the ssh session went away)
+//! is a stop like the others, so that a render whose terminal closed still writes what
+//! it has; what it prints then goes nowhere ([`splitray::console`]).
 //!
 //! The first one asks the render to stop: the pass loop asks before every batch of
 //! passes, so the work in flight finishes, and the image (with the samples it reached),
 //! its stats and its checkpoint are written; the process then exits with 128 + the
-//! signal's number (130 for SIGINT, 143 for SIGTERM), as a shell reports a process that
-//! a signal ended. A second one exits at once: it removes every temporary output file
+//! signal's number (130 for SIGINT, 143 for SIGTERM, 129 for SIGHUP), as a shell reports
+//! a process that a signal ended. A second one exits at once: it removes every temporary output file
 //! ([`splitray::film::discard_all_temporaries`], which also keeps the writers from
 //! creating or renaming another) and calls `_exit`. That skips the Vulkan teardown on
 //! purpose: waiting for a submission in flight, or a driver's exit handlers, is exactly
@@ -20,8 +22,11 @@ use std::sync::atomic::{AtomicI32, Ordering};
 use std::sync::Arc;
 
 use anyhow::Context;
-use signal_hook::consts::{SIGINT, SIGTERM};
+use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
 use signal_hook::iterator::Signals;
+
+/// The signals that stop a command.
+const STOP_SIGNALS: [i32; 3] = [SIGINT, SIGTERM, SIGHUP];
 
 /// The first stop signal received, if any.
 #[derive(Clone)]
@@ -30,12 +35,12 @@ pub struct StopSignals {
 }
 
 impl StopSignals {
-    /// Handles SIGINT and SIGTERM from here on, on a thread of its own; the first one
+    /// Handles the stop signals from here on, on a thread of its own; the first one
     /// tells the user `kept`, what stopping keeps.
     pub fn install(kept: &'static str) -> anyhow::Result<Self> {
         let received = Arc::new(AtomicI32::new(0));
         let mut signals =
-            Signals::new([SIGINT, SIGTERM]).context("cannot install the signal handlers")?;
+            Signals::new(STOP_SIGNALS).context("cannot install the signal handlers")?;
         let first = received.clone();
         std::thread::Builder::new()
             .name("signals".into())
@@ -45,7 +50,7 @@ impl StopSignals {
                         .compare_exchange(0, signal, Ordering::SeqCst, Ordering::SeqCst)
                         .is_ok()
                     {
-                        eprintln!(
+                        splitray::errln!(
                             "\n{}: stopping after the passes in flight; {kept} (send it \
                              again to exit at once, writing nothing)",
                             name(signal)
@@ -77,15 +82,15 @@ pub fn name(signal: i32) -> &'static str {
     match signal {
         SIGINT => "SIGINT",
         SIGTERM => "SIGTERM",
+        SIGHUP => "SIGHUP",
         _ => "signal",
     }
 }
 
-/// Handles SIGINT and SIGTERM from here on, on a thread of its own: the first one exits
-/// at once, removing every temporary output file, with 128 + its number.
+/// Handles the stop signals from here on, on a thread of its own: the first one exits at
+/// once, removing every temporary output file, with 128 + its number.
 pub fn exit_at_first_signal() -> anyhow::Result<()> {
-    let mut signals =
-        Signals::new([SIGINT, SIGTERM]).context("cannot install the signal handlers")?;
+    let mut signals = Signals::new(STOP_SIGNALS).context("cannot install the signal handlers")?;
     std::thread::Builder::new()
         .name("signals".into())
         .spawn(move || {
@@ -101,7 +106,7 @@ pub fn exit_at_first_signal() -> anyhow::Result<()> {
 /// signal's name, then `again` where it is the second one).
 fn exit_at_once(signal: i32, again: &str) -> ! {
     let discarded = splitray::film::discard_all_temporaries();
-    eprintln!(
+    splitray::errln!(
         "{}{again}: exiting at once; {} unfinished output file(s) removed",
         name(signal),
         discarded.removed.len()

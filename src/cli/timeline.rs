@@ -51,7 +51,7 @@ impl TimelineOutput {
             .write_all(timeline::json::to_json(&trace).as_bytes())
             .with_context(|| format!("{}: cannot write", path.display()))?;
         file.commit()?;
-        println!(
+        splitray::outln!(
             "wrote {} ({} tracks; open it in ui.perfetto.dev or chrome://tracing)",
             path.display(),
             trace.tracks.len()
@@ -102,8 +102,8 @@ pub fn run(args: &TimelineArgs) -> anyhow::Result<()> {
     let bytes = drawn.with_context(|| format!("{}", args.input.display()))?;
     // The error names the file.
     write_bytes_atomically(&args.output, &bytes)?;
-    print!("{}", trace.summary());
-    println!("wrote {}", args.output.display());
+    splitray::out!("{}", trace.summary());
+    splitray::outln!("wrote {}", args.output.display());
     Ok(())
 }
 

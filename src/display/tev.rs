@@ -265,7 +265,7 @@ impl Sender {
             return;
         }
         if reconnection {
-            eprintln!("display server {}: connected", self.address);
+            crate::errln!("display server {}: connected", self.address);
         }
         self.warned = false;
         self.connection = Some(connection);
@@ -361,7 +361,7 @@ impl Sender {
     /// Notes a listener that is away: warned once until it is back.
     fn lost(&mut self, error: &std::io::Error) {
         if !self.warned {
-            eprintln!(
+            crate::errln!(
                 "display server {}: {error}; the render goes on and the connection is retried",
                 self.address
             );

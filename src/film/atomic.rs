@@ -74,6 +74,14 @@ pub struct AtomicFile {
 /// The longest file name most file systems take, in bytes (Linux's `NAME_MAX`).
 const MAX_NAME_BYTES: usize = 255;
 
+/// Whether `path` ends in a path separator (`out.exr/`).
+pub fn ends_in_a_separator(path: &Path) -> bool {
+    path.as_os_str()
+        .as_encoded_bytes()
+        .last()
+        .is_some_and(|&b| std::path::is_separator(b as char))
+}
+
 /// The name of a new temporary file for the target named `file_name`:
 /// `.<file name>.tmp-<pid>-<n>`, or `.splitray.tmp-<pid>-<n>` where that would be too
 /// long a name (a target whose name is near the limit is still a legal output).
@@ -114,9 +122,17 @@ impl AtomicFile {
                 folder: dir,
             });
         }
-        // Renaming over a folder fails only at the end, after the work.
+        // Renaming over a folder, or to a path that ends in a separator (`out.exr/`,
+        // whose file name `Path` reads as `out.exr`), fails only at the end, after the
+        // work.
         if target.is_dir() {
             return Err(FilmError::invalid(&target, "is a folder, not a file"));
+        }
+        if ends_in_a_separator(&target) {
+            return Err(FilmError::invalid(
+                &target,
+                "ends in a separator, so it names a folder, not a file",
+            ));
         }
         let temp = dir.join(temp_name(file_name));
         let mut live = live_temporaries();
@@ -308,6 +324,17 @@ mod tests {
         std::fs::write(dir.path().join("plain"), "").unwrap();
         let err = AtomicFile::create(dir.path().join("plain/x.exr")).unwrap_err();
         assert!(err.to_string().ends_with("plain is not a folder"), "{err}");
+    }
+
+    #[test]
+    fn a_path_that_names_a_folder_is_refused_before_any_write() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::create_dir(dir.path().join("sub")).unwrap();
+        for target in [dir.path().join("sub"), dir.path().join("x.exr/")] {
+            let err = AtomicFile::create(&target).unwrap_err().to_string();
+            assert!(err.contains("not a file"), "{err}");
+        }
+        assert_eq!(entries(dir.path()), ["sub"]);
     }
 
     #[test]

@@ -128,7 +128,7 @@ impl App {
     /// writes what it has, as on SIGINT.
     fn close_window(&mut self) {
         if !self.closed.swap(true, Ordering::SeqCst) {
-            eprintln!(
+            crate::errln!(
                 "\npreview window closed: stopping after the passes in flight; the image is \
                  written with the samples reached"
             );
@@ -169,7 +169,7 @@ impl App {
 
     /// A preview that cannot draw stops drawing; the render goes on.
     fn fail(&mut self, error: &str) {
-        eprintln!("preview: {error}; the window stops updating, the render goes on");
+        crate::errln!("preview: {error}; the window stops updating, the render goes on");
         self.presenter = None;
     }
 
@@ -185,8 +185,8 @@ impl App {
             self.state.file_tag()
         ));
         match presenter.snapshot(&snapshot, &self.state, &path) {
-            Ok(written) => eprintln!("\npreview: wrote {}", written.display()),
-            Err(e) => eprintln!("\npreview: no snapshot: {e}"),
+            Ok(written) => crate::errln!("\npreview: wrote {}", written.display()),
+            Err(e) => crate::errln!("\npreview: no snapshot: {e}"),
         }
     }
 

@@ -119,7 +119,7 @@ impl Preview {
                 let _ = opened.send(Ok((event_loop.create_proxy(), extensions)));
                 let mut app = App::new(options, app_closed);
                 if let Err(e) = event_loop.run_app(&mut app) {
-                    eprintln!("preview: the window's event loop failed: {e}");
+                    crate::errln!("preview: the window's event loop failed: {e}");
                 }
             })
             .map_err(|e| PreviewError::Window(format!("cannot start its thread: {e}")))?;

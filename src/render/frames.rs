@@ -55,7 +55,12 @@ impl FrameRange {
         let first: u32 = a.trim().parse().map_err(|_| bad())?;
         let last: u32 = b.trim().parse().map_err(|_| bad())?;
         let end = match inclusive {
-            true => last.checked_add(1).ok_or_else(bad)?,
+            true => last.checked_add(1).ok_or_else(|| {
+                format!(
+                    "frame range '{spec}': the last frame is past {}",
+                    u32::MAX - 1
+                )
+            })?,
             false => last,
         };
         if end <= first {
@@ -63,6 +68,15 @@ impl FrameRange {
         }
         if !(fps.is_finite() && fps > 0.0) {
             return Err(format!("--fps {fps} must be a positive number"));
+        }
+        // Frame k shows time k / fps, an f32 of the scene's clock.
+        let last_time = (end - 1) as f64 / fps;
+        if !(last_time as f32).is_finite() {
+            return Err(format!(
+                "--fps {fps} puts frame {} at {last_time:e} s, past any time a scene can \
+                 hold",
+                end - 1
+            ));
         }
         Ok(Self { first, end, fps })
     }
@@ -468,6 +482,12 @@ mod tests {
         }
         assert!(FrameRange::parse("0..2", 0.0).is_err());
         assert!(FrameRange::parse("0..2", f64::NAN).is_err());
+        let past = FrameRange::parse("4294967294..=4294967295", 24.0).unwrap_err();
+        assert!(past.contains("the last frame is past 4294967294"), "{past}");
+        // Frame 1 at 1e-40 fps would show time 1e40 s, which no f32 holds.
+        let never = FrameRange::parse("0..2", 1e-40).unwrap_err();
+        assert!(never.contains("past any time a scene can hold"), "{never}");
+        assert!(FrameRange::parse("0..1", 1e-40).is_ok());
     }
 
     #[test]

@@ -246,6 +246,16 @@ fn bad_animation_input_names_the_file_and_the_problem() {
             ],
         ),
         (
+            // A mistyped last file: named at the first missing file, without first
+            // making the names of four billion.
+            "last = 2",
+            "last = 4000000000",
+            &[
+                "animated.toml:36:",
+                "mesh sequence file 'sheet_03.obj' not found",
+            ],
+        ),
+        (
             "first = 0, last = 2",
             "first = 2, last = 0",
             &["last file 0 comes before first file 2"],

@@ -2,9 +2,9 @@
 //! giving a clear error, a non-zero exit status and no output file.
 
 use std::path::Path;
-use std::process::Output;
+use std::process::{Output, Stdio};
 
-use crate::common::cli::{printed as text, splitray};
+use crate::common::cli::{command, printed as text, splitray};
 
 #[test]
 fn info_lists_devices_streams_and_validation() {
@@ -335,6 +335,18 @@ fn outputs_that_would_replace_another_file_of_the_render_are_refused() {
             &["--stats and --resume"],
         ),
         (&["-o", "folder.exr"], &["folder.exr", "is a folder"]),
+        (
+            &["-o", "a.exr/"],
+            &["a.exr/", "not a folder (the path ends in a separator)"],
+        ),
+        (
+            &["-o", "a.exr", "--stats", "s.json/"],
+            &["s.json/", "ends in a separator"],
+        ),
+        (
+            &["-o", "a.exr", "--checkpoint", "run2.ckpt/"],
+            &["run2.ckpt/", "ends in a separator"],
+        ),
     ];
     for (args, expect) in cases {
         let out = render(args);
@@ -370,6 +382,107 @@ fn outputs_that_would_replace_another_file_of_the_render_are_refused() {
         d,
     );
     assert!(out.status.success(), "{}", text(&out));
+}
+
+/// The scene's own files — the scene file, its meshes and their material libraries —
+/// are inputs too: an output on one of them is refused, and the file left as it was.
+#[test]
+fn outputs_over_the_scenes_own_files_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let files = [
+        ("scene.toml", "[[mesh]]\npath = \"mesh.obj\"\n"),
+        (
+            "mesh.obj",
+            "mtllib grey.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl grey\nf 1 2 3\n",
+        ),
+        ("grey.mtl", "newmtl grey\nKd 0.5 0.5 0.5\n"),
+    ];
+    for (name, text) in files {
+        std::fs::write(d.join(name), text).unwrap();
+    }
+    let tiny = [
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "--spp",
+        "1",
+        "--integrator",
+        "ao",
+    ];
+    for (option, path) in [
+        ("--stats", "scene.toml"),
+        ("--checkpoint", "./mesh.obj"),
+        ("--stats", "grey.mtl"),
+    ] {
+        let args = [
+            &["render", "scene.toml", "-o", "a.exr", option, path][..],
+            &tiny,
+        ]
+        .concat();
+        let out = splitray(&args, d);
+        let t = text(&out);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {t}");
+        let clash = format!("{option} and a file of the scene name the same file");
+        assert!(t.contains(&clash), "{args:?}: {t}");
+    }
+    for (name, text) in files {
+        assert_eq!(std::fs::read_to_string(d.join(name)).unwrap(), text);
+    }
+    assert_eq!(std::fs::read_dir(d).unwrap().count(), files.len());
+}
+
+/// Standard output that cannot take the summary — a closed pipe (`| head`), a full
+/// disk — costs none of the render's files: the failure is noted once on standard error
+/// and the render goes on to write them, exiting 0.
+#[test]
+fn a_closed_or_full_standard_output_costs_no_file() {
+    let args = [
+        "render",
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "--spp",
+        "1",
+        "--integrator",
+        "ao",
+        "-o",
+        "a.exr",
+        "--stats",
+        "s.json",
+    ];
+    let closed_pipe = |d: &Path| {
+        let mut child = command(&args, d)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        drop(child.stdout.take());
+        child.wait_with_output().unwrap()
+    };
+    let full_disk = |d: &Path| {
+        let full = std::fs::OpenOptions::new()
+            .write(true)
+            .open("/dev/full")
+            .unwrap();
+        command(&args, d).stdout(full).output().unwrap()
+    };
+    for (what, run) in [
+        ("a closed pipe", &closed_pipe as &dyn Fn(&Path) -> Output),
+        ("a full disk", &full_disk),
+    ] {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        let out = run(d);
+        let t = text(&out);
+        assert!(out.status.success(), "{what}: {t}");
+        assert!(t.contains("note: standard output failed"), "{what}: {t}");
+        for file in ["a.exr", "a.png", "s.json"] {
+            assert!(d.join(file).is_file(), "{what}: no {file}: {t}");
+        }
+    }
 }
 
 /// Runs a render expected to fail; checks the message and that no file was written.

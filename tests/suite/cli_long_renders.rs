@@ -226,6 +226,9 @@ fn sigint_writes_the_samples_reached_and_the_render_resumes_bit_identically() {
     let (resumed, _) = read_exr(d.join("resumed.exr")).unwrap();
     let (uninterrupted, _) = read_exr(d.join("direct.exr")).unwrap();
     assert!(resumed.stderr.is_some() && resumed.stderr == uninterrupted.stderr);
+    // Without --checkpoint, the resumed render went on saving to the one it resumed.
+    let held = Checkpoint::read(d.join("run.ckpt")).unwrap().header.passes;
+    assert_eq!(held, reached + 3);
 
     // A changed setting is refused, naming the checkpoint, and writes nothing.
     let out = splitray(
@@ -249,7 +252,7 @@ fn sigint_writes_the_samples_reached_and_the_render_resumes_bit_identically() {
     assert!(!d.join("other.exr").exists() && temporaries(d).is_empty());
 
     // Asking for no more samples than it holds is refused rather than rewriting its image.
-    let held = reached.to_string();
+    let held = held.to_string();
     let out = splitray(
         &[
             "render", "--resume", "run.ckpt", "--spp", &held, "-o", "same.exr",
@@ -265,40 +268,44 @@ fn sigint_writes_the_samples_reached_and_the_render_resumes_bit_identically() {
     assert!(!d.join("same.exr").exists() && temporaries(d).is_empty());
 }
 
+/// SIGTERM, and SIGHUP (the terminal or ssh session went away), stop a render as SIGINT
+/// does: the samples reached are written, and the exit status is 128 + the signal.
 #[test]
-fn sigterm_writes_the_samples_reached_and_exits_143() {
-    let dir = tempfile::tempdir().unwrap();
-    let d = dir.path();
-    let args = [
-        "render",
-        "-o",
-        "img.exr",
-        "--time",
-        "60",
-        "--integrator",
-        "ao",
-        "--width",
-        "32",
-        "--height",
-        "24",
-        "--checkpoint",
-        "run.ckpt",
-        "--checkpoint-every",
-        "0",
-    ];
-    let mut render = Running::start(&args, d);
-    wait_for_file(&d.join("run.ckpt"));
-    render.signal("TERM");
-    render.wait_for_line("SIGTERM: stopping");
-    let (code, stderr) = render.finish();
-    assert_eq!(code, Some(143), "{stderr}");
-    let (_, meta) = read_exr(d.join("img.exr")).unwrap();
-    assert_eq!(
-        meta.spp,
-        Checkpoint::read(d.join("run.ckpt")).unwrap().header.passes
-    );
-    assert!(meta.spp > 0);
-    assert!(temporaries(d).is_empty(), "{:?}", temporaries(d));
+fn sigterm_and_sighup_write_the_samples_reached_and_exit_143_and_129() {
+    for (signal, code) in [("TERM", 143), ("HUP", 129)] {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        let args = [
+            "render",
+            "-o",
+            "img.exr",
+            "--time",
+            "60",
+            "--integrator",
+            "ao",
+            "--width",
+            "32",
+            "--height",
+            "24",
+            "--checkpoint",
+            "run.ckpt",
+            "--checkpoint-every",
+            "0",
+        ];
+        let mut render = Running::start(&args, d);
+        wait_for_file(&d.join("run.ckpt"));
+        render.signal(signal);
+        render.wait_for_line(&format!("SIG{signal}: stopping"));
+        let (status, stderr) = render.finish();
+        assert_eq!(status, Some(code), "{stderr}");
+        let (_, meta) = read_exr(d.join("img.exr")).unwrap();
+        assert_eq!(
+            meta.spp,
+            Checkpoint::read(d.join("run.ckpt")).unwrap().header.passes
+        );
+        assert!(meta.spp > 0);
+        assert!(temporaries(d).is_empty(), "{:?}", temporaries(d));
+    }
 }
 
 #[test]

@@ -171,7 +171,7 @@ fn read_sequence(args: &RenderArgs, spec: &str) -> anyhow::Result<SequenceJob> {
     let options = render_options(args, &animated.scene, None)?;
     check_frames(&animated, &options, &range)?;
     if !animated.is_animated() {
-        eprintln!(
+        splitray::errln!(
             "note: nothing moves in scene '{}': every frame is the same image",
             animated.scene.name
         );
@@ -268,7 +268,7 @@ fn report_sequence_end(
 ) -> ExitCode {
     match stopped_by {
         Some(signal) => {
-            eprintln!(
+            splitray::errln!(
                 "{}: {}",
                 signals::name(signal),
                 rest_of_sequence(written, range)
@@ -276,7 +276,7 @@ fn report_sequence_end(
             ExitCode::from(signals::exit_status(signal))
         }
         None => {
-            println!(
+            splitray::outln!(
                 "wrote frames {}..{} ({} at {} fps) as {}",
                 range.first,
                 range.end,
@@ -316,9 +316,9 @@ fn write_frame(
         )));
     }
     let written = image.write(&frame.output.film, &frame.output.metadata)?;
-    print!("frame {} (t = {} s): ", frame.index, frame.time);
+    splitray::out!("frame {} (t = {} s): ", frame.index, frame.time);
     print_summary(&frame.output, profile);
-    println!(
+    splitray::outln!(
         "wrote {} and {}",
         written.exr.display(),
         written.png.display()

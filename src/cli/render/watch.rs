@@ -129,17 +129,19 @@ impl Watching {
         if let Some(tev) = self.tev {
             let report = tev.finish();
             match (report.final_sent, report.connections) {
-                (true, _) => println!(
+                (true, _) => splitray::outln!(
                     "display server {}: sent the finished image ({} tile updates)",
-                    report.address, report.updates
+                    report.address,
+                    report.updates
                 ),
-                (false, 0) => eprintln!(
+                (false, 0) => splitray::errln!(
                     "display server {}: never reached; nothing was shown there",
                     report.address
                 ),
-                (false, _) => eprintln!(
+                (false, _) => splitray::errln!(
                     "display server {}: gone before the finished image ({} tile updates sent)",
-                    report.address, report.updates
+                    report.address,
+                    report.updates
                 ),
             }
         }

@@ -162,18 +162,21 @@ pub fn load_sequence(
     if !(fps.is_finite() && fps > 0.0) {
         return Err(invalid(format!("fps {fps} must be a positive number")));
     }
-    // Every file must exist before any is parsed: a missing one is named at once.
-    let files: Vec<String> = (first..=last).map(|n| pattern.file(n)).collect();
-    for name in &files {
-        check_referenced_file(&dir.join(name), at, "mesh sequence file", name)?;
+    // Every file must exist before any is parsed: a missing one is named at once. The
+    // names are made one at a time, so a mistyped `last` costs no memory.
+    for n in first..=last {
+        let name = pattern.file(n);
+        check_referenced_file(&dir.join(&name), at, "mesh sequence file", &name)?;
     }
+    let first_name = pattern.file(first);
     let mut first_mesh: Option<ObjMesh> = None;
-    let mut shapes = Vec::with_capacity(files.len());
-    for name in &files {
-        let mesh = load_obj_mesh(&dir.join(name))?;
+    let mut shapes = Vec::with_capacity((last - first) as usize + 1);
+    for n in first..=last {
+        let name = pattern.file(n);
+        let mesh = load_obj_mesh(&dir.join(&name))?;
         let shape = shape_of(&mesh.triangles);
         if let Some(m) = &first_mesh {
-            check_same_topology(m, &mesh, (&files[0], name)).map_err(&invalid)?;
+            check_same_topology(m, &mesh, (&first_name, &name)).map_err(&invalid)?;
         } else {
             if mesh.triangles.is_empty() {
                 return Err(invalid(format!("'{name}' has no faces")));
