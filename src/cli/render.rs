@@ -448,7 +448,8 @@ fn keep_saving(resumed: &Path) -> Option<CheckpointFile> {
     CheckpointFile::create(resumed)
         .map_err(|e| {
             splitray::errln!(
-                "note: {e}: the checkpoint resumed is not saved over, so the samples this                  render adds are kept only in its image (--checkpoint FILE saves them)"
+                "note: {e}: the checkpoint resumed is not saved over, so the samples this \
+                 render adds are kept only in its image (--checkpoint FILE saves them)"
             )
         })
         .ok()

@@ -74,7 +74,8 @@ impl LightCache {
         let limit = gpu.info().limits.max_storage_buffer_range / size_of::<LvcVertex>() as u64;
         if needed > limit.min(u32::MAX as u64) {
             return Err(vk::VkError::Usage(format!(
-                "a chunk's light subpaths made {needed} cache vertices, more than one                  storage-buffer binding holds ({limit}): use fewer light paths per pass"
+                "a chunk's light subpaths made {needed} cache vertices, more than one \
+                 storage-buffer binding holds ({limit}): use fewer light paths per pass"
             )));
         }
         self.set_capacity(gpu, (needed + needed / 10 + 64).min(limit))
