@@ -37,28 +37,36 @@ pub fn write_err(text: fmt::Arguments<'_>) {
     let _ = err.write_fmt(text).and_then(|()| err.flush());
 }
 
-/// `print!` that never panics ([`write_out`]).
+/// `print!` that never panics ([`write_out`](crate::console::write_out)).
 #[macro_export]
 macro_rules! out {
     ($($arg:tt)*) => { $crate::console::write_out(format_args!($($arg)*)) };
 }
 
-/// `println!` that never panics ([`write_out`]).
+/// `println!` that never panics ([`write_out`](crate::console::write_out)).
 #[macro_export]
 macro_rules! outln {
-    () => { $crate::console::write_out(format_args!("\n")) };
-    ($($arg:tt)*) => { $crate::console::write_out(format_args!("{}\n", format_args!($($arg)*))) };
+    () => {
+        $crate::console::write_out(format_args!("\n"))
+    };
+    ($($arg:tt)*) => {
+        $crate::console::write_out(format_args!("{}\n", format_args!($($arg)*)))
+    };
 }
 
-/// `eprint!` that never panics ([`write_err`]).
+/// `eprint!` that never panics ([`write_err`](crate::console::write_err)).
 #[macro_export]
 macro_rules! err {
     ($($arg:tt)*) => { $crate::console::write_err(format_args!($($arg)*)) };
 }
 
-/// `eprintln!` that never panics ([`write_err`]).
+/// `eprintln!` that never panics ([`write_err`](crate::console::write_err)).
 #[macro_export]
 macro_rules! errln {
-    () => { $crate::console::write_err(format_args!("\n")) };
-    ($($arg:tt)*) => { $crate::console::write_err(format_args!("{}\n", format_args!($($arg)*))) };
+    () => {
+        $crate::console::write_err(format_args!("\n"))
+    };
+    ($($arg:tt)*) => {
+        $crate::console::write_err(format_args!("{}\n", format_args!($($arg)*)))
+    };
 }

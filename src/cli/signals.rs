@@ -1,18 +1,19 @@
 //! SIGINT, SIGTERM and SIGHUP (through `signal-hook`): during a render, and during the
-//! other commands that write files. SIGHUP (the terminal or the ssh session went away)
-//! is a stop like the others, so that a render whose terminal closed still writes what
-//! it has; what it prints then goes nowhere ([`splitray::console`]).
+//! other commands that write files. SIGHUP (the terminal or the ssh connection went
+//! away) is a stop like the others, so that a render whose terminal closed still writes
+//! what it has; what it prints then goes nowhere ([`splitray::console`]).
 //!
 //! The first one asks the render to stop: the pass loop asks before every batch of
 //! passes, so the work in flight finishes, and the image (with the samples it reached),
 //! its stats and its checkpoint are written; the process then exits with 128 + the
 //! signal's number (130 for SIGINT, 143 for SIGTERM, 129 for SIGHUP), as a shell reports
-//! a process that a signal ended. A second one exits at once: it removes every temporary output file
-//! ([`splitray::film::discard_all_temporaries`], which also keeps the writers from
-//! creating or renaming another) and calls `_exit`. That skips the Vulkan teardown on
-//! purpose: waiting for a submission in flight, or a driver's exit handlers, is exactly
-//! what "at once" rules out; the kernel reclaims the device's memory with the process.
-//! Outputs already renamed into place are complete; none is ever left half-written.
+//! a process that a signal ended. A second one exits at once: it removes every temporary
+//! output file ([`splitray::film::discard_all_temporaries`], which also keeps the
+//! writers from creating or renaming another) and calls `_exit`. That skips the Vulkan
+//! teardown on purpose: waiting for a submission in flight, or a driver's exit handlers,
+//! is exactly what "at once" rules out; the kernel reclaims the device's memory with the
+//! process. Outputs already renamed into place are complete; none is ever left
+//! half-written.
 //!
 //! The other commands that write files (merge, bench, timeline, export-scene) have no
 //! partial result worth keeping: [`exit_at_first_signal`] makes the first signal exit at

@@ -6,11 +6,11 @@
 //! the per-pixel sums of the pass estimates and of their squares give both the image
 //! (their mean) and its standard error — for integrators whose samples within a pass are
 //! correlated (CBPT) as much as for one-sample passes (`pt`). Sums are `f64`: integrators
-//! that accumulate on the GPU, in pairs of `f32` ([`compensated`](super::compensated)),
-//! convert exactly, so a film can be saved and restored without changing a bit. The
-//! GPU's second moments are of estimates multiplied by a power of two (the square of an
-//! f32 estimate leaves f32's range above about 1e19 and below about 1e-22); the
-//! conversions take it out and put it back exactly.
+//! that accumulate on the GPU, in pairs of `f32` ([`compensated`]), convert exactly, so
+//! a film can be saved and restored without changing a bit. The GPU's second moments
+//! are of estimates multiplied by a power of two (the square of an f32 estimate leaves
+//! f32's range above about 1e19 and below about 1e-22); the conversions take it out and
+//! put it back exactly.
 
 use super::{compensated, Film, FilmError};
 
@@ -52,7 +52,7 @@ impl FilmSums {
     }
 
     /// Sums of GPU accumulators, each a film of sums and remainders
-    /// ([`compensated`](super::compensated)): `sum` holds Σ L in rgb (its w is
+    /// ([`compensated`]): `sum` holds Σ L in rgb (its w is
     /// ignored), `sum_sq` Σ (s L)² in rgb, s = `moment_scale`, a power of two
     /// ([`LightTable::brightness_scale`]; 1 where there are no second moments).
     ///

@@ -268,7 +268,7 @@ fn sigint_writes_the_samples_reached_and_the_render_resumes_bit_identically() {
     assert!(!d.join("same.exr").exists() && temporaries(d).is_empty());
 }
 
-/// SIGTERM, and SIGHUP (the terminal or ssh session went away), stop a render as SIGINT
+/// SIGTERM, and SIGHUP (the terminal or ssh connection went away), stop a render as SIGINT
 /// does: the samples reached are written, and the exit status is 128 + the signal.
 #[test]
 fn sigterm_and_sighup_write_the_samples_reached_and_exit_143_and_129() {
