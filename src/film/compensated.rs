@@ -86,14 +86,16 @@ pub fn film_rgb(film: &[[f32; 4]], by: f64) -> Vec<[f64; 3]> {
 
 /// A GPU film of sums and remainders holding `sums` (times `by`) with weight `w`.
 pub fn film_of(sums: &[[f64; 3]], by: f64, w: f64) -> Vec<[f32; 4]> {
-    let (w_hi, w_lo) = split(w);
-    let pairs: Vec<[(f32, f32); 3]> = sums.iter().map(|s| s.map(|v| split(v * by))).collect();
-    let half = |part: fn((f32, f32)) -> f32, w: f32| {
-        pairs
-            .iter()
-            .map(move |p| [part(p[0]), part(p[1]), part(p[2]), w])
-    };
-    half(|p| p.0, w_hi).chain(half(|p| p.1, w_lo)).collect()
+    let n = sums.len();
+    let mut film = vec![[0.0; 4]; 2 * n];
+    let (hi, lo) = film.split_at_mut(n);
+    for ((h, l), s) in hi.iter_mut().zip(lo).zip(sums) {
+        for c in 0..3 {
+            (h[c], l[c]) = split(s[c] * by);
+        }
+        (h[3], l[3]) = split(w);
+    }
+    film
 }
 
 #[cfg(test)]
