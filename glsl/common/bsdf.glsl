@@ -50,6 +50,9 @@ struct BsdfParams {
     uint pad2;
 };
 
+#include "address.glsl"
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer BsdfsInRef { BsdfParams data[]; };
+
 // DST = SRC (a stack in a buffer) with only SRC's first `count` layers loaded: the layers
 // past it are never read (every loop over a stack stops at its count). A plain copy loads
 // all BSDF_MAX_LAYERS, which cost lavapipe's connection kernels a fifth of their time

@@ -19,18 +19,11 @@ use crate::vk::{fmt_bytes, Gpu};
 pub struct PlannedBuffer {
     pub name: &'static str,
     pub bytes: u64,
-    /// Its kernels take it through one storage binding (maxStorageBufferRange), not by
-    /// address.
-    pub one_binding: bool,
 }
 
 impl PlannedBuffer {
-    fn by_address(name: &'static str, bytes: u64) -> Self {
-        PlannedBuffer {
-            name,
-            bytes,
-            one_binding: false,
-        }
+    fn new(name: &'static str, bytes: u64) -> Self {
+        PlannedBuffer { name, bytes }
     }
 }
 
@@ -57,8 +50,6 @@ impl RenderSize<'_> {
 #[derive(Clone, Debug)]
 pub struct DeviceCapacity {
     pub device: String,
-    /// maxStorageBufferRange.
-    pub binding: u64,
     pub max_buffer: u64,
     pub max_buffer_limit: &'static str,
     pub memory: u64,
@@ -69,7 +60,6 @@ impl DeviceCapacity {
         let (max_buffer, max_buffer_limit) = gpu.max_buffer_bytes();
         DeviceCapacity {
             device: gpu.info().name.clone(),
-            binding: gpu.info().limits.max_storage_buffer_range,
             max_buffer,
             max_buffer_limit,
             memory: gpu.info().limits.device_local_bytes,
@@ -86,8 +76,8 @@ pub fn planned_buffers(size: &RenderSize<'_>, integrator: IntegratorKind) -> Vec
     let vec4 = 16;
     let triangle_bytes = triangles * size_of::<GpuTriangle>() as u64;
     let mut buffers = vec![
-        PlannedBuffer::by_address("triangles", triangle_bytes),
-        PlannedBuffer::by_address("aov-normal", pixels * vec4),
+        PlannedBuffer::new("triangles", triangle_bytes),
+        PlannedBuffer::new("aov-normal", pixels * vec4),
     ];
     let gpu_film = match integrator {
         IntegratorKind::Pt => vec!["pt-accum", "pt-accum2"],
@@ -97,31 +87,23 @@ pub fn planned_buffers(size: &RenderSize<'_>, integrator: IntegratorKind) -> Vec
     };
     if !gpu_film.is_empty() {
         // The shading kernels' own copy of the triangles and their materials.
-        buffers.push(PlannedBuffer::by_address("shade-triangles", triangle_bytes));
-        buffers.push(PlannedBuffer::by_address(
-            "triangle-material",
-            triangles * 4,
-        ));
+        buffers.push(PlannedBuffer::new("shade-triangles", triangle_bytes));
+        buffers.push(PlannedBuffer::new("triangle-material", triangles * 4));
     }
     // Films hold a sum and its remainder per pixel (film::compensated).
     let film = 2 * pixels * vec4;
     for name in gpu_film {
-        buffers.push(PlannedBuffer::by_address(name, film));
+        buffers.push(PlannedBuffer::new(name, film));
     }
     if integrator.lvc_variant().is_some() {
-        // The light-vertex-cache kernels take their films through one binding; the
-        // splat film holds at least one pass of fixed-point words per pixel.
+        // The splat film holds at least one pass of fixed-point words per pixel.
         let splat = pixels * crate::integrator::lvc::fixed::FIXED_WORDS as u64 * 4;
         for (name, bytes) in [
             ("lvc-accum", film),
             ("lvc-accum2", film),
             ("lvc-splat-film", splat),
         ] {
-            buffers.push(PlannedBuffer {
-                name,
-                bytes,
-                one_binding: true,
-            });
+            buffers.push(PlannedBuffer::new(name, bytes));
         }
     }
     buffers
@@ -164,22 +146,6 @@ pub fn fits(
             device.max_buffer_limit
         ));
     }
-    let past_binding: Vec<String> = buffers
-        .iter()
-        .filter(|b| b.one_binding && b.bytes > device.binding)
-        .map(|b| format!("'{}' of {} bytes ({})", b.name, b.bytes, fmt_bytes(b.bytes)))
-        .collect();
-    if !past_binding.is_empty() {
-        return Err(format!(
-            "{} needs {}, which its kernels take through one storage binding: more than \
-             device '{}' binds, {} bytes ({}, its maxStorageBufferRange)",
-            size.describe(),
-            past_binding.join(", "),
-            device.device,
-            device.binding,
-            fmt_bytes(device.binding)
-        ));
-    }
     let total: u64 = buffers.iter().map(|b| b.bytes).sum();
     if total > device.memory {
         let list: Vec<String> = buffers
@@ -208,7 +174,6 @@ mod tests {
     fn device(max_buffer: u64, memory: u64) -> DeviceCapacity {
         DeviceCapacity {
             device: "test device".into(),
-            binding: 128 << 20,
             max_buffer,
             max_buffer_limit: "maxBufferSize",
             memory,
@@ -264,22 +229,25 @@ mod tests {
     }
 
     #[test]
-    fn films_of_the_light_vertex_cache_integrators_stay_within_one_binding() {
-        // 2048²: 128 MiB of vec4 sums and remainders and 96 MiB of six-word splats, within
-        // one binding; 4096² is past 128 MiB.
-        let small = size(1000, 2048);
+    fn films_past_one_binding_are_no_limit() {
+        // 4096²: 512 MiB of vec4 sums and remainders and 384 MiB of six-word splats, past
+        // a 128 MiB binding, within a 2 GiB buffer: the kernels take them by address.
         let large = size(1000, 4096);
-        for kind in [IntegratorKind::LvcBdpt, IntegratorKind::CisLbdpt] {
-            let device = device(2 << 30, 1 << 40);
-            assert!(fits(&small, &planned_buffers(&small, kind), &device).is_ok());
-            let err = fits(&large, &planned_buffers(&large, kind), &device).unwrap_err();
-            for part in ["'lvc-accum' of", "'lvc-splat-film' of", "134217728 bytes"] {
-                assert!(err.contains(part), "missing {part:?} in: {err}");
-            }
+        for kind in [
+            IntegratorKind::Pt,
+            IntegratorKind::LvcBdpt,
+            IntegratorKind::CisLbdpt,
+        ] {
+            let buffers = planned_buffers(&large, kind);
+            assert!(buffers.iter().any(|b| b.bytes > 128 << 20), "{kind}");
+            assert!(fits(&large, &buffers, &device(2 << 30, 1 << 40)).is_ok());
         }
-        // pt takes its film by address.
-        let pt = planned_buffers(&large, IntegratorKind::Pt);
-        assert!(fits(&large, &pt, &device(2 << 30, 1 << 40)).is_ok());
+        // Past the largest buffer (256 MiB here), they are refused by name.
+        let buffers = planned_buffers(&large, IntegratorKind::CisLbdpt);
+        let err = fits(&large, &buffers, &device(256 << 20, 1 << 40)).unwrap_err();
+        for part in ["'lvc-accum' of", "'lvc-accum2' of", "268435456 bytes"] {
+            assert!(err.contains(part), "missing {part:?} in: {err}");
+        }
     }
 
     #[test]

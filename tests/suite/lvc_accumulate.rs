@@ -18,6 +18,9 @@
 //! of the film's pixels, and a whole large film. Σ estimate and Σ (s · estimate)² must
 //! be the twin's bit for bit (one invocation per pixel adds the passes in the twin's
 //! order), and Σ estimate must hold every estimate's bits.
+//!
+//! Both on films past one storage binding (maxStorageBufferRange), which they take by
+//! address: `finish` on the last pixels of such a film, `splat` into its last slots.
 
 use crate::common;
 
@@ -260,6 +263,12 @@ struct Splats {
 
 impl Splats {
     fn new(count: usize, seed: u64) -> Self {
+        Self::into_slots_from(count, seed, 0)
+    }
+
+    /// [`Splats::new`] crowding into the last [`SPLAT_SLOTS`] of a film of
+    /// `first_slot + SPLAT_SLOTS` slots (the others hold sums too).
+    fn into_slots_from(count: usize, seed: u64, first_slot: usize) -> Self {
         let words = common::random_u32s(5 * count, seed);
         let contributions = (0..count)
             .map(|k| {
@@ -273,7 +282,7 @@ impl Splats {
                         1 | 1 << 16
                     },
                     weight: 1.0,
-                    target: w[4] % SPLAT_SLOTS as u32,
+                    target: (first_slot + w[4] as usize % SPLAT_SLOTS) as u32,
                     pad: [0; 2],
                 }
             })
@@ -287,7 +296,7 @@ impl Splats {
         Self {
             contributions,
             shadow_hits,
-            film: common::random_u32s(SPLAT_SLOTS * FIXED_WORDS, seed + 1),
+            film: common::random_u32s((first_slot + SPLAT_SLOTS) * FIXED_WORDS, seed + 1),
         }
     }
 
@@ -356,6 +365,30 @@ impl Splats {
     }
 }
 
+/// `splat` on `splats` at `scale` against the twin: the film's words and the counters.
+fn check_splats(gpu: &Gpu, kernels: &Kernels, splats: &Splats, scale: f32, what: &str) {
+    let (want, want_non_finite) = splats.twin(scale);
+    let (words, counters) = splats.on_gpu(gpu, kernels, scale);
+    assert!(
+        FixedFilm::from_words(&words, scale).sums == want.sums,
+        "{what}: film"
+    );
+    assert_eq!(
+        counters[COUNTER_NON_FINITE], want_non_finite,
+        "{what}: non-finite count"
+    );
+    assert_eq!(
+        counters[COUNTER_CLAMPED] as u64, want.clamped,
+        "{what}: clamp count"
+    );
+    if splats.contributions.len() > 1000 {
+        // The mix leaves something in every count to compare.
+        assert!(want_non_finite > 0, "{what}: no non-finite splat");
+        assert_eq!(want.clamped > 0, scale == 1.0, "{what}: clamps");
+        assert!(want.sums != FixedFilm::from_words(&splats.film, scale).sums);
+    }
+}
+
 #[test]
 fn splat_matches_the_fixed_point_twin() {
     let gpu = common::gpu();
@@ -364,27 +397,7 @@ fn splat_matches_the_fixed_point_twin() {
         let splats = Splats::new(count, 101 + k as u64);
         for scale in [1.0, 2f32.powi(-20)] {
             let what = format!("{count} contributions at scale {scale}");
-            let (want, want_non_finite) = splats.twin(scale);
-            let (words, counters) = splats.on_gpu(&gpu, &kernels, scale);
-            assert_eq!(
-                FixedFilm::from_words(&words, scale).sums,
-                want.sums,
-                "{what}: film"
-            );
-            assert_eq!(
-                counters[COUNTER_NON_FINITE], want_non_finite,
-                "{what}: non-finite count"
-            );
-            assert_eq!(
-                counters[COUNTER_CLAMPED] as u64, want.clamped,
-                "{what}: clamp count"
-            );
-            if count > 1000 {
-                // The mix leaves something in every count to compare.
-                assert!(want_non_finite > 0, "{what}: no non-finite splat");
-                assert_eq!(want.clamped > 0, scale == 1.0, "{what}: clamps");
-                assert_ne!(want.sums, FixedFilm::from_words(&splats.film, scale).sums);
-            }
+            check_splats(&gpu, &kernels, &splats, scale, &what);
         }
     }
     common::assert_clean(&gpu);
@@ -532,6 +545,46 @@ fn bits(v: &[[f32; 4]]) -> Vec<u32> {
     v.iter().flatten().map(|x| x.to_bits()).collect()
 }
 
+/// `finish` on `case` against the twin, bit for bit, and against the exact sums.
+fn check_finish(gpu: &Gpu, kernels: &Kernels, case: &Finish, what: &str) {
+    let (width, height) = (case.width, case.height);
+    let chunk = (case.pixel_offset, case.pixel_count);
+    let passes = case.radiance.len() / case.pixel_count;
+    let (want, want2) = case.twin();
+    let (got, got2) = case.on_gpu(gpu, kernels);
+    assert!(bits(&got) == bits(&want), "{what}: Σ estimate");
+    assert!(bits(&got2) == bits(&want2), "{what}: Σ (s · estimate)²");
+    // The sums keep the estimates' every bit: each addition rounds a pair by half its
+    // quantum (2^-48 of the sum at most, or 2^-127 below 2^-79, where the quantum stops
+    // at 2^-126) and its remainder's own sum by about 2^-47 of the sum. Scaled, the
+    // second moments are the f64 sums' to f32 rounding of each square, where squares of
+    // estimates of 2^70 would overflow f32 and those of 2^-80 vanish.
+    let (exact, exact2) = case.exact_sums();
+    let (sums, sums2) = (
+        compensated::film_rgb(&want, 1.0),
+        compensated::film_rgb(&want2, 1.0),
+    );
+    for p in 0..sums.len() {
+        for k in 0..3 {
+            let (s, e) = (sums[p][k], exact[p][k]);
+            let bound = passes as f64 * (e.abs() * 2f64.powi(-46) + 2f64.powi(-126));
+            assert!((s - e).abs() <= bound, "{what}: pixel {p}: {s} vs {e}");
+            let (q, e) = (sums2[p][k], exact2[p][k]);
+            assert!((q - e).abs() <= 1e-6 * e, "{what}: pixel {p}: {q} vs {e}");
+        }
+    }
+    // Pixels outside the chunk, and their remainders, are left alone.
+    let pixels = (width * height) as usize;
+    let (lo, hi) = (chunk.0, chunk.0 + chunk.1);
+    for range in [0..lo, hi..pixels + lo, pixels + hi..2 * pixels] {
+        assert!(want[range.clone()] == case.accum[range], "{what}");
+    }
+    assert!(
+        want[lo..hi].iter().all(|s| s[3] == 2.0 + passes as f32),
+        "{what}"
+    );
+}
+
 #[test]
 fn finish_matches_its_twin_bit_for_bit() {
     let gpu = common::gpu();
@@ -541,41 +594,37 @@ fn finish_matches_its_twin_bit_for_bit() {
             let case = Finish::new(width, height, chunk, passes, exponent);
             let what =
                 format!("{width}×{height}, pixels {chunk:?}, {passes} passes of 2^{exponent}");
-            let (want, want2) = case.twin();
-            let (got, got2) = case.on_gpu(&gpu, &kernels);
-            assert!(bits(&got) == bits(&want), "{what}: Σ estimate");
-            assert!(bits(&got2) == bits(&want2), "{what}: Σ (s · estimate)²");
-            // The sums keep the estimates' every bit: each addition rounds a pair by
-            // half its quantum (2^-48 of the sum at most, or 2^-127 below 2^-79, where
-            // the quantum stops at 2^-126) and its remainder's own sum by about 2^-47
-            // of the sum. Scaled,
-            // the second moments are the f64 sums' to f32 rounding of each square, where
-            // squares of estimates of 2^70 would overflow f32 and those of 2^-80 vanish.
-            let (exact, exact2) = case.exact_sums();
-            let (sums, sums2) = (
-                compensated::film_rgb(&want, 1.0),
-                compensated::film_rgb(&want2, 1.0),
-            );
-            for p in 0..sums.len() {
-                for k in 0..3 {
-                    let (s, e) = (sums[p][k], exact[p][k]);
-                    let bound = passes as f64 * (e.abs() * 2f64.powi(-46) + 2f64.powi(-126));
-                    assert!((s - e).abs() <= bound, "{what}: pixel {p}: {s} vs {e}");
-                    let (q, e) = (sums2[p][k], exact2[p][k]);
-                    assert!((q - e).abs() <= 1e-6 * e, "{what}: pixel {p}: {q} vs {e}");
-                }
-            }
-            // Pixels outside the chunk, and their remainders, are left alone.
-            let pixels = (width * height) as usize;
-            let (lo, hi) = (chunk.0, chunk.0 + chunk.1);
-            for range in [0..lo, hi..pixels + lo, pixels + hi..2 * pixels] {
-                assert!(want[range.clone()] == case.accum[range], "{what}");
-            }
-            assert!(
-                want[lo..hi].iter().all(|s| s[3] == 2.0 + passes as f32),
-                "{what}"
-            );
+            check_finish(&gpu, &kernels, &case, &what);
         }
+    }
+    common::assert_clean(&gpu);
+}
+
+/// Both kernels on films past one storage binding, which they take by address: `finish`
+/// on the last pixels of a film whose sums and remainders, and whose two passes of
+/// splats, are each past it, and `splat` into the last slots of a film past it.
+#[test]
+fn finish_and_splat_take_films_past_one_binding() {
+    let gpu = common::gpu();
+    let kernels = Kernels::new(&gpu, &LvcOptions::new(Variant::LvcBdpt, false), u32::MAX).unwrap();
+    let binding = gpu.info().limits.max_storage_buffer_range;
+    // Sums and remainders: 32 bytes a pixel.
+    let side = ((binding / 32) as f64).sqrt() as u32 + 1;
+    let pixels = side as usize * side as usize;
+    let film_bytes = pixels as u64 * 32;
+    if common::holds_past_one_binding(&gpu, film_bytes, "a film's sums and remainders") {
+        let chunk = (pixels - 40_000, 40_000);
+        let case = Finish::new(side, side, chunk, 2, 0);
+        assert!(case.splat_words.len() as u64 * 4 > binding);
+        let what = format!("{side}×{side}, pixels {chunk:?}, 2 passes");
+        check_finish(&gpu, &kernels, &case, &what);
+    }
+    let slot_bytes = (FIXED_WORDS * 4) as u64;
+    let first_slot = (binding / slot_bytes) as usize + 1;
+    let splat_bytes = (first_slot + SPLAT_SLOTS) as u64 * slot_bytes;
+    if common::holds_past_one_binding(&gpu, splat_bytes, "a splat film") {
+        let splats = Splats::into_slots_from(100_003, 7, first_slot);
+        check_splats(&gpu, &kernels, &splats, 1.0, "splats past one binding");
     }
     common::assert_clean(&gpu);
 }

@@ -3,6 +3,8 @@
 //! a film whose buffers are past it renders what the CPU computes and round-trips through
 //! EXR. The kernels take such buffers by address (glsl/common/address.glsl); lavapipe
 //! runs the descriptor twins wherever the buffers fit, so these tests mix both forms.
+//! The light-vertex-cache integrators render the same image of a scene padded past one
+//! binding with hidden triangles as of the scene itself.
 
 use crate::common;
 
@@ -10,8 +12,10 @@ use glam::{Vec2, Vec3};
 use splitray::film::{read_exr, write_exr, Film};
 use splitray::integrator::IntegratorKind;
 use splitray::render::{render, RenderOptions};
-use splitray::scene::{self, Scene};
-use splitray::trace::{cpu, BruteForceTracer, GpuTriangle, Hit, PdacrtTracer, Query, Ray};
+use splitray::scene::{self, Scene, Triangle};
+use splitray::trace::{
+    cpu, BruteForceTracer, GpuTriangle, Hit, PdacrtTracer, Query, Ray, TracerKind,
+};
 use splitray::vk::{BufferAccess, Gpu};
 
 /// Cells per side of a height field whose triangle buffer is past one binding.
@@ -225,6 +229,8 @@ fn every_gpu_integrator_renders_the_same_image_by_address() {
         IntegratorKind::Reflection,
         IntegratorKind::Path,
         IntegratorKind::Pt,
+        IntegratorKind::LvcBdpt,
+        IntegratorKind::CisLbdpt,
     ] {
         let options = RenderOptions::resolve(
             &scene,
@@ -249,4 +255,68 @@ fn every_gpu_integrator_renders_the_same_image_by_address() {
     }
     common::assert_clean(&gpu);
     common::assert_clean(&by_address);
+}
+
+/// The Cornell box with `count` more triangles after its own, hidden inside its tall
+/// block: millimetre triangles on a 40 mm grid around the block's centre, so that no
+/// ray reaches them, the bounds (and so the ray offset) stay the box's, and the lights
+/// and materials stay the same.
+fn cornell_box_with_hidden_triangles(count: usize) -> Scene {
+    let mut scene = scene::load("cornell-box").unwrap();
+    let white = scene.material_index("white").unwrap();
+    let centre = Vec3::new(368.5, 165.0, 351.25);
+    scene.triangles.extend((0..count).map(|i| {
+        let cell = |k: usize| ((i / k) % 40) as f32 - 20.0;
+        let p = centre + Vec3::new(cell(1), cell(40), cell(1600));
+        Triangle::new(p, p + Vec3::X, p + Vec3::Y, white)
+    }));
+    scene
+}
+
+/// The light-vertex-cache integrators on a scene whose triangle buffer is past one
+/// binding (their kernels then take it by address) render the very image they render
+/// without the extra, hidden triangles (through the descriptor twins, on lavapipe).
+#[test]
+fn light_vertex_cache_integrators_take_a_scene_past_one_binding() {
+    let gpu = common::gpu();
+    let binding_triangles = gpu.info().limits.max_storage_buffer_range / 48;
+    let count = binding_triangles as usize + 1000;
+    let bytes = ((count + 32) * size_of::<GpuTriangle>()) as u64;
+    if !common::holds_past_one_binding(&gpu, bytes, "the padded scene's triangles") {
+        return;
+    }
+    let plain = scene::load("cornell-box").unwrap();
+    let padded = cornell_box_with_hidden_triangles(count);
+    assert_eq!(padded.bounds(), plain.bounds());
+    for integrator in [IntegratorKind::LvcBdpt, IntegratorKind::CisLbdpt] {
+        let options = RenderOptions::resolve(
+            &plain,
+            Some(40),
+            Some(30),
+            Some(2),
+            Some(1),
+            Some(integrator),
+            // A CPU BVH traces millions of triangles in moments.
+            Some(TracerKind::CpuBvh),
+        )
+        .unwrap();
+        let a = render(&gpu, &plain, &options, &mut |_| {}).unwrap();
+        let b = render(&gpu, &padded, &options, &mut |_| {}).unwrap();
+        assert!(
+            a.film.mean_rgb_buffer().iter().flatten().any(|v| *v > 0.0),
+            "{integrator}: an image"
+        );
+        let bits = |f: &Film| -> Vec<u32> {
+            f.mean_rgb_buffer()
+                .iter()
+                .flatten()
+                .map(|v| v.to_bits())
+                .collect()
+        };
+        assert!(
+            bits(&a.film) == bits(&b.film),
+            "{integrator}: the same image"
+        );
+    }
+    common::assert_clean(&gpu);
 }

@@ -9,16 +9,28 @@
 #include "../pt/pt.glsl"
 #include "lvc.glsl"
 
-layout(push_constant) uniform Push { LvcPush P; };
-layout(std430, set = 0, binding = 0) readonly buffer Constants { LvcConstants C; };
-layout(std430, set = 0, binding = 1) writeonly buffer Rays { Ray rays[]; };
-layout(std430, set = 0, binding = 2) readonly buffer Active { uint live_ids[]; };
-layout(std430, set = 0, binding = 3) readonly buffer Order { uint order[]; };
-layout(std430, set = 0, binding = 4) readonly buffer Vertices { LvcVertex vertices[]; };
-layout(std430, set = 0, binding = 5) buffer Paths { WalkState paths[]; };
-layout(std430, set = 0, binding = 6) readonly buffer Triangles { Triangle triangles[]; };
-layout(std430, set = 0, binding = 7) readonly buffer Bsdfs { BsdfParams bsdfs[]; };
-layout(std430, set = 0, binding = 8) writeonly buffer Alive { uint alive[]; };
+layout(push_constant) uniform Push {
+    LvcPush P;
+    BUFFER_REF(LvcConstantsInRef, constants)
+    BUFFER_REF(RaysOutRef, rays)
+    BUFFER_REF(UintsInRef, live_ids)
+    BUFFER_REF(UintsInRef, order)
+    BUFFER_REF(LvcVerticesInRef, vertices)
+    BUFFER_REF(WalkStatesRef, paths)
+    BUFFER_REF(TrianglesInRef, triangles)
+    BUFFER_REF(BsdfsInRef, bsdfs)
+    BUFFER_REF(UintsOutRef, alive)
+};
+BUFFER_BINDING(0, readonly, LvcConstants, constants)
+BUFFER_BINDING(1, writeonly, Ray, rays)
+BUFFER_BINDING(2, readonly, uint, live_ids)
+BUFFER_BINDING(3, readonly, uint, order)
+BUFFER_BINDING(4, readonly, LvcVertex, vertices)
+BUFFER_BINDING(5, , WalkState, paths)
+BUFFER_BINDING(6, readonly, Triangle, triangles)
+BUFFER_BINDING(7, readonly, BsdfParams, bsdfs)
+BUFFER_BINDING(8, writeonly, uint, alive)
+#define C constants.data[0]
 
 #include "lvc_surface.glsl"
 #define LVC_WALK_SCATTER
@@ -27,19 +39,19 @@ layout(std430, set = 0, binding = 8) writeonly buffer Alive { uint alive[]; };
 void main() {
     uint jj = linear_invocation_id();
     if (jj >= P.active_count) return;
-    uint i = (C.flags & LVC_FLAG_SORTED) != 0u ? order[jj] : jj;
-    alive[i] = 0u;
-    LvcVertex v = vertices[i];
+    uint i = (C.flags & LVC_FLAG_SORTED) != 0u ? order.data[jj] : jj;
+    alive.data[i] = 0u;
+    LvcVertex v = vertices.data[i];
     uint need = VERTEX_VALID | VERTEX_EXTENDS;
     if ((v.flags & need) != need) return;
-    uint c = live_ids[i];
+    uint c = live_ids.data[i];
     uint pixel = P.pixel_offset + c % P.pixel_count;
     uint pass = P.first_pass + c / P.pixel_count;
-    WalkState s = paths[c];
+    WalkState s = paths.data[c];
     Ray next;
     if (walk_scatter(s, v, triangle_normal(v.triangle), pixel, pass, TRANSPORT_RADIANCE, next)) {
-        rays[i] = next;
-        alive[i] = 1u;
+        rays.data[i] = next;
+        alive.data[i] = 1u;
     }
-    paths[c] = s;
+    paths.data[c] = s;
 }

@@ -34,18 +34,32 @@
 #include "bsdf.glsl"
 #include "lvc.glsl"
 
-layout(push_constant) uniform Push { LvcPush P; };
-layout(std430, set = 0, binding = 0) readonly buffer Constants { LvcConstants C; };
-layout(std430, set = 0, binding = 1) readonly buffer Active { uint live_ids[]; };
-layout(std430, set = 0, binding = 2) readonly buffer Order { uint order[]; };
-layout(std430, set = 0, binding = 3) readonly buffer Vertices { LvcVertex vertices[]; };
-layout(std430, set = 0, binding = 4) readonly buffer Triangles { Triangle triangles[]; };
-layout(std430, set = 0, binding = 5) readonly buffer Bsdfs { BsdfParams bsdfs[]; };
-layout(std430, set = 0, binding = 6) readonly buffer Cache { LvcVertex cache[]; };
-layout(std430, set = 0, binding = 7) readonly buffer CacheIndex { uint cache_index[]; };
-layout(std430, set = 0, binding = 8) readonly buffer PathOffset { uint path_offset[]; };
-layout(std430, set = 0, binding = 9) writeonly buffer ShadowRays { Ray shadow_rays[]; };
-layout(std430, set = 0, binding = 10) writeonly buffer Contributions { Contribution contrib[]; };
+layout(push_constant) uniform Push {
+    LvcPush P;
+    BUFFER_REF(LvcConstantsInRef, constants)
+    BUFFER_REF(UintsInRef, live_ids)
+    BUFFER_REF(UintsInRef, order)
+    BUFFER_REF(LvcVerticesInRef, vertices)
+    BUFFER_REF(TrianglesInRef, triangles)
+    BUFFER_REF(BsdfsInRef, bsdfs)
+    BUFFER_REF(LvcVerticesInRef, cache)
+    BUFFER_REF(UintsInRef, cache_index)
+    BUFFER_REF(UintsInRef, path_offset)
+    BUFFER_REF(RaysOutRef, shadow_rays)
+    BUFFER_REF(ContributionsOutRef, contrib)
+};
+BUFFER_BINDING(0, readonly, LvcConstants, constants)
+BUFFER_BINDING(1, readonly, uint, live_ids)
+BUFFER_BINDING(2, readonly, uint, order)
+BUFFER_BINDING(3, readonly, LvcVertex, vertices)
+BUFFER_BINDING(4, readonly, Triangle, triangles)
+BUFFER_BINDING(5, readonly, BsdfParams, bsdfs)
+BUFFER_BINDING(6, readonly, LvcVertex, cache)
+BUFFER_BINDING(7, readonly, uint, cache_index)
+BUFFER_BINDING(8, readonly, uint, path_offset)
+BUFFER_BINDING(9, writeonly, Ray, shadow_rays)
+BUFFER_BINDING(10, writeonly, Contribution, contrib)
+#define C constants.data[0]
 
 #include "lvc_surface.glsl"
 #include "lvc_bsdf.glsl"
@@ -103,35 +117,35 @@ vec3 connection(LvcVertex z, vec3 z_ng, EndpointBsdf zb, LvcVertex y, out float 
 
 // Slot `slot` gets the connection to cache vertex `k` of contribution g (times `scale`).
 void emit(uint slot, LvcVertex z, vec3 z_ng, uint k, vec3 g, float weight, float scale) {
-    LvcVertex y = cache[k];
+    LvcVertex y = cache.data[k];
     Ray r;
     if (g == vec3(0.0) || !shadow_ray(z.p, z_ng, y.p, triangle_normal(y.triangle),
                                       C.ray_epsilon, r)) return;
-    shadow_rays[slot] = r;
-    contrib[slot] = Contribution(g * scale, technique_code(y.depth + 1u, z.depth + 1u), weight,
-                                 k, 0u, 0u);
+    shadow_rays.data[slot] = r;
+    contrib.data[slot] = Contribution(g * scale, technique_code(y.depth + 1u, z.depth + 1u), weight,
+                                      k, 0u, 0u);
 }
 
 void main() {
     uint jj = linear_invocation_id();
     if (jj >= P.active_count) return;
-    uint i = (C.flags & LVC_FLAG_SORTED) != 0u ? order[jj] : jj;
+    uint i = (C.flags & LVC_FLAG_SORTED) != 0u ? order.data[jj] : jj;
     uint n = C.connections;
     uint first = i * n;
     for (uint k = 0u; k < n; ++k) {
-        shadow_rays[first + k] = no_ray();
-        contrib[first + k] = Contribution(vec3(0.0), CONTRIBUTION_NONE, 0.0, CONTRIBUTION_NONE,
-                                          0u, 0u);
+        shadow_rays.data[first + k] = no_ray();
+        contrib.data[first + k] = Contribution(vec3(0.0), CONTRIBUTION_NONE, 0.0, CONTRIBUTION_NONE,
+                                               0u, 0u);
     }
-    LvcVertex z = vertices[i];
+    LvcVertex z = vertices.data[i];
     uint need = VERTEX_VALID | VERTEX_CONNECTIBLE;
     if ((z.flags & need) != need || !(C.count_connection > 0.0)) return;
-    uint c = live_ids[i];
+    uint c = live_ids.data[i];
     uint pixel = P.pixel_offset + c % P.pixel_count;
     uint pass_in_chunk = c / P.pixel_count;
     uint pass = P.first_pass + pass_in_chunk;
-    uint start = path_offset[pass_in_chunk * C.light_paths];
-    uint size = path_offset[(pass_in_chunk + 1u) * C.light_paths] - start;
+    uint start = path_offset.data[pass_in_chunk * C.light_paths];
+    uint size = path_offset.data[(pass_in_chunk + 1u) * C.light_paths] - start;
     if (size == 0u) return;
     uint j = z.depth;
     vec3 z_ng = triangle_normal(z.triangle);
@@ -142,9 +156,9 @@ void main() {
     float scale = float(size) / (float(n) * float(C.light_paths));
     for (uint k = 0u; k < n; ++k) {
         uint pick = uniform_index_below(pixel, pass, select_dim(j, k), C.seed, size, threshold);
-        uint slot = cache_index[start + pick];
+        uint slot = cache_index.data[start + pick];
         float weight;
-        vec3 g = connection(z, z_ng, zb, cache[slot], weight);
+        vec3 g = connection(z, z_ng, zb, cache.data[slot], weight);
         emit(first + k, z, z_ng, slot, g, weight, scale);
     }
 #else
@@ -155,9 +169,9 @@ void main() {
     float total = 0.0;
     for (uint m = 0u; m < m_count; ++m) {
         uint pick = uniform_index_below(pixel, pass, select_dim(j, m), C.seed, size, threshold);
-        uint slot = cache_index[start + pick];
+        uint slot = cache_index.data[start + pick];
         float weight;
-        vec3 g = connection(z, z_ng, zb, cache[slot], weight);
+        vec3 g = connection(z, z_ng, zb, cache.data[slot], weight);
         float target = max(lvc_luminance(g), 0.0);
         candidate_slot[own + m] = slot;
         candidate_value[own + m] = vec4(g, weight);

@@ -11,17 +11,30 @@
 #include "../pt/pt.glsl"
 #include "lvc.glsl"
 
-layout(push_constant) uniform Push { LvcPush P; };
-layout(std430, set = 0, binding = 0) readonly buffer Constants { LvcConstants C; };
-layout(std430, set = 0, binding = 1) readonly buffer Active { uint live_ids[]; };
-layout(std430, set = 0, binding = 2) readonly buffer Order { uint order[]; };
-layout(std430, set = 0, binding = 3) readonly buffer Vertices { LvcVertex vertices[]; };
-layout(std430, set = 0, binding = 4) readonly buffer Triangles { Triangle triangles[]; };
-layout(std430, set = 0, binding = 5) readonly buffer Bsdfs { BsdfParams bsdfs[]; };
-layout(std430, set = 0, binding = 6) readonly buffer Lights { Light lights[]; };
-layout(std430, set = 0, binding = 7) readonly buffer LightCdf { float light_cdf[]; };
-layout(std430, set = 0, binding = 8) writeonly buffer ShadowRays { Ray shadow_rays[]; };
-layout(std430, set = 0, binding = 9) writeonly buffer Contributions { Contribution contrib[]; };
+layout(push_constant) uniform Push {
+    LvcPush P;
+    BUFFER_REF(LvcConstantsInRef, constants)
+    BUFFER_REF(UintsInRef, live_ids)
+    BUFFER_REF(UintsInRef, order)
+    BUFFER_REF(LvcVerticesInRef, vertices)
+    BUFFER_REF(TrianglesInRef, triangles)
+    BUFFER_REF(BsdfsInRef, bsdfs)
+    BUFFER_REF(LightsInRef, lights)
+    BUFFER_REF(FloatsInRef, light_cdf)
+    BUFFER_REF(RaysOutRef, shadow_rays)
+    BUFFER_REF(ContributionsOutRef, contrib)
+};
+BUFFER_BINDING(0, readonly, LvcConstants, constants)
+BUFFER_BINDING(1, readonly, uint, live_ids)
+BUFFER_BINDING(2, readonly, uint, order)
+BUFFER_BINDING(3, readonly, LvcVertex, vertices)
+BUFFER_BINDING(4, readonly, Triangle, triangles)
+BUFFER_BINDING(5, readonly, BsdfParams, bsdfs)
+BUFFER_BINDING(6, readonly, Light, lights)
+BUFFER_BINDING(7, readonly, float, light_cdf)
+BUFFER_BINDING(8, writeonly, Ray, shadow_rays)
+BUFFER_BINDING(9, writeonly, Contribution, contrib)
+#define C constants.data[0]
 
 #include "lvc_surface.glsl"
 #include "lvc_lights.glsl"
@@ -31,19 +44,19 @@ void main() {
     uint jj = linear_invocation_id();
     if (jj >= P.base) return;
     if (jj >= P.active_count) {
-        shadow_rays[jj] = no_ray();
-        contrib[jj] = Contribution(vec3(0.0), CONTRIBUTION_NONE, 0.0, CONTRIBUTION_NONE, 0u, 0u);
+        shadow_rays.data[jj] = no_ray();
+        contrib.data[jj] = Contribution(vec3(0.0), CONTRIBUTION_NONE, 0.0, CONTRIBUTION_NONE, 0u, 0u);
         return;
     }
-    uint i = (C.flags & LVC_FLAG_SORTED) != 0u ? order[jj] : jj;
-    shadow_rays[i] = no_ray();
-    contrib[i] = Contribution(vec3(0.0), CONTRIBUTION_NONE, 0.0, CONTRIBUTION_NONE, 0u, 0u);
-    LvcVertex z = vertices[i];
+    uint i = (C.flags & LVC_FLAG_SORTED) != 0u ? order.data[jj] : jj;
+    shadow_rays.data[i] = no_ray();
+    contrib.data[i] = Contribution(vec3(0.0), CONTRIBUTION_NONE, 0.0, CONTRIBUTION_NONE, 0u, 0u);
+    LvcVertex z = vertices.data[i];
     uint j = z.depth;
     uint need = VERTEX_VALID | VERTEX_CONNECTIBLE;
     if ((z.flags & need) != need || !(C.count_light_sample > 0.0) || !depth_allows(C, j + 1u))
         return;
-    uint c = live_ids[i];
+    uint c = live_ids.data[i];
     uint pixel = P.pixel_offset + c % P.pixel_count;
     uint pass = P.first_pass + c / P.pixel_count;
     vec3 u = vec3(random01(pixel, pass, camera_dim(j, DIM_LIGHT_PICK), C.seed),
@@ -69,7 +82,7 @@ void main() {
     float weight = mis_balance(others / (C.count_light_sample * q.pdf_area));
     Ray r;
     if (!shadow_ray(z.p, ng, q.p, q.n, C.ray_epsilon, r)) return;
-    shadow_rays[i] = r;
-    contrib[i] = Contribution(value * weight, technique_code(1u, j + 1u), weight,
-                              CONTRIBUTION_NONE, 0u, 0u);
+    shadow_rays.data[i] = r;
+    contrib.data[i] = Contribution(value * weight, technique_code(1u, j + 1u), weight,
+                                   CONTRIBUTION_NONE, 0u, 0u);
 }

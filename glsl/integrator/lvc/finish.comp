@@ -14,12 +14,20 @@
 #include "lvc.glsl"
 #include "film_sum.glsl"
 
-layout(push_constant) uniform Push { LvcPush P; };
-layout(std430, set = 0, binding = 0) readonly buffer Constants { LvcConstants C; };
-layout(std430, set = 0, binding = 1) readonly buffer Radiance { vec4 radiance[]; };
-layout(std430, set = 0, binding = 2) readonly buffer FixedFilm { uint fixed_film[]; };
-layout(std430, set = 0, binding = 3) buffer Accum { vec4 accum[]; };
-layout(std430, set = 0, binding = 4) buffer Accum2 { vec4 accum2[]; };
+layout(push_constant) uniform Push {
+    LvcPush P;
+    BUFFER_REF(LvcConstantsInRef, constants)
+    BUFFER_REF(Vec4sInRef, radiance)
+    BUFFER_REF(UintsInRef, fixed_film)
+    BUFFER_REF(Vec4sRef, accum)
+    BUFFER_REF(Vec4sRef, accum2)
+};
+BUFFER_BINDING(0, readonly, LvcConstants, constants)
+BUFFER_BINDING(1, readonly, vec4, radiance)
+BUFFER_BINDING(2, readonly, uint, fixed_film)
+BUFFER_BINDING(3, , vec4, accum)
+BUFFER_BINDING(4, , vec4, accum2)
+#define C constants.data[0]
 
 #include "lvc_fixed.glsl"
 
@@ -30,20 +38,20 @@ void main() {
     uint pixels = C.width * C.height;
     uint passes = P.path_count / P.pixel_count;
     uint rest = pixel + pixels;
-    vec4 sum = accum[pixel];
-    vec4 sum_rest = accum[rest];
-    vec4 sum2 = accum2[pixel];
-    vec4 sum2_rest = accum2[rest];
+    vec4 sum = accum.data[pixel];
+    vec4 sum_rest = accum.data[rest];
+    vec4 sum2 = accum2.data[pixel];
+    vec4 sum2_rest = accum2.data[rest];
     for (uint q = 0u; q < passes; ++q) {
         vec3 splats = fixed_value(q * pixels + pixel) * (1.0 / C.brightness_scale);
-        vec3 l = radiance[q * P.pixel_count + i].rgb + splats;
+        vec3 l = radiance.data[q * P.pixel_count + i].rgb + splats;
         precise vec3 scaled = l * C.brightness_scale;
         precise vec3 squared = scaled * scaled;
         film_add(sum, sum_rest, vec4(l, 1.0));
         film_add(sum2, sum2_rest, vec4(squared, 0.0));
     }
-    accum[pixel] = sum;
-    accum[rest] = sum_rest;
-    accum2[pixel] = sum2;
-    accum2[rest] = sum2_rest;
+    accum.data[pixel] = sum;
+    accum.data[rest] = sum_rest;
+    accum2.data[pixel] = sum2;
+    accum2.data[rest] = sum2_rest;
 }

@@ -9,13 +9,22 @@
 #include "bsdf.glsl"
 #include "lvc.glsl"
 
-layout(push_constant) uniform Push { LvcPush P; };
-layout(std430, set = 0, binding = 0) readonly buffer Constants { LvcConstants C; };
-layout(std430, set = 0, binding = 1) readonly buffer Cache { LvcVertex cache[]; };
-layout(std430, set = 0, binding = 2) readonly buffer Triangles { Triangle triangles[]; };
-layout(std430, set = 0, binding = 3) readonly buffer Bsdfs { BsdfParams bsdfs[]; };
-layout(std430, set = 0, binding = 4) writeonly buffer ShadowRays { Ray shadow_rays[]; };
-layout(std430, set = 0, binding = 5) writeonly buffer Contributions { Contribution contrib[]; };
+layout(push_constant) uniform Push {
+    LvcPush P;
+    BUFFER_REF(LvcConstantsInRef, constants)
+    BUFFER_REF(LvcVerticesInRef, cache)
+    BUFFER_REF(TrianglesInRef, triangles)
+    BUFFER_REF(BsdfsInRef, bsdfs)
+    BUFFER_REF(RaysOutRef, shadow_rays)
+    BUFFER_REF(ContributionsOutRef, contrib)
+};
+BUFFER_BINDING(0, readonly, LvcConstants, constants)
+BUFFER_BINDING(1, readonly, LvcVertex, cache)
+BUFFER_BINDING(2, readonly, Triangle, triangles)
+BUFFER_BINDING(3, readonly, BsdfParams, bsdfs)
+BUFFER_BINDING(4, writeonly, Ray, shadow_rays)
+BUFFER_BINDING(5, writeonly, Contribution, contrib)
+#define C constants.data[0]
 
 #include "lvc_surface.glsl"
 #include "lvc_bsdf.glsl"
@@ -23,10 +32,10 @@ layout(std430, set = 0, binding = 5) writeonly buffer Contributions { Contributi
 void main() {
     uint k = linear_invocation_id();
     if (k >= P.active_count) return;
-    shadow_rays[k] = no_ray();
-    contrib[k] = Contribution(vec3(0.0), CONTRIBUTION_NONE, 0.0, CONTRIBUTION_NONE, 0u, 0u);
+    shadow_rays.data[k] = no_ray();
+    contrib.data[k] = Contribution(vec3(0.0), CONTRIBUTION_NONE, 0.0, CONTRIBUTION_NONE, 0u, 0u);
     if (!(C.count_light_trace > 0.0)) return;
-    LvcVertex y = cache[P.base + k];
+    LvcVertex y = cache.data[P.base + k];
     vec3 ng = triangle_normal(y.triangle);
     vec3 to = C.origin - y.p;
     float dist2 = dot(to, to);
@@ -44,9 +53,9 @@ void main() {
     if (value == vec3(0.0)) return;
     Ray r;
     if (!shadow_ray(y.p, ng, C.origin, vec3(0.0), C.ray_epsilon, r)) return;
-    shadow_rays[k] = r;
+    shadow_rays.data[k] = r;
     uint pass_in_chunk = y.path / C.light_paths;
-    contrib[k] = Contribution(value * weight / float(C.light_paths),
-                              technique_code(y.depth + 1u, 1u), weight,
-                              pass_in_chunk * (C.width * C.height) + pixel, 0u, 0u);
+    contrib.data[k] = Contribution(value * weight / float(C.light_paths),
+                                   technique_code(y.depth + 1u, 1u), weight,
+                                   pass_in_chunk * (C.width * C.height) + pixel, 0u, 0u);
 }

@@ -12,14 +12,24 @@
 #include "../pt/pt.glsl"
 #include "lvc.glsl"
 
-layout(push_constant) uniform Push { LvcPush P; };
-layout(std430, set = 0, binding = 0) readonly buffer Constants { LvcConstants C; };
-layout(std430, set = 0, binding = 1) readonly buffer Lights { Light lights[]; };
-layout(std430, set = 0, binding = 2) readonly buffer LightCdf { float light_cdf[]; };
-layout(std430, set = 0, binding = 3) writeonly buffer Rays { Ray rays[]; };
-layout(std430, set = 0, binding = 4) writeonly buffer Active { uint live_ids[]; };
-layout(std430, set = 0, binding = 5) writeonly buffer Paths { WalkState paths[]; };
-layout(std430, set = 0, binding = 6) writeonly buffer VertexCount { uint vertex_count[]; };
+layout(push_constant) uniform Push {
+    LvcPush P;
+    BUFFER_REF(LvcConstantsInRef, constants)
+    BUFFER_REF(LightsInRef, lights)
+    BUFFER_REF(FloatsInRef, light_cdf)
+    BUFFER_REF(RaysOutRef, rays)
+    BUFFER_REF(UintsOutRef, live_ids)
+    BUFFER_REF(WalkStatesOutRef, paths)
+    BUFFER_REF(UintsOutRef, vertex_count)
+};
+BUFFER_BINDING(0, readonly, LvcConstants, constants)
+BUFFER_BINDING(1, readonly, Light, lights)
+BUFFER_BINDING(2, readonly, float, light_cdf)
+BUFFER_BINDING(3, writeonly, Ray, rays)
+BUFFER_BINDING(4, writeonly, uint, live_ids)
+BUFFER_BINDING(5, writeonly, WalkState, paths)
+BUFFER_BINDING(6, writeonly, uint, vertex_count)
+#define C constants.data[0]
 
 #include "lvc_lights.glsl"
 
@@ -28,8 +38,8 @@ void main() {
     if (l >= P.path_count) return;
     uint index = l % C.light_paths;
     uint pass = P.first_pass + l / C.light_paths;
-    live_ids[l] = l;
-    vertex_count[l] = 0u;
+    live_ids.data[l] = l;
+    vertex_count.data[l] = 0u;
 
     WalkState s;
     s.beta = vec3(0.0);
@@ -71,6 +81,6 @@ void main() {
             }
         }
     }
-    rays[l] = ray;
-    paths[l] = s;
+    rays.data[l] = ray;
+    paths.data[l] = s;
 }

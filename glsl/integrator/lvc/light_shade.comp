@@ -15,22 +15,40 @@
 #include "../pt/pt.glsl"
 #include "lvc.glsl"
 
-layout(push_constant) uniform Push { LvcPush P; };
-layout(std430, set = 0, binding = 0) readonly buffer Constants { LvcConstants C; };
-layout(std430, set = 0, binding = 1) buffer Rays { Ray rays[]; };
-layout(std430, set = 0, binding = 2) readonly buffer Hits { Hit hits[]; };
-layout(std430, set = 0, binding = 3) readonly buffer Active { uint live_ids[]; };
-layout(std430, set = 0, binding = 4) readonly buffer Order { uint order[]; };
-layout(std430, set = 0, binding = 5) buffer Paths { WalkState paths[]; };
-layout(std430, set = 0, binding = 6) readonly buffer Triangles { Triangle triangles[]; };
-layout(std430, set = 0, binding = 7) readonly buffer TriMaterial { uint triangle_material[]; };
-layout(std430, set = 0, binding = 8) readonly buffer Materials { PtMaterial materials[]; };
-layout(std430, set = 0, binding = 9) readonly buffer Bsdfs { BsdfParams bsdfs[]; };
-layout(std430, set = 0, binding = 10) readonly buffer Normals { vec4 normals[]; };
-layout(std430, set = 0, binding = 11) writeonly buffer VertexOut { LvcVertex vertex_out[]; };
-layout(std430, set = 0, binding = 12) writeonly buffer Stored { uint stored[]; };
-layout(std430, set = 0, binding = 13) writeonly buffer Alive { uint alive[]; };
-layout(std430, set = 0, binding = 14) buffer VertexCount { uint vertex_count[]; };
+layout(push_constant) uniform Push {
+    LvcPush P;
+    BUFFER_REF(LvcConstantsInRef, constants)
+    BUFFER_REF(RaysRef, rays)
+    BUFFER_REF(HitsInRef, hits)
+    BUFFER_REF(UintsInRef, live_ids)
+    BUFFER_REF(UintsInRef, order)
+    BUFFER_REF(WalkStatesRef, paths)
+    BUFFER_REF(TrianglesInRef, triangles)
+    BUFFER_REF(UintsInRef, triangle_material)
+    BUFFER_REF(PtMaterialsInRef, materials)
+    BUFFER_REF(BsdfsInRef, bsdfs)
+    BUFFER_REF(Vec4sInRef, normals)
+    BUFFER_REF(LvcVerticesOutRef, vertex_out)
+    BUFFER_REF(UintsOutRef, stored)
+    BUFFER_REF(UintsOutRef, alive)
+    BUFFER_REF(UintsRef, vertex_count)
+};
+BUFFER_BINDING(0, readonly, LvcConstants, constants)
+BUFFER_BINDING(1, , Ray, rays)
+BUFFER_BINDING(2, readonly, Hit, hits)
+BUFFER_BINDING(3, readonly, uint, live_ids)
+BUFFER_BINDING(4, readonly, uint, order)
+BUFFER_BINDING(5, , WalkState, paths)
+BUFFER_BINDING(6, readonly, Triangle, triangles)
+BUFFER_BINDING(7, readonly, uint, triangle_material)
+BUFFER_BINDING(8, readonly, PtMaterial, materials)
+BUFFER_BINDING(9, readonly, BsdfParams, bsdfs)
+BUFFER_BINDING(10, readonly, vec4, normals)
+BUFFER_BINDING(11, writeonly, LvcVertex, vertex_out)
+BUFFER_BINDING(12, writeonly, uint, stored)
+BUFFER_BINDING(13, writeonly, uint, alive)
+BUFFER_BINDING(14, , uint, vertex_count)
+#define C constants.data[0]
 
 #define LVC_SHADING_NORMALS
 #include "lvc_surface.glsl"
@@ -41,21 +59,21 @@ layout(std430, set = 0, binding = 14) buffer VertexCount { uint vertex_count[]; 
 void main() {
     uint j = linear_invocation_id();
     if (j >= P.active_count) return;
-    uint i = (C.flags & LVC_FLAG_SORTED) != 0u ? order[j] : j;
-    uint l = live_ids[i];
-    stored[i] = 0u;
-    alive[i] = 0u;
-    Hit hit = hits[i];
+    uint i = (C.flags & LVC_FLAG_SORTED) != 0u ? order.data[j] : j;
+    uint l = live_ids.data[i];
+    stored.data[i] = 0u;
+    alive.data[i] = 0u;
+    Hit hit = hits.data[i];
     if (hit.triangle == MISS) return;
-    WalkState s = paths[l];
+    WalkState s = paths.data[l];
     LvcVertex v;
-    if (!walk_arrive(s, rays[i], hit, l, v)) return;
+    if (!walk_arrive(s, rays.data[i], hit, l, v)) return;
     if ((v.flags & VERTEX_CONNECTIBLE) != 0u) {
-        v.ordinal = vertex_count[l];
-        vertex_count[l] = v.ordinal + 1u;
-        stored[i] = 1u;
+        v.ordinal = vertex_count.data[l];
+        vertex_count.data[l] = v.ordinal + 1u;
+        stored.data[i] = 1u;
     }
-    vertex_out[i] = v;
+    vertex_out.data[i] = v;
     // A light subpath holds at most max_depth vertices, the light's included.
     bool extends = C.max_depth < 0 || v.depth + 1u < uint(C.max_depth);
     Ray next;
@@ -63,8 +81,8 @@ void main() {
     uint pass = P.first_pass + l / C.light_paths;
     if (extends && walk_scatter(s, v, triangle_normal(hit.triangle), index, pass,
                                 TRANSPORT_IMPORTANCE, next)) {
-        rays[i] = next;
-        alive[i] = 1u;
+        rays.data[i] = next;
+        alive.data[i] = 1u;
     }
-    paths[l] = s;
+    paths.data[l] = s;
 }

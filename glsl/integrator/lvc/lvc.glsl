@@ -41,6 +41,7 @@ struct LvcConstants {
 
 const uint LVC_FLAG_SORTED = 1u;    // kernels read their items through the sorted order
 const uint LVC_FLAG_SYSTEMATIC = 2u;  // camera_connect's resampled draws are systematic
+const uint LVC_FLAG_NORMALS = 4u;     // the normals table has three per triangle (else a dummy)
 
 // Per dispatch, as push constants (32 bytes).
 struct LvcPush {
@@ -108,6 +109,18 @@ struct Contribution {
 };
 
 const uint CONTRIBUTION_NONE = 0xFFFFFFFFu;
+
+// The records by device address (address.glsl): kernels whose buffers grow with the
+// scene or the film take every buffer so, and run their descriptor twins where the
+// device reads descriptors faster and each buffer fits one binding.
+#include "address.glsl"
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer LvcConstantsInRef { LvcConstants data[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer LvcVerticesInRef { LvcVertex data[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) writeonly buffer LvcVerticesOutRef { LvcVertex data[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) buffer WalkStatesRef { WalkState data[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) writeonly buffer WalkStatesOutRef { WalkState data[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer ContributionsInRef { Contribution data[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) writeonly buffer ContributionsOutRef { Contribution data[]; };
 
 uint technique_code(uint s, uint t) { return s | (t << 16); }
 

@@ -1,5 +1,5 @@
-// A connection endpoint's BSDF (src/bidir/connect.rs `Endpoint`): needs
-// `BsdfParams bsdfs[]`.
+// A connection endpoint's BSDF (src/bidir/connect.rs `Endpoint`): needs the BsdfParams
+// buffer `bsdfs` (a BUFFER_REF or BUFFER_BINDING of address.glsl).
 #ifndef SPLITRAY_LVC_BSDF_GLSL
 #define SPLITRAY_LVC_BSDF_GLSL
 
@@ -19,7 +19,7 @@ struct EndpointBsdf {
 
 EndpointBsdf endpoint_bsdf(LvcVertex v) {
     EndpointBsdf e;
-    BSDF_LOAD(e.b, bsdfs[v.material]);
+    BSDF_LOAD(e.b, bsdfs.data[v.material]);
     e.frame = bsdf_frame(v.ns);
     e.wo = bsdf_to_local(e.frame, v.wo);
     return e;

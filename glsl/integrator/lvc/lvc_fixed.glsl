@@ -7,8 +7,9 @@
 // rounding errors cancel on average instead of all cutting it down. Callers scale
 // values by a power of two that puts the scene's radiance near 1 (LvcConstants'
 // brightness_scale), which keeps splats well inside the 2^-32 .. 2^31 range whatever
-// the scene's units. Needs `uint fixed_film[]`; kernels that add define LVC_FIXED_ADD and
-// also declare `uint counters[]`. src/integrator/lvc/fixed.rs is the twin.
+// the scene's units. Needs the uint buffer `fixed_film`; kernels that add define
+// LVC_FIXED_ADD and also declare the uint buffer `counters` (each a BUFFER_REF or
+// BUFFER_BINDING of address.glsl). src/integrator/lvc/fixed.rs is the twin.
 #ifndef SPLITRAY_LVC_FIXED_GLSL
 #define SPLITRAY_LVC_FIXED_GLSL
 
@@ -25,15 +26,15 @@ void fixed_add_channel(uint base, uint channel, float v) {
     if (!(v > 0.0)) return;
     if (v > FIXED_MAX) {
         v = FIXED_MAX;
-        atomicAdd(counters[COUNTER_CLAMPED], 1u);
+        atomicAdd(counters.data[COUNTER_CLAMPED], 1u);
     }
     float whole = floor(v);
     uint hi = uint(whole);
     // (v - whole) < 1, so the rounded fraction stays below 2^32 (at most 2^32 - 2^8).
     uint lo = uint(roundEven((v - whole) * FIXED_ONE));
-    uint old = atomicAdd(fixed_film[base + channel], lo);
+    uint old = atomicAdd(fixed_film.data[base + channel], lo);
     if (old > 0xFFFFFFFFu - lo) hi += 1u;
-    if (hi != 0u) atomicAdd(fixed_film[base + 3u + channel], hi);
+    if (hi != 0u) atomicAdd(fixed_film.data[base + 3u + channel], hi);
 }
 
 void fixed_add(uint slot, vec3 v) {
@@ -48,7 +49,7 @@ vec3 fixed_value(uint slot) {
     uint base = slot * FIXED_WORDS;
     vec3 v;
     for (uint c = 0u; c < 3u; ++c) {
-        v[c] = float(fixed_film[base + 3u + c]) + float(fixed_film[base + c]) * (1.0 / FIXED_ONE);
+        v[c] = float(fixed_film.data[base + 3u + c]) + float(fixed_film.data[base + c]) * (1.0 / FIXED_ONE);
     }
     return v;
 }

@@ -1,5 +1,6 @@
 // Light sampling with the light table's semantics (src/bidir/lights.rs `Lights`): needs
-// `Light lights[]` and `float light_cdf[]` (pt.glsl's records).
+// the buffers `lights` (pt.glsl's Light records) and `light_cdf` (floats), each a
+// BUFFER_REF or BUFFER_BINDING of address.glsl.
 #ifndef SPLITRAY_LVC_LIGHTS_GLSL
 #define SPLITRAY_LVC_LIGHTS_GLSL
 
@@ -18,14 +19,14 @@ uint lvc_pick_light(float u, uint count) {
     uint hi = count - 1u;
     while (lo < hi) {
         uint mid = (lo + hi) / 2u;
-        if (u < light_cdf[mid]) hi = mid; else lo = mid + 1u;
+        if (u < light_cdf.data[mid]) hi = mid; else lo = mid + 1u;
     }
     return lo;
 }
 
 // The point of light k for (u1, u2) (Lights::point).
 LightPoint lvc_light_point(uint k, float u1, float u2) {
-    Light l = lights[k];
+    Light l = lights.data[k];
     LightPoint q;
     q.radiance = l.emission_pmf.rgb;
     float pmf = l.emission_pmf.w;

@@ -1,8 +1,9 @@
 // The random walks of both subpaths (src/bidir/walk.rs `Walk::extend` / `scatter`),
-// one vertex per call. Needs the constants `C` and `Triangle triangles[]`; a kernel
-// defines LVC_WALK_ARRIVE for walk_arrive (which needs `vec4 normals[]` with
-// LVC_SHADING_NORMALS, `uint triangle_material[]` and `PtMaterial materials[]`) and
-// LVC_WALK_SCATTER for walk_scatter (which needs `BsdfParams bsdfs[]`).
+// one vertex per call. Needs the constants `C` and the buffer `triangles`; a kernel
+// defines LVC_WALK_ARRIVE for walk_arrive (which needs the buffers `normals` with
+// LVC_SHADING_NORMALS, `triangle_material` and `materials`) and LVC_WALK_SCATTER for
+// walk_scatter (which needs `bsdfs`). Buffers are BUFFER_REFs or BUFFER_BINDINGs
+// (address.glsl), read as `name.data[i]`.
 #ifndef SPLITRAY_LVC_WALK_GLSL
 #define SPLITRAY_LVC_WALK_GLSL
 
@@ -33,7 +34,7 @@ bool walk_arrive(inout WalkState s, Ray ray, Hit hit, uint path, out LvcVertex v
                     (s.flags & WALK_PENDING_DELTA) != 0u);
     }
     mis_arrive(s.d_vcm, s.d_vc, dist2, cos_in);
-    uint material = triangle_material[hit.triangle];
+    uint material = triangle_material.data[hit.triangle];
     v.p = x;
     v.material = material;
     v.ns = shading_normal(hit, ng);
@@ -46,7 +47,7 @@ bool walk_arrive(inout WalkState s, Ray ray, Hit hit, uint path, out LvcVertex v
     v.depth = s.depth + 1u;
     v.ordinal = 0u;
     v.flags = VERTEX_VALID;
-    if (materials[material].all_delta == 0u) v.flags |= VERTEX_CONNECTIBLE;
+    if (materials.data[material].all_delta == 0u) v.flags |= VERTEX_CONNECTIBLE;
     s.depth = v.depth;
     s.prev_p = x;
     s.prev_ng = ng;
@@ -64,7 +65,7 @@ bool walk_scatter(inout WalkState s, LvcVertex v, vec3 ng, uint index, uint samp
                   uint mode, out Ray next) {
     next = no_ray();
     BsdfParams b;
-    BSDF_LOAD(b, bsdfs[v.material]);
+    BSDF_LOAD(b, bsdfs.data[v.material]);
     mat3 frame = bsdf_frame(v.ns);
     vec3 wo = bsdf_to_local(frame, v.wo);
     uint i = v.depth;

@@ -8,12 +8,20 @@
 #include "geometry.glsl"
 #include "lvc.glsl"
 
-layout(push_constant) uniform Push { LvcPush P; };
-layout(std430, set = 0, binding = 0) readonly buffer Contributions { Contribution contrib[]; };
-layout(std430, set = 0, binding = 1) readonly buffer ShadowHits { Hit shadow_hits[]; };
-layout(std430, set = 0, binding = 2) buffer FixedFilm { uint fixed_film[]; };
-layout(std430, set = 0, binding = 3) buffer Counters { uint counters[]; };
-layout(std430, set = 0, binding = 4) readonly buffer Constants { LvcConstants C; };
+layout(push_constant) uniform Push {
+    LvcPush P;
+    BUFFER_REF(ContributionsInRef, contrib)
+    BUFFER_REF(HitsInRef, shadow_hits)
+    BUFFER_REF(UintsRef, fixed_film)
+    BUFFER_REF(UintsRef, counters)
+    BUFFER_REF(LvcConstantsInRef, constants)
+};
+BUFFER_BINDING(0, readonly, Contribution, contrib)
+BUFFER_BINDING(1, readonly, Hit, shadow_hits)
+BUFFER_BINDING(2, , uint, fixed_film)
+BUFFER_BINDING(3, , uint, counters)
+BUFFER_BINDING(4, readonly, LvcConstants, constants)
+#define C constants.data[0]
 
 #define LVC_FIXED_ADD
 #include "lvc_fixed.glsl"
@@ -21,10 +29,10 @@ layout(std430, set = 0, binding = 4) readonly buffer Constants { LvcConstants C;
 void main() {
     uint k = linear_invocation_id();
     if (k >= P.active_count) return;
-    Contribution c = contrib[k];
-    if (c.code == CONTRIBUTION_NONE || shadow_hits[k].triangle != MISS) return;
+    Contribution c = contrib.data[k];
+    if (c.code == CONTRIBUTION_NONE || shadow_hits.data[k].triangle != MISS) return;
     if (any(isnan(c.value)) || any(isinf(c.value))) {
-        atomicAdd(counters[COUNTER_NON_FINITE], 1u);
+        atomicAdd(counters.data[COUNTER_NON_FINITE], 1u);
         return;
     }
     fixed_add(c.target, c.value * C.brightness_scale);

@@ -19,7 +19,6 @@
 #include "bsdf.glsl"
 #include "pt.glsl"
 
-layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer BsdfsInRef { BsdfParams data[]; };
 layout(push_constant) uniform Push {
     PtParams params;
     BUFFER_REF(RaysRef, rays)

@@ -22,6 +22,7 @@
 //! keeps its buffers unless the posed scene needs more slots than they hold
 //! ([`super::cache::LightCache::set_capacity`]).
 
+use super::gpu::FLAG_NORMALS;
 use super::plan::Plan;
 use super::{prepass_constants, LvcIntegrator};
 use crate::integrator::pt::rescale_moments;
@@ -42,6 +43,8 @@ impl LvcIntegrator<'_> {
         self.plan = Plan::new(&self.gpu, camera.width, camera.height, &self.options);
         let kept_scale = self.constants.brightness_scale;
         let bounds = frame.scene.bounds();
+        // Posing moves normals, never adds or drops them.
+        let normals = self.constants.flags & FLAG_NORMALS;
         self.constants = prepass_constants(
             &self.options,
             &self.plan,
@@ -50,6 +53,7 @@ impl LvcIntegrator<'_> {
             bounds.ray_epsilon(frame.scene.ray_sources()),
             &self.light_table,
         );
+        self.constants.flags |= normals;
         rescale_moments(&self.accum2, kept_scale, self.constants.brightness_scale)?;
         self.constants_buffer.write(&[self.constants])?;
         self.prepass()

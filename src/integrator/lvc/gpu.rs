@@ -50,6 +50,10 @@ const _: () = assert!(size_of::<LvcConstants>() == 128);
 pub const FLAG_SORTED: u32 = 1;
 /// CIS-LBDPT's draws are systematic ([`super::options::Resampling::Systematic`]).
 pub const FLAG_SYSTEMATIC: u32 = 2;
+/// The normals table holds three per triangle ([`PtScene::has_normals`]).
+///
+/// [`PtScene::has_normals`]: crate::integrator::pt::PtScene::has_normals
+pub const FLAG_NORMALS: u32 = 4;
 
 impl LvcConstants {
     /// The camera part; counts, depths and the rest are the caller's.

@@ -65,7 +65,7 @@ use crate::vk::{self, Buffer, Gpu, Recorder};
 use self::cache::LightCache;
 pub use self::camera_pass::Visibility;
 use self::camera_pass::{trace_camera_paths, CameraRange, CameraTargets, Streams};
-use self::gpu::{LvcConstants, FLAG_SORTED, FLAG_SYSTEMATIC};
+use self::gpu::{LvcConstants, FLAG_NORMALS, FLAG_SORTED, FLAG_SYSTEMATIC};
 use self::kernels::Kernels;
 use self::light_pass::trace_light_paths;
 use self::light_tracing::splat_cache;
@@ -101,7 +101,8 @@ pub fn lvc_counts(
 /// scene's `ray_epsilon` ([`Aabb::ray_epsilon`] from the camera and the point lights),
 /// the splat film's scale from the scene's `bounds` and `lights`, the light count, N_L
 /// of the plan before the prepass fits it, and provisional counts (the prepass's
-/// vertices do not depend on them).
+/// vertices do not depend on them). The caller adds [`FLAG_NORMALS`] where the scene
+/// has shading normals.
 fn prepass_constants(
     options: &LvcOptions,
     plan: &Plan,
@@ -239,7 +240,7 @@ impl<'t> LvcIntegrator<'t> {
     ) -> Result<Self, IntegratorError> {
         options.check()?;
         let plan = Plan::new(gpu, camera.width, camera.height, options);
-        let constants = prepass_constants(
+        let mut constants = prepass_constants(
             options,
             &plan,
             camera,
@@ -247,6 +248,9 @@ impl<'t> LvcIntegrator<'t> {
             scene.ray_epsilon,
             &scene.lights,
         );
+        if scene.has_normals() {
+            constants.flags |= FLAG_NORMALS;
+        }
         let pixels = plan.pixels as usize;
         let max_light_paths = plan.chunk_light_paths(plan.passes_per_chunk);
         let mut integrator = Self {

@@ -140,6 +140,13 @@ pub struct PtScene {
 }
 
 impl PtScene {
+    /// Whether `normals` holds three per triangle. Without them the table the kernels
+    /// get is one dummy entry: reading it at a triangle's index would be out of bounds,
+    /// and no robustness promises zeros there (through a buffer address nothing does).
+    pub fn has_normals(&self) -> bool {
+        !self.triangles.is_empty() && self.normals.len() == 3 * self.triangles.len()
+    }
+
     pub fn new(scene: &Scene) -> Self {
         let (bsdfs, materials) = materials::material_tables(&scene.materials);
         let normals = if scene.triangles.iter().any(|t| t.n.is_some()) {
@@ -430,9 +437,7 @@ impl<'t> PtIntegrator<'t> {
         if options.sort {
             params.flags |= FLAG_SORTED;
         }
-        // Without per-triangle normals the table is one dummy entry: reading it at a
-        // triangle's index would be out of bounds (no robustness promises zeros there).
-        if scene.normals.len() == 3 * scene.triangles.len() {
+        if scene.has_normals() {
             params.flags |= FLAG_NORMALS;
         }
         Ok(Self {
