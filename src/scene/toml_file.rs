@@ -185,15 +185,20 @@ impl MaterialToml {
     /// of every material), so that a bad one is reported at its line.
     fn check_values(&self, at: &Loc) -> Result<(), SceneError> {
         let name = self.name.get_ref();
-        for (what, v) in [
-            ("diffuse", &self.diffuse),
-            ("specular", &self.specular),
-            ("emission", &self.emission),
+        for (what, v, reflectance) in [
+            ("diffuse", &self.diffuse, true),
+            ("specular", &self.specular, true),
+            ("emission", &self.emission, false),
         ] {
             if let Some(v) = v {
                 let (c, at) = (Vec3::from(*v.get_ref()), at(v.span()));
-                validate::check_finite(c, &at, || format!("material '{name}' {what}"))?;
-                validate::check_non_negative(c, &at, || format!("material '{name}' {what}"))?;
+                let what = || format!("material '{name}' {what}");
+                validate::check_finite(c, &at, what)?;
+                if reflectance {
+                    validate::check_reflectance(c, &at, what)?;
+                } else {
+                    validate::check_non_negative(c, &at, what)?;
+                }
             }
         }
         for (what, v) in [

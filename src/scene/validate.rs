@@ -115,6 +115,27 @@ pub(super) fn check_non_negative(
     Ok(())
 }
 
+/// Why a reflectance channel above 1 is refused.
+pub(super) const ABOVE_ONE: &str =
+    "is more than 1: a surface cannot reflect more light than it receives";
+
+/// A reflectance (`diffuse`, `specular`): each channel in [0, 1]. One above 1 would make
+/// every bounce add energy, so that a closed room's radiance grows without bound.
+pub(super) fn check_reflectance(
+    v: Vec3,
+    at: &Location,
+    what: impl Fn() -> String,
+) -> Result<(), SceneError> {
+    check_non_negative(v, at, &what)?;
+    if v.max_element() > 1.0 {
+        return Err(SceneError::Invalid {
+            at: at.clone(),
+            message: format!("{} {v} {ABOVE_ONE}", what()),
+        });
+    }
+    Ok(())
+}
+
 /// Full check of a scene loaded from `at`: camera, film, non-empty geometry, finite
 /// vertices / normals / material and light parameters, material indices in range.
 /// Degenerate triangles are allowed (counted and logged as a warning) unless every
@@ -149,13 +170,18 @@ pub fn validate_scene(scene: &Scene, at: &Location) -> Result<SceneStats, SceneE
         }
     }
     for m in &scene.materials {
-        for (what, v) in [
-            ("diffuse", m.diffuse),
-            ("specular", m.specular),
-            ("emission", m.emission),
+        for (what, v, reflectance) in [
+            ("diffuse", m.diffuse, true),
+            ("specular", m.specular, true),
+            ("emission", m.emission, false),
         ] {
-            check_finite(v, at, || format!("material '{}' {what}", m.name))?;
-            check_non_negative(v, at, || format!("material '{}' {what}", m.name))?;
+            let what = || format!("material '{}' {what}", m.name);
+            check_finite(v, at, what)?;
+            if reflectance {
+                check_reflectance(v, at, what)?;
+            } else {
+                check_non_negative(v, at, what)?;
+            }
         }
         for (what, v) in [
             ("shininess", m.shininess),

@@ -203,6 +203,14 @@ fn toml_errors_have_line_and_column() {
             "material 'red' diffuse [-1, 2, 1] is negative",
         ),
         (
+            "diffuse = [0.5, 1.2, 0.5]",
+            "material 'red' diffuse [0.5, 1.2, 0.5] is more than 1: a surface cannot reflect",
+        ),
+        (
+            "specular = [1.5, 1, 1]",
+            "material 'red' specular [1.5, 1, 1] is more than 1",
+        ),
+        (
             "emission = [1, inf, 1]",
             "material 'red' emission is not finite",
         ),
@@ -374,6 +382,15 @@ fn malformed_obj_and_mtl() {
         (
             "newmtl a\nKd -1 2 1\n",
             "bad.mtl:2: Kd [-1, 2, 1] is negative",
+        ),
+        (
+            "newmtl a\nKd 0.5 0.5 0.5\nKs 1 1.01 1\n",
+            "bad.mtl:3: Ks [1, 1.01, 1] is more than 1: a surface cannot reflect",
+        ),
+        // Ke is emission, and Ka is not used: neither is a reflectance.
+        (
+            "newmtl a\nKe 5 5 5\nKa 2 2 2\nKd 2 0 0\n",
+            "bad.mtl:4: Kd [2, 0, 0] is more than 1",
         ),
     ] {
         write(dir.path(), "bad.mtl", mtl);

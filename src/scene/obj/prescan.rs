@@ -326,12 +326,21 @@ pub(super) fn prescan_mtl(text: &str, file: &str) -> Result<(), SceneError> {
             "Ka" | "Kd" | "Ks" | "Ke" => {
                 let v = parse_floats(&words[1..], 3, &at, keyword)?;
                 require_finite(&v, &at, keyword.to_string())?;
-                // As `validate_scene` refuses a negative colour, but said at its line
-                // (Ka, which splitray does not use, may be anything finite).
-                if keyword != "Ka" && v.iter().any(|c| *c < 0.0) {
+                // As `validate_scene` refuses a negative colour and a reflectance above
+                // 1, but said at its line (Ka, which splitray does not use, may be
+                // anything finite).
+                let colour = format!("{keyword} [{}, {}, {}]", v[0], v[1], v[2]);
+                let problem = if keyword != "Ka" && v.iter().any(|c| *c < 0.0) {
+                    Some("is negative")
+                } else if matches!(keyword, "Kd" | "Ks") && v.iter().any(|c| *c > 1.0) {
+                    Some(crate::scene::validate::ABOVE_ONE)
+                } else {
+                    None
+                };
+                if let Some(problem) = problem {
                     return Err(SceneError::Invalid {
                         at,
-                        message: format!("{keyword} [{}, {}, {}] is negative", v[0], v[1], v[2]),
+                        message: format!("{colour} {problem}"),
                     });
                 }
             }
