@@ -21,6 +21,7 @@ pub mod builtin;
 pub mod camera;
 pub mod error;
 pub mod obj;
+pub mod recentre;
 pub mod shapes;
 pub mod toml_file;
 pub mod validate;
@@ -505,8 +506,9 @@ pub fn load_animated(spec: &str) -> Result<AnimatedScene, SceneError> {
 
 /// Loads a scene: a built-in name (see [`builtin_names`]), a path to a `.toml` scene
 /// file, or a path to an `.obj` mesh (which gets a framing camera and a 512×512 film).
-/// The result is validated ([`validate::validate_scene`]). An animated scene is posed
-/// at time 0 ([`load_animated`] keeps what moves).
+/// The result is validated ([`validate::validate_scene`]) and, when it lies far from
+/// the origin, moved to it ([`recentre`]). An animated scene is posed at time 0
+/// ([`load_animated`] keeps what moves).
 pub fn load(spec: &str) -> Result<Scene, SceneError> {
     let _span = tracing::info_span!("scene load", what = spec).entered();
     if let Some(scene) = builtin(spec) {
@@ -519,7 +521,11 @@ pub fn load(spec: &str) -> Result<Scene, SceneError> {
         .map(str::to_ascii_lowercase);
     match ext.as_deref() {
         Some("toml") => toml_file::load_toml(path),
-        Some("obj") => obj::load_obj_scene(path),
+        Some("obj") => obj::load_obj_scene(path).map(|scene| {
+            let mut scene = AnimatedScene::from(scene);
+            recentre::recentre(&mut scene);
+            scene.scene
+        }),
         _ => {
             let names: Vec<&str> = builtin_names().iter().map(|(n, _)| *n).collect();
             Err(SceneError::BadSpec {

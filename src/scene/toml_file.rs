@@ -567,7 +567,9 @@ pub fn parse_toml_animated(
     }
     animation.camera = place_camera(doc.camera.as_ref(), &mut scene, (&at_span, &whole))?;
     validate::validate_scene(&scene, &whole)?;
-    Ok(AnimatedScene { scene, animation })
+    let mut animated = AnimatedScene { scene, animation };
+    super::recentre::recentre(&mut animated);
+    Ok(animated)
 }
 
 /// The `[film]` size, validated.

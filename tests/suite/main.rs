@@ -29,6 +29,7 @@ mod cli_long_renders;
 mod display_server;
 mod display_tonemap;
 mod eye_kernels;
+mod far_from_origin;
 mod film_io;
 mod integrator_interface;
 mod lvc_accumulate;

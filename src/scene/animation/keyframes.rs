@@ -114,6 +114,11 @@ impl<T: Interpolate> Keyframes<T> {
     pub fn values(&self) -> &[T] {
         &self.values
     }
+
+    /// Changes every key's value by `f`; the times stay.
+    pub fn map_values(&mut self, f: impl FnMut(&mut T)) {
+        self.values.iter_mut().for_each(f);
+    }
 }
 
 /// A rigid transform with scale: `p' = translate + rotate · (scale ⊙ p)`.
