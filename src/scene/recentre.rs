@@ -69,7 +69,7 @@ pub fn recentre(animated: &mut AnimatedScene) -> Option<Vec3> {
     }
     // The moving meshes as their motions now pose them, so that the scene stays its own
     // pose at time 0, bit for bit.
-    animated.scene = animated.pose(0.0);
+    animated.pose_in_place(0.0);
     log::info!(
         "scene '{}' lies far from the origin: moved by {} (positions are relative to its \
          centre)",

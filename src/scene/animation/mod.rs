@@ -159,6 +159,17 @@ impl Animation {
         self.meshes.is_empty() && self.camera.is_none()
     }
 
+    /// Writes the moving meshes and the camera of `scene` (this animation's scene or a
+    /// copy of it) at time `t`.
+    fn pose_into(&self, t: f32, scene: &mut Scene) {
+        for m in &self.meshes {
+            m.motion.pose(t, &mut scene.triangles[m.range.clone()]);
+        }
+        if let Some(keys) = &self.camera {
+            scene.camera = keys.sample(t);
+        }
+    }
+
     /// The time after which nothing changes any more (the last key, the last file of a
     /// sequence), or `None` when something moves for ever (a procedure).
     pub fn end_time(&self) -> Option<f32> {
@@ -216,11 +227,13 @@ impl AnimatedScene {
     /// The scene posed at time `t`.
     pub fn pose(&self, t: f32) -> Scene {
         let mut scene = self.scene.clone();
-        for m in &self.animation.meshes {
-            m.motion.pose(t, &mut scene.triangles[m.range.clone()]);
-        }
-        scene.camera = self.camera_at(t);
+        self.animation.pose_into(t, &mut scene);
         scene
+    }
+
+    /// Poses the scene itself at time `t`: [`Self::pose`] without the copy.
+    pub fn pose_in_place(&mut self, t: f32) {
+        self.animation.pose_into(t, &mut self.scene);
     }
 
     /// Moves `scene`, posed at time `from`, to time `to`: poses again only the meshes
