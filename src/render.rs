@@ -762,19 +762,30 @@ fn run_passes(
             break;
         }
         let count = batch.min(block.end - next);
+        // Once the film holds a pass, the time limit gives up a pass in progress too,
+        // where the integrator can (`cbpt`'s passes, 4 spp of the whole film in steps,
+        // last minutes on a large film): the render then ends within a step of its
+        // limit. The first pass always finishes: an image needs one.
+        let film_has_a_pass = passes > 0;
+        let abandon = || {
+            (control.abandon)() || (film_has_a_pass && past_time_limit(options.time_limit, start))
+        };
         let done;
-        (done, batch) = render_batch(integrator, (next, count), control.abandon, || {
+        (done, batch) = render_batch(integrator, (next, count), &abandon, || {
             batch_time_left_s(options.time_limit, start, watched_batch_s)
         })?;
         next += done;
         passes += done;
-        if done < count {
-            // A pass given up: the film holds the passes before it.
-            stopped = true;
-            break;
-        }
         let elapsed_s = start.elapsed().as_secs_f64();
         let out_of_time = options.time_limit.is_some_and(|t| elapsed_s >= t);
+        if done < count {
+            // A pass given up: the film holds the passes before it.
+            if !out_of_time {
+                stopped = true;
+                break;
+            }
+            log::info!("the time limit gave up pass {next} in progress");
+        }
         let last = next == block.end || out_of_time;
         if let Some(reference) = &options.reference {
             if last || elapsed_s - mse_read_at >= MSE_INTERVAL_S {
@@ -829,6 +840,11 @@ fn render_batch(
         integrator.passes_per_call(),
     );
     Ok((done, next))
+}
+
+/// Whether the time limit of the render begun at `start` has passed.
+fn past_time_limit(time_limit: Option<f64>, start: Instant) -> bool {
+    time_limit.is_some_and(|t| start.elapsed().as_secs_f64() >= t)
 }
 
 /// The most seconds the next batch may last: what the time limit leaves of the render
@@ -906,6 +922,128 @@ pub fn shadow_light(scene: &Scene) -> glam::Vec4 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::integrator::IntegratorStats;
+    use std::time::Duration;
+
+    /// A one-pixel integrator whose pass 0 is one step and every later pass
+    /// `later_steps`, each step a sleep of 1 ms, asking `abandon` after each step as
+    /// `cbpt` does.
+    struct SleptSteps {
+        later_steps: u32,
+        sums: FilmSums,
+        given_up: Option<u32>,
+    }
+
+    impl SleptSteps {
+        fn new(later_steps: u32) -> Self {
+            Self {
+                later_steps,
+                sums: FilmSums::new(1, 1, 1, false),
+                given_up: None,
+            }
+        }
+    }
+
+    impl Integrator for SleptSteps {
+        fn name(&self) -> &'static str {
+            "slept-steps"
+        }
+
+        fn render_passes(&mut self, first: u32, count: u32) -> Result<(), IntegratorError> {
+            self.render_passes_or_abandon(first, count, &|| false)
+                .map(|_| ())
+        }
+
+        fn render_passes_or_abandon(
+            &mut self,
+            first: u32,
+            count: u32,
+            abandon: &dyn Fn() -> bool,
+        ) -> Result<u32, IntegratorError> {
+            for (done, pass) in (first..first + count).enumerate() {
+                let steps = if pass == 0 { 1 } else { self.later_steps };
+                for _ in 0..steps {
+                    std::thread::sleep(Duration::from_millis(1));
+                    if abandon() {
+                        self.given_up = Some(pass);
+                        return Ok(done as u32);
+                    }
+                }
+                self.sums.add_pass(&[[1.0; 3]]);
+            }
+            Ok(count)
+        }
+
+        fn sums(&mut self) -> Result<FilmSums, IntegratorError> {
+            Ok(self.sums.clone())
+        }
+
+        fn restore(&mut self, sums: &FilmSums) -> Result<(), IntegratorError> {
+            self.sums = sums.clone();
+            Ok(())
+        }
+
+        fn stats(&self) -> IntegratorStats {
+            IntegratorStats::default()
+        }
+    }
+
+    /// Runs the pass loop over `integrator` for up to 1000 passes with `time_limit`.
+    fn run_for(integrator: &mut SleptSteps, time_limit: f64) -> PassRun {
+        let scene = crate::scene::builtin("cornell-box").unwrap();
+        let mut options = RenderOptions::resolve(
+            &scene,
+            Some(1),
+            Some(1),
+            Some(1000),
+            Some(0),
+            Some(IntegratorKind::Primary),
+            None,
+        )
+        .unwrap();
+        options.time_limit = Some(time_limit);
+        let fingerprint = Fingerprint {
+            scene_digest: String::new(),
+            settings: Vec::new(),
+        };
+        let job = PassLoop {
+            first_pass: 0,
+            resumed_passes: 0,
+            shard: Shard::WHOLE,
+            fingerprint: &fingerprint,
+            previous_time_s: 0.0,
+            checkpoint: None,
+            watch: None,
+        };
+        let control = RenderControl {
+            progress: &mut |_| {},
+            stop: &|| false,
+            abandon: &|| false,
+        };
+        run_passes(integrator, &options, control, job, Instant::now()).unwrap()
+    }
+
+    /// The time limit gives up a long pass in progress once the film holds one, and the
+    /// render ends as one that ran out of time, not as one stopped early.
+    #[test]
+    fn the_time_limit_gives_up_a_long_pass_once_the_film_holds_one() {
+        // Pass 1 would last 100 s; the limit comes 0.5 s into it at most.
+        let mut long = SleptSteps::new(100_000);
+        let run = run_for(&mut long, 0.5);
+        assert_eq!(long.given_up, Some(1));
+        assert_eq!((run.passes_rendered, long.sums.passes), (1, 1));
+        assert!(!run.stopped);
+    }
+
+    /// The first pass always finishes, however short the time limit: an image needs one.
+    #[test]
+    fn the_first_pass_finishes_past_the_time_limit() {
+        let mut one = SleptSteps::new(3);
+        let run = run_for(&mut one, 0.0);
+        assert_eq!(one.given_up, None);
+        assert_eq!((run.passes_rendered, one.sums.passes), (1, 1));
+        assert!(!run.stopped);
+    }
 
     #[test]
     fn batches_last_about_the_target_within_the_integrators_bounds() {

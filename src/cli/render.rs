@@ -76,7 +76,8 @@ pub struct RenderArgs {
     #[arg(long)]
     integrator: Option<IntegratorKind>,
     /// Render for this many seconds instead (stops after the pass during which the time
-    /// ran out; with --spp, at most that many passes).
+    /// ran out; cbpt gives that pass up between two of its steps once the film holds a
+    /// pass; with --spp, at most that many passes).
     #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
     time: Option<f64>,
     /// pt, bpt, light, lvc-bdpt, cis-lbdpt, cbpt: maximum path depth as in Mitsuba (1 =
