@@ -54,8 +54,7 @@ lint:
 	$(CARGO) clippy --profile ci --locked --all-targets -- -D warnings
 
 # The API documentation in target/doc, with broken or private intra-doc links as errors.
-# In the `ci` profile it reuses what `make test` built (about 25 s on 2 cores then). Not
-# part of `.ci/run`, whose 20 minutes are nearly spent.
+# In the `ci` profile it reuses what `make test` built (about 25 s on 2 cores then).
 doc:
 	RUSTDOCFLAGS="-D warnings" $(CARGO) doc --profile ci --locked --no-deps
 
