@@ -785,6 +785,12 @@ fn run_passes(
                 break;
             }
             log::info!("the time limit gave up pass {next} in progress");
+        } else if out_of_time && !film_has_a_pass {
+            log::warn!(
+                "the first pass took {elapsed_s:.1} s, past the time limit of {:.1} s: an \
+                 image needs one pass",
+                options.time_limit.unwrap_or_default()
+            );
         }
         let last = next == block.end || out_of_time;
         if let Some(reference) = &options.reference {
