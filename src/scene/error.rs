@@ -91,6 +91,16 @@ pub enum SceneError {
         name: String,
         path: PathBuf,
     },
+    /// A file referenced from another one is there but cannot be read (a folder, a
+    /// FIFO, a name the file system refuses): named with the reference, since the
+    /// mistake may be the reference's.
+    #[error("{at}: {what} {path} cannot be read: {error}", path = .path.display())]
+    UnreadableReference {
+        at: Location,
+        what: &'static str,
+        path: PathBuf,
+        error: std::io::Error,
+    },
     /// Malformed OBJ, MTL or TOML text.
     #[error("{at}: {message}")]
     Syntax { at: Location, message: String },

@@ -328,6 +328,47 @@ fn missing_files() {
     assert_has(&e, &["no-such-scene", "cornell-box", "fixture"]);
 }
 
+/// A referenced file that is there but cannot be read (a folder, a name the file system
+/// refuses) is named with the line that refers to it: the mistake may be that line's.
+#[test]
+fn unreadable_references_name_the_line_that_refers_to_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::create_dir(d.join("lib.mtl")).unwrap();
+    std::fs::create_dir(d.join("folder.obj")).unwrap();
+    let tri = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+    // An empty name would have been the OBJ's own folder.
+    let p = write(d, "bare.obj", &format!("# lib\nmtllib \n{tri}"));
+    assert_has(
+        &load_err(&p),
+        &["bare.obj:2", "mtllib without a material library name"],
+    );
+    let p = write(d, "folder-lib.obj", &format!("mtllib lib.mtl\n{tri}"));
+    assert_has(
+        &load_err(&p),
+        &[
+            "folder-lib.obj:1: material library ",
+            "lib.mtl cannot be read: it is a folder, not a regular file",
+        ],
+    );
+    let p = write(d, "nul.obj", &format!("mtllib cornell\0box.mtl\n{tri}"));
+    assert_has(
+        &load_err(&p),
+        &[
+            "nul.obj:1: material library ",
+            "cornell\0box.mtl cannot be read: file name contained an unexpected NUL byte",
+        ],
+    );
+    let p = write(d, "folder.toml", "[[mesh]]\npath = \"folder.obj\"\n");
+    assert_has(
+        &load_err(&p),
+        &[
+            "folder.toml:2:8: mesh ",
+            "folder.obj cannot be read: it is a folder, not a regular file",
+        ],
+    );
+}
+
 #[test]
 fn malformed_obj_and_mtl() {
     let dir = tempfile::tempdir().unwrap();

@@ -67,18 +67,33 @@ pub(crate) fn check_referenced_file(
     what: &'static str,
     name: &str,
 ) -> Result<(), SceneError> {
-    match crate::input::check_regular_file(full) {
-        Ok(()) => Ok(()),
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Err(SceneError::MissingReference {
-            at: at.clone(),
+    crate::input::check_regular_file(full)
+        .map_err(|error| reference_error(error, full, at.clone(), what, name.to_string()))
+}
+
+/// The error of reading `full`, the file `at` refers to as the `what` `name`: missing,
+/// or there but not readable.
+fn reference_error(
+    error: std::io::Error,
+    full: &Path,
+    at: Location,
+    what: &'static str,
+    name: String,
+) -> SceneError {
+    let path = full.to_path_buf();
+    match error.kind() {
+        std::io::ErrorKind::NotFound => SceneError::MissingReference {
+            at,
             what,
-            name: name.to_string(),
-            path: full.to_path_buf(),
-        }),
-        Err(error) => Err(SceneError::Io {
-            path: full.to_path_buf(),
+            name,
+            path,
+        },
+        _ => SceneError::UnreadableReference {
+            at,
+            what,
+            path,
             error,
-        }),
+        },
     }
 }
 
@@ -269,19 +284,10 @@ fn mtllib_location(libraries: &[Library], file: &str, name: &str) -> Location {
 
 /// The text of the MTL file `full` (named at `at` as `name`), pre-scanned.
 fn read_mtl(full: &Path, at: Location, name: String) -> Result<String, SceneError> {
-    match crate::input::read_to_string(full).map(without_byte_order_mark) {
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Err(SceneError::MissingReference {
-            at,
-            what: "material library",
-            name,
-            path: full.to_path_buf(),
-        }),
-        Err(error) => Err(SceneError::Io {
-            path: full.to_path_buf(),
-            error,
-        }),
-        Ok(mtl_text) => prescan_mtl(&mtl_text, &label(full)).map(|()| mtl_text),
-    }
+    let text = crate::input::read_to_string(full)
+        .map(without_byte_order_mark)
+        .map_err(|error| reference_error(error, full, at, "material library", name))?;
+    prescan_mtl(&text, &label(full)).map(|()| text)
 }
 
 /// Warns of each `usemtl` that names none of `materials` (its faces get the default

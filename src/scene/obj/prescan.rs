@@ -125,9 +125,16 @@ pub(super) fn prescan_obj(text: &str, file: &str) -> Result<ObjScan, SceneError>
                 check_face(&words[1..], face, &seen, &totals, &at, &mut joins)?;
             }
             "mtllib" => {
+                // Without a name, the library's path would be the OBJ's folder.
+                let names = rest_of_line(line, "mtllib");
+                if names.is_empty() {
+                    return Err(SceneError::Syntax {
+                        at: at(),
+                        message: "mtllib without a material library name".to_string(),
+                    });
+                }
                 scan.mtllib_after_usemtl |= !scan.usemtl.is_empty();
-                scan.mtllibs
-                    .push((rest_of_line(line, "mtllib").to_string(), i + 1));
+                scan.mtllibs.push((names.to_string(), i + 1));
             }
             "usemtl" => {
                 let name = rest_of_line(line, "usemtl");
