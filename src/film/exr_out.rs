@@ -241,7 +241,8 @@ pub fn read_exr(path: impl AsRef<Path>) -> Result<(Film, RenderMetadata), FilmEr
 type ExrImage = Image<Layers<AnyChannels<FlatSamples>>>;
 
 fn read_exr_image(path: &Path) -> Result<ExrImage, FilmError> {
-    let file = crate::input::open(path).map_err(|e| FilmError::io(path, "open", e))?;
+    let mut file = crate::input::open(path).map_err(|e| FilmError::io(path, "open", e))?;
+    check_exr_size(&mut file, path)?;
     exr::prelude::read()
         .no_deep_data()
         .largest_resolution_level()
@@ -253,6 +254,63 @@ fn read_exr_image(path: &Path) -> Result<ExrImage, FilmError> {
             path: path.to_path_buf(),
             error,
         })
+}
+
+/// How many times larger than its file an EXR's pixels may be. Deflate (ZIP, the
+/// compression splitray writes, and PXR24's last step) shrinks data at most 1032 times;
+/// the margin above that leaves room for the run-length stages of PIZ and DWA on images
+/// of one colour.
+const MAX_EXR_EXPANSION: u128 = 4096;
+
+/// Refuses, from its header, an EXR whose pixels no film could hold or its file could
+/// not encode: the decoder sizes its sample buffers by the header alone, so a corrupted
+/// data window or channel list would otherwise make it allocate gigabytes for a file of
+/// a few hundred bytes. Leaves `file` at its start.
+fn check_exr_size(file: &mut std::fs::File, path: &Path) -> Result<(), FilmError> {
+    let exr_error = |error| FilmError::Exr {
+        path: path.to_path_buf(),
+        error,
+    };
+    let file_len = file
+        .metadata()
+        .map_err(|e| FilmError::io(path, "read", e))?
+        .len();
+    let meta = exr::meta::MetaData::read_from_buffered(BufReader::new(&mut *file), false)
+        .map_err(exr_error)?;
+    file.rewind().map_err(|e| FilmError::io(path, "read", e))?;
+    let max_side = crate::scene::validate::MAX_FILM_DIM as usize;
+    let mut pixel_bytes: u128 = 0;
+    for header in &meta.headers {
+        let (width, height) = (header.layer_size.0, header.layer_size.1);
+        if width > max_side || height > max_side {
+            return Err(FilmError::invalid(
+                path,
+                format!(
+                    "its data window is {width}x{height} pixels, larger than any film \
+                     ({max_side}x{max_side}): the header is corrupted, or the image is not one \
+                     splitray can read"
+                ),
+            ));
+        }
+        let sample_bytes: usize = header
+            .channels
+            .list
+            .iter()
+            .map(|c| c.sample_type.bytes_per_sample())
+            .sum();
+        pixel_bytes += (width * height) as u128 * sample_bytes as u128;
+    }
+    if pixel_bytes > u128::from(file_len) * MAX_EXR_EXPANSION {
+        return Err(FilmError::invalid(
+            path,
+            format!(
+                "its header describes {pixel_bytes} bytes of pixels, more than \
+                 {MAX_EXR_EXPANSION} times the file's {file_len} bytes: the header is \
+                 corrupted or the file cut short"
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// The image's attributes and every layer's.

@@ -372,6 +372,35 @@ fn read_errors_name_the_path() {
     assert!(err.to_string().contains("garbage.exr"), "{err}");
 }
 
+/// The decoder sizes its buffers by the header: a data window corrupted past any film,
+/// or past what the file's bytes could encode, is refused from the header, naming the
+/// file, rather than allocated.
+#[test]
+fn an_exr_whose_header_describes_more_pixels_than_its_file_holds_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("window.exr");
+    write_exr(&path, &test_film(3, 2, true), &meta()).unwrap();
+    let bytes = std::fs::read(&path).unwrap();
+    let key = b"dataWindow\0box2i\0";
+    // After the name, the type and the 4-byte size: x_min, y_min, x_max, y_max.
+    let window = bytes.windows(key.len()).position(|w| w == key).unwrap() + key.len() + 4;
+    for (x_max, y_max, want) in [
+        (
+            0x3fff_fff0_i32,
+            1_i32,
+            "its data window is 1073741809x2 pixels, larger than any film (16384x16384)",
+        ),
+        (15_999, 15_999, "more than 4096 times the file's"),
+    ] {
+        let mut corrupted = bytes.clone();
+        corrupted[window + 8..window + 12].copy_from_slice(&x_max.to_le_bytes());
+        corrupted[window + 12..window + 16].copy_from_slice(&y_max.to_le_bytes());
+        std::fs::write(&path, &corrupted).unwrap();
+        let err = read_exr(&path).unwrap_err().to_string();
+        assert!(err.contains("window.exr") && err.contains(want), "{err}");
+    }
+}
+
 #[test]
 fn a_folder_in_the_way_is_refused_before_writing() {
     let dir = tempfile::tempdir().unwrap();
