@@ -47,14 +47,9 @@ pub fn run(args: &MergeArgs) -> anyhow::Result<()> {
         splitray::outln!("standard error: {mean_stderr:.4e} on average over pixels and channels");
     }
     if !merged.missing_shards.is_empty() {
-        let names: Vec<String> = merged
-            .missing_shards
-            .iter()
-            .map(|s| s.to_string())
-            .collect();
         splitray::errln!(
             "warning: no part is shard {}: the image holds fewer samples than its render asked for",
-            names.join(", ")
+            merged.missing_shards
         );
     } else {
         // Shards of renders of different lengths, say: valid, but not what one render

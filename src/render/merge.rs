@@ -8,6 +8,8 @@
 //! it is small against m²; a one-pass part has `Σ² = m²`). The parts' sums add up, and
 //! the merged image and its standard error are those of the summed film.
 
+use std::fmt;
+use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 use super::part::{self, PartRecord};
@@ -31,7 +33,39 @@ pub struct MergedImage {
     pub record: PartRecord,
     /// Shards of the parts' shard count that no part is (when all parts are shards of
     /// one count): the merged image is then valid but has fewer samples.
-    pub missing_shards: Vec<Shard>,
+    pub missing_shards: MissingShards,
+}
+
+/// Shards of one count that no part is, as runs of indices: a part may be one shard of
+/// billions (of a render of as many passes), and the runs are never more than the parts
+/// and one.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct MissingShards {
+    pub count: u32,
+    pub indices: Vec<Range<u32>>,
+}
+
+impl MissingShards {
+    pub fn is_empty(&self) -> bool {
+        self.indices.is_empty()
+    }
+}
+
+impl fmt::Display for MissingShards {
+    /// `1/4, 3/4`; a run of three or more as `4/9 to 7/9`.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let n = self.count;
+        let runs: Vec<String> = self
+            .indices
+            .iter()
+            .map(|r| match r.end - r.start {
+                1 => format!("{}/{n}", r.start),
+                2 => format!("{}/{n}, {}/{n}", r.start, r.start + 1),
+                _ => format!("{}/{n} to {}/{n}", r.start, r.end - 1),
+            })
+            .collect();
+        f.write_str(&runs.join(", "))
+    }
 }
 
 /// One part as read.
@@ -249,19 +283,29 @@ fn merged_metadata(parts: &[Part], sums: &FilmSums, record: &PartRecord) -> Rend
     }
 }
 
-fn missing_shards(parts: &[Part]) -> Vec<Shard> {
+fn missing_shards(parts: &[Part]) -> MissingShards {
     let shards: Option<Vec<Shard>> = parts.iter().map(|p| p.record.shard).collect();
-    let Some(shards) = shards else {
-        return Vec::new();
+    let Some(mut shards) = shards else {
+        return MissingShards::default();
     };
     let count = shards[0].count;
     if shards.iter().any(|s| s.count != count) {
-        return Vec::new();
+        return MissingShards::default();
     }
-    (0..count)
-        .map(|i| Shard { index: i, count })
-        .filter(|s| !shards.contains(s))
-        .collect()
+    shards.sort_by_key(|s| s.index);
+    // The gaps before, between and after the parts' indices.
+    let mut indices = Vec::new();
+    let mut next = 0;
+    for s in &shards {
+        if s.index > next {
+            indices.push(next..s.index);
+        }
+        next = next.max(s.index + 1);
+    }
+    if next < count {
+        indices.push(next..count);
+    }
+    MissingShards { count, indices }
 }
 
 fn bad(path: &Path, message: impl Into<String>) -> RenderError {
