@@ -400,7 +400,7 @@ fn a_shard_continues_only_its_own_block_of_passes() {
 }
 
 /// A checkpoint of a 3×2 film made on the CPU: the file format needs no device.
-fn small_checkpoint() -> Checkpoint {
+pub(crate) fn small_checkpoint() -> Checkpoint {
     let scene = builtin("cornell-box").unwrap();
     let mut sums = FilmSums::new(3, 2, 1, true);
     sums.add_pass(&[

@@ -31,6 +31,7 @@ mod display_tonemap;
 mod eye_kernels;
 mod far_from_origin;
 mod film_io;
+mod input_fuzz;
 mod integrator_interface;
 mod lvc_accumulate;
 mod lvc_analytic;
