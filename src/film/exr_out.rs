@@ -262,6 +262,11 @@ fn read_exr_image(path: &Path) -> Result<ExrImage, FilmError> {
 /// of one colour.
 const MAX_EXR_EXPANSION: u128 = 4096;
 
+/// Pixel bytes any EXR may describe whatever its file's size (a 2048² RGBA f32 image):
+/// a small image of one colour compressed past [`MAX_EXR_EXPANSION`] is read, and a
+/// corrupted header of a small file costs at most this much memory.
+const ALWAYS_READ_PIXEL_BYTES: u128 = 64 << 20;
+
 /// Refuses, from its header, an EXR whose pixels no film could hold or its file could
 /// not encode: the decoder sizes its sample buffers by the header alone, so a corrupted
 /// data window or channel list would otherwise make it allocate gigabytes for a file of
@@ -300,7 +305,7 @@ fn check_exr_size(file: &mut std::fs::File, path: &Path) -> Result<(), FilmError
             .sum();
         pixel_bytes += (width * height) as u128 * sample_bytes as u128;
     }
-    if pixel_bytes > u128::from(file_len) * MAX_EXR_EXPANSION {
+    if pixel_bytes > (u128::from(file_len) * MAX_EXR_EXPANSION).max(ALWAYS_READ_PIXEL_BYTES) {
         return Err(FilmError::invalid(
             path,
             format!(
