@@ -254,6 +254,12 @@ impl Checkpoint {
         }
         let header: CheckpointHeader = serde_json::from_slice(&bytes[header_start..data_start])
             .map_err(|e| bad(path, format!("has a corrupted header: {e}")))?;
+        if let Some(contradiction) = header_contradiction(&header) {
+            return Err(bad(
+                path,
+                format!("has a corrupted header: {contradiction}"),
+            ));
+        }
         let pixels = header.width as usize * header.height as usize;
         let planes = 1 + header.second_moments as usize;
         let expected = (planes * 24)
@@ -292,6 +298,43 @@ impl Checkpoint {
         };
         Ok(Self { header, sums })
     }
+}
+
+/// What in `header` no render could have saved, if anything: the checksum covers the
+/// header, so only a writer's bug or a hand-made file gets here, and resuming from it
+/// must fail at once rather than part way.
+fn header_contradiction(h: &CheckpointHeader) -> Option<String> {
+    let max = crate::scene::validate::MAX_FILM_DIM;
+    let film = (h.width, h.height);
+    if !(1..=max).contains(&h.width) || !(1..=max).contains(&h.height) {
+        return Some(format!(
+            "its film is {}x{}, outside 1..={max}",
+            film.0, film.1
+        ));
+    }
+    if film != (h.options.width, h.options.height) {
+        return Some(format!(
+            "its film is {}x{} but its options ask for {}x{}",
+            film.0, film.1, h.options.width, h.options.height
+        ));
+    }
+    if h.samples_per_pass == 0 {
+        return Some("its passes have no samples".into());
+    }
+    if h.first_pass.checked_add(h.passes).is_none() {
+        return Some(format!(
+            "its passes {} + {} run past the last pass number",
+            h.first_pass, h.passes
+        ));
+    }
+    if let Err(e) = Shard::new(h.shard.index, h.shard.count) {
+        return Some(e);
+    }
+    // (JSON has no NaN or infinity: serde refuses those as null before this.)
+    if !(h.render_time_s.is_finite() && h.render_time_s >= 0.0) {
+        return Some(format!("its render time is {} s", h.render_time_s));
+    }
+    None
 }
 
 fn bad(path: &Path, message: impl Into<String>) -> RenderError {

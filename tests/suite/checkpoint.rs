@@ -411,7 +411,8 @@ pub(crate) fn small_checkpoint() -> Checkpoint {
         [2.0; 3],
         [3.0; 3],
     ]);
-    let opts = common::small_render_options(&scene, IntegratorKind::Pt, 4);
+    let mut opts = common::small_render_options(&scene, IntegratorKind::Pt, 4);
+    (opts.width, opts.height) = (3, 2);
     Checkpoint {
         header: CheckpointHeader {
             software: "splitray test".into(),
@@ -516,4 +517,39 @@ fn a_failed_periodic_checkpoint_lets_the_render_go_on() {
     // included.
     assert_eq!(offered, [1, 2, 3, 4]);
     common::assert_clean(&gpu);
+}
+
+/// A header no render could have saved, under a checksum that matches (a writer's bug
+/// or a hand-made file), is refused when read, naming the file and the contradiction.
+#[test]
+fn a_checkpoint_whose_header_contradicts_itself_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("odd.ckpt");
+    type Edit = fn(&mut CheckpointHeader);
+    let cases: [(Edit, &str); 5] = [
+        (
+            |h| h.options.width = 4,
+            "its film is 3x2 but its options ask for 4x2",
+        ),
+        (|h| h.samples_per_pass = 0, "its passes have no samples"),
+        (
+            |h| (h.first_pass, h.passes) = (u32::MAX, 1),
+            "run past the last pass number",
+        ),
+        (|h| h.shard = Shard { index: 2, count: 2 }, "shard 2/2"),
+        (|h| h.render_time_s = -1.0, "its render time is -1 s"),
+    ];
+    let good = small_checkpoint();
+    good.write(AtomicFile::create(&path).unwrap()).unwrap();
+    assert_eq!(Checkpoint::read(&path).unwrap(), good);
+    for (edit, want) in cases {
+        let mut odd = small_checkpoint();
+        edit(&mut odd.header);
+        odd.write(AtomicFile::create(&path).unwrap()).unwrap();
+        let err = Checkpoint::read(&path).unwrap_err().to_string();
+        assert!(
+            err.contains("odd.ckpt") && err.contains("corrupted header") && err.contains(want),
+            "{err}"
+        );
+    }
 }
