@@ -2,6 +2,8 @@
 //! non-delta BSDF over a spread of parameters, sample/eval/pdf consistency,
 //! reciprocity, and white-furnace energy checks.
 
+use crate::common::SplitMix64 as Rng;
+
 use glam::Vec3;
 use rayon::prelude::*;
 use splitray::bsdf::chi2::{self, Chi2Settings};
@@ -9,20 +11,13 @@ use splitray::bsdf::microfacet::blinn_phong_exponent;
 use splitray::bsdf::sampling::spherical_direction;
 use splitray::bsdf::{Bsdf, BsdfParams, Distribution, TransportMode};
 
-/// SplitMix64 → uniform f32 in [0, 1) with 24 bits.
-struct Rng(u64);
+/// The draws these tests take besides uniforms.
+trait Draws {
+    fn u3(&mut self) -> [f32; 3];
+    fn sphere(&mut self) -> Vec3;
+}
 
-impl Rng {
-    fn next_u32(&mut self) -> u32 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        (z ^ (z >> 31)) as u32
-    }
-    fn uniform(&mut self) -> f32 {
-        (self.next_u32() >> 8) as f32 / (1u32 << 24) as f32
-    }
+impl Draws for Rng {
     fn u3(&mut self) -> [f32; 3] {
         [self.uniform(), self.uniform(), self.uniform()]
     }

@@ -27,6 +27,8 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::Mutex;
 
+use crate::common::SplitMix64 as Rng;
+
 use sha2::{Digest, Sha256};
 use splitray::film::{write_exr, AtomicFile, Film, RenderMetadata};
 use splitray::render::checkpoint::SIGNATURE;
@@ -47,24 +49,19 @@ const CHILD: &str = "SPLITRAY_INPUT_FUZZ_CHILD";
 // ---------------------------------------------------------------------------------
 // The generator and the mutations.
 
-/// SplitMix64: small, fast and fixed, so the cases are the same on every machine.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-
+/// The choices the mutations make.
+trait Choose {
     /// Uniform in `0..n` (0 for an empty range).
+    fn below(&mut self, n: usize) -> usize;
+    fn pick<T: Copy>(&mut self, items: &[T]) -> T;
+}
+
+impl Choose for Rng {
     fn below(&mut self, n: usize) -> usize {
         if n == 0 {
             0
         } else {
-            (self.next() % n as u64) as usize
+            (self.next_u64() % n as u64) as usize
         }
     }
 
@@ -462,11 +459,13 @@ fn binary_mutation(rng: &mut Rng, input: &[u8], fields: &[usize]) -> Mutation {
         },
         1 => Mutation::SetByte {
             at: rng.below(len),
-            byte: rng.next() as u8,
+            byte: rng.next_u64() as u8,
         },
         2 => Mutation::Insert {
             at: rng.below(len + 1),
-            bytes: (0..1 + rng.below(8)).map(|_| rng.next() as u8).collect(),
+            bytes: (0..1 + rng.below(8))
+                .map(|_| rng.next_u64() as u8)
+                .collect(),
         },
         3 => Mutation::Delete {
             at: rng.below(len),

@@ -121,18 +121,34 @@ pub fn segment_tunings(gpu: &Gpu) -> Vec<(u32, splitray::primitives::Tuning)> {
     .collect()
 }
 
-/// Deterministic pseudo-random u32s (SplitMix64) for test data.
+/// SplitMix64: the tests' deterministic pseudo-random numbers, the same on every
+/// machine.
+pub struct SplitMix64(pub u64);
+
+impl SplitMix64 {
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+
+    /// The low 32 bits of [`SplitMix64::next_u64`].
+    pub fn next_u32(&mut self) -> u32 {
+        self.next_u64() as u32
+    }
+
+    /// Uniform in [0, 1) with 24 bits.
+    pub fn uniform(&mut self) -> f32 {
+        (self.next_u32() >> 8) as f32 / (1u32 << 24) as f32
+    }
+}
+
+/// Deterministic pseudo-random u32s ([`SplitMix64`]) for test data.
 pub fn random_u32s(n: usize, seed: u64) -> Vec<u32> {
-    let mut state = seed;
-    (0..n)
-        .map(|_| {
-            state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-            let mut z = state;
-            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-            (z ^ (z >> 31)) as u32
-        })
-        .collect()
+    let mut rng = SplitMix64(seed);
+    (0..n).map(|_| rng.next_u32()).collect()
 }
 
 /// Uniform floats in [0, 1) from [`random_u32s`].
