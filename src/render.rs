@@ -23,6 +23,7 @@ use crate::integrator::{
     self, aov, EyeInputs, EyeIntegrator, EyeOptions, GpuMaterial, Integrator, IntegratorError,
     IntegratorKind, IntegratorStats, NamedImage,
 };
+use crate::scene::validate::{is_film_side, MAX_FILM_DIM};
 use crate::scene::{CameraFrame, Scene, SceneError};
 use crate::trace::{GpuTriangle, Tracer, TracerKind};
 use crate::vk::{self, Gpu, KernelTime, ProfileTree};
@@ -137,13 +138,9 @@ impl RenderOptions {
             lvc: Default::default(),
             cbpt: Default::default(),
         };
-        if options.width == 0
-            || options.height == 0
-            || options.width > 16384
-            || options.height > 16384
-        {
+        if !is_film_side(options.width) || !is_film_side(options.height) {
             return Err(RenderError::Options(format!(
-                "film size {}x{} is outside 1..=16384",
+                "film size {}x{} is outside 1..={MAX_FILM_DIM}",
                 options.width, options.height
             )));
         }
@@ -768,7 +765,8 @@ fn run_passes(
         // limit. The first pass always finishes: an image needs one.
         let film_has_a_pass = passes > 0;
         let abandon = || {
-            (control.abandon)() || (film_has_a_pass && past_time_limit(options.time_limit, start))
+            (control.abandon)()
+                || (film_has_a_pass && past(options.time_limit, start.elapsed().as_secs_f64()))
         };
         let done;
         (done, batch) = render_batch(integrator, (next, count), &abandon, || {
@@ -777,7 +775,7 @@ fn run_passes(
         next += done;
         passes += done;
         let elapsed_s = start.elapsed().as_secs_f64();
-        let out_of_time = options.time_limit.is_some_and(|t| elapsed_s >= t);
+        let out_of_time = past(options.time_limit, elapsed_s);
         if done < count {
             // A pass given up: the film holds the passes before it.
             if !out_of_time {
@@ -848,9 +846,9 @@ fn render_batch(
     Ok((done, next))
 }
 
-/// Whether the time limit of the render begun at `start` has passed.
-fn past_time_limit(time_limit: Option<f64>, start: Instant) -> bool {
-    time_limit.is_some_and(|t| start.elapsed().as_secs_f64() >= t)
+/// Whether a render `elapsed_s` seconds in has reached its time limit.
+fn past(time_limit: Option<f64>, elapsed_s: f64) -> bool {
+    time_limit.is_some_and(|t| elapsed_s >= t)
 }
 
 /// The most seconds the next batch may last: what the time limit leaves of the render

@@ -304,11 +304,11 @@ impl Checkpoint {
 /// header, so only a writer's bug or a hand-made file gets here, and resuming from it
 /// must fail at once rather than part way.
 fn header_contradiction(h: &CheckpointHeader) -> Option<String> {
-    let max = crate::scene::validate::MAX_FILM_DIM;
+    use crate::scene::validate::{is_film_side, MAX_FILM_DIM};
     let film = (h.width, h.height);
-    if !(1..=max).contains(&h.width) || !(1..=max).contains(&h.height) {
+    if !is_film_side(h.width) || !is_film_side(h.height) {
         return Some(format!(
-            "its film is {}x{}, outside 1..={max}",
+            "its film is {}x{}, outside 1..={MAX_FILM_DIM}",
             film.0, film.1
         ));
     }

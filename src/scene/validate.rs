@@ -70,10 +70,15 @@ pub fn validate_camera(camera: &Camera, at: &Location) -> Result<(), SceneError>
     Ok(())
 }
 
+/// Whether `pixels` is a film side splitray renders: 1 ..= [`MAX_FILM_DIM`].
+pub fn is_film_side(pixels: u32) -> bool {
+    (1..=MAX_FILM_DIM).contains(&pixels)
+}
+
 /// 1 ≤ width, height ≤ [`MAX_FILM_DIM`].
 pub fn validate_film(film: &FilmSize, at: &Location) -> Result<(), SceneError> {
     for (what, v) in [("width", film.width), ("height", film.height)] {
-        if v == 0 || v > MAX_FILM_DIM {
+        if !is_film_side(v) {
             return Err(SceneError::Film {
                 at: at.clone(),
                 message: format!("{what} {v} is outside 1..={MAX_FILM_DIM}"),
