@@ -521,11 +521,7 @@ pub fn load(spec: &str) -> Result<Scene, SceneError> {
         .map(str::to_ascii_lowercase);
     match ext.as_deref() {
         Some("toml") => toml_file::load_toml(path),
-        Some("obj") => obj::load_obj_scene(path).map(|scene| {
-            let mut scene = AnimatedScene::from(scene);
-            recentre::recentre(&mut scene);
-            scene.scene
-        }),
+        Some("obj") => obj::load_obj_scene(path),
         _ => {
             let names: Vec<&str> = builtin_names().iter().map(|(n, _)| *n).collect();
             Err(SceneError::BadSpec {

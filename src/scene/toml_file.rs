@@ -100,13 +100,14 @@
 
 use std::path::Path;
 
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 use serde::Deserialize;
 use toml::Spanned;
 
 use super::animation::toml::{CameraToml, MeshToml};
 use super::animation::{AnimatedScene, Animation, Keyframes};
 use super::obj::read_text;
+use super::recentre::{self, Anchored};
 use super::{
     framing_camera, validate, BsdfKind, Camera, FilmSize, Location, Material, MaterialBsdf,
     MaterialLayer, MicrofacetModel, PointLight, RenderSettings, Scene, SceneError, Triangle,
@@ -439,16 +440,21 @@ const DEFAULT_IOR: f32 = 1.5;
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct PointLightToml {
-    position: Spanned<[f32; 3]>,
+    /// Read in f64 and moved with the scene before it is rounded ([`recentre::to_scene`]).
+    position: Spanned<[f64; 3]>,
     intensity: Spanned<[f32; 3]>,
 }
 
-/// The `[[point_light]]` tables, each checked as `validate_scene` checks a light, so that
-/// a bad value is reported at its line.
-fn point_lights(tables: &[PointLightToml], at: &Loc) -> Result<Vec<PointLight>, SceneError> {
+/// The `[[point_light]]` tables, moved by −`offset` (the scene's), each checked as
+/// `validate_scene` checks a light, so that a bad value is reported at its line.
+fn point_lights(
+    tables: &[PointLightToml],
+    offset: Option<DVec3>,
+    at: &Loc,
+) -> Result<Vec<PointLight>, SceneError> {
     let mut lights = Vec::with_capacity(tables.len());
     for (i, l) in tables.iter().enumerate() {
-        let position = Vec3::from(*l.position.get_ref());
+        let position = recentre::to_scene(*l.position.get_ref(), offset);
         let intensity = Vec3::from(*l.intensity.get_ref());
         let (at_position, at_intensity) = (at(l.position.span()), at(l.intensity.span()));
         validate::check_finite(position, &at_position, || {
@@ -529,12 +535,16 @@ pub fn parse_toml_animated(
         mut materials,
         mut animation,
         overrides,
+        anchored,
     } = load_meshes(&doc.mesh, dir, &at_span)?;
     apply_material_tables(&doc.material, &mut materials, &at_span)?;
     apply_mesh_materials(&overrides, &materials, &mut triangles, &at_span)?;
+    let name = doc.name.unwrap_or_else(|| default_name.to_string());
+    // Far from the origin, everything is moved before it is rounded to f32 (`recentre`).
+    let offset = recentre::place_soup(&name, &mut triangles, &anchored);
 
     let mut scene = Scene {
-        name: doc.name.unwrap_or_else(|| default_name.to_string()),
+        name,
         camera: Camera {
             position: Vec3::ZERO,
             look_at: Vec3::NEG_Z,
@@ -544,7 +554,7 @@ pub fn parse_toml_animated(
         film: FilmSize::default(),
         triangles,
         materials,
-        point_lights: point_lights(&doc.point_light, &at_span)?,
+        point_lights: point_lights(&doc.point_light, offset, &at_span)?,
         settings: match doc.render {
             Some(r) => render_settings(r, &at_span)?,
             None => RenderSettings::default(),
@@ -565,10 +575,12 @@ pub fn parse_toml_animated(
     if let Some(f) = &doc.film {
         scene.film = film_size(f, &at_span)?;
     }
-    animation.camera = place_camera(doc.camera.as_ref(), &mut scene, (&at_span, &whole))?;
+    animation.camera = place_camera(doc.camera.as_ref(), offset, &mut scene, (&at_span, &whole))?;
     validate::validate_scene(&scene, &whole)?;
     let mut animated = AnimatedScene { scene, animation };
-    super::recentre::recentre(&mut animated);
+    if let Some(offset) = offset {
+        recentre::shift_motions(&mut animated, offset);
+    }
     Ok(animated)
 }
 
@@ -589,17 +601,18 @@ fn film_size(film: &FilmToml, at: &Loc) -> Result<FilmSize, SceneError> {
     Ok(size)
 }
 
-/// Sets the scene's camera: the `[camera]` table's, else one framing the geometry (where
-/// its bounds are finite; `validate_scene` reports them where not). Returns the camera's
-/// keyframes.
+/// Sets the scene's camera: the `[camera]` table's (moved by −`offset`, the scene's),
+/// else one framing the geometry (where its bounds are finite; `validate_scene` reports
+/// them where not). Returns the camera's keyframes.
 fn place_camera(
     camera: Option<&CameraToml>,
+    offset: Option<DVec3>,
     scene: &mut Scene,
     (at, file): (&Loc, &Location),
 ) -> Result<Option<Keyframes<Camera>>, SceneError> {
     match camera {
         Some(c) => {
-            let (camera, keys) = c.resolve(at, file)?;
+            let (camera, keys) = c.resolve(at, file, offset)?;
             scene.camera = camera;
             Ok(keys)
         }
@@ -621,6 +634,8 @@ struct Meshes<'d> {
     /// (first triangle, end, material name) for per-mesh overrides, resolved once every
     /// material is known.
     overrides: Vec<(usize, usize, &'d Spanned<String>)>,
+    /// The still meshes whose positions are relative to an anchor of their own.
+    anchored: Vec<Anchored>,
 }
 
 /// Loads every mesh, its triangles indexing the materials of all meshes.
@@ -629,6 +644,7 @@ fn load_meshes<'d>(meshes: &'d [MeshToml], dir: &Path, at: &Loc) -> Result<Meshe
     let mut materials: Vec<Material> = Vec::new();
     let mut animation = Animation::default();
     let mut overrides = Vec::new();
+    let mut anchored = Vec::new();
     for mesh in meshes {
         let loaded = mesh.load(dir, at)?;
         let offset = materials.len() as u32;
@@ -638,6 +654,12 @@ fn load_meshes<'d>(meshes: &'d [MeshToml], dir: &Path, at: &Loc) -> Result<Meshe
             t.material += offset;
             t
         }));
+        if loaded.mesh.origin != DVec3::ZERO {
+            anchored.push(Anchored {
+                range: start..triangles.len(),
+                anchor: loaded.mesh.origin,
+            });
+        }
         if let Some(mut motion) = loaded.motion {
             motion.range = start..triangles.len();
             animation.meshes.push(motion);
@@ -651,6 +673,7 @@ fn load_meshes<'d>(meshes: &'d [MeshToml], dir: &Path, at: &Loc) -> Result<Meshe
         materials,
         animation,
         overrides,
+        anchored,
     })
 }
 

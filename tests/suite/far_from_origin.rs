@@ -70,7 +70,9 @@ const ROOM_MTL: &str = "newmtl white\nKd 0.7 0.7 0.7\nnewmtl red\nKd 0.6 0.1 0.1
                         newmtl lamp\nKd 0 0 0\nKe 10 10 10\n";
 
 /// The room's scene file with everything translated by `at`, and `extra` TOML after it.
-fn room_toml(dir: &Path, name: &str, at: [f32; 3], extra: &str) -> PathBuf {
+/// Its numbers are written as f64s (as splitray reads them), so that each is the exact
+/// sum.
+fn room_toml(dir: &Path, name: &str, at: [f64; 3], extra: &str) -> PathBuf {
     std::fs::write(dir.join("room.obj"), room_obj()).unwrap();
     std::fs::write(dir.join("room.mtl"), ROOM_MTL).unwrap();
     let [x, y, z] = at;
@@ -87,7 +89,7 @@ fn room_toml(dir: &Path, name: &str, at: [f32; 3], extra: &str) -> PathBuf {
     path
 }
 
-const FAR: [f32; 3] = [1e5, -1e5, 2e5];
+const FAR: [f64; 3] = [1e5, -1e5, 2e5];
 
 fn load(path: &Path) -> AnimatedScene {
     scene::load_animated(path.to_str().unwrap()).unwrap()
@@ -160,4 +162,110 @@ fn what_moves_far_from_the_origin_moves_as_at_the_origin() {
         assert!((b.camera.position - (a.camera.position + d)).length() < 1e-6);
         assert_eq!(b.camera.fov_y, a.camera.fov_y);
     }
+}
+
+/// Survey coordinates: an easting and a northing, where f32 steps are 1/16 and 1/2.
+const SURVEY: [f64; 3] = [500_000.3, 5_000_000.7, -0.1];
+
+/// The room's OBJ text scaled by 0.3 (coordinates like 0.075 that no float holds
+/// exactly) and moved by `at`, each coordinate written as the f64 decimal nearest its
+/// exact value.
+fn scaled_room_obj(at: [f64; 3]) -> String {
+    let mut out = String::new();
+    for line in room_obj().lines() {
+        match line.strip_prefix("v ") {
+            Some(xyz) => {
+                let mut v = xyz.split(' ').map(|c| c.parse::<f64>().unwrap());
+                let [x, y, z] = [(); 3].map(|_| v.next().unwrap());
+                let [ax, ay, az] = at;
+                let (x, y, z) = (0.3 * x + ax, 0.3 * y + ay, 0.3 * z + az);
+                out.push_str(&format!("v {x} {y} {z}\n"));
+            }
+            None => out.push_str(&format!("{line}\n")),
+        }
+    }
+    out
+}
+
+/// Writes the scaled room at `at` as `name`.obj beside its MTL; returns its path.
+fn write_scaled_room(dir: &Path, name: &str, at: [f64; 3]) -> PathBuf {
+    std::fs::write(dir.join("room.mtl"), ROOM_MTL).unwrap();
+    let path = dir.join(format!("{name}.obj"));
+    std::fs::write(&path, scaled_room_obj(at)).unwrap();
+    path
+}
+
+/// Every vertex of `far` is the vertex of `near` moved by one offset, to a few float
+/// steps of the room's own size; returns the offset.
+fn moved_by_about_one_offset(near: &Scene, far: &Scene) -> Vec3 {
+    let d = far.triangles[0].p[0] - near.triangles[0].p[0];
+    for (a, b) in near.triangles.iter().zip(&far.triangles) {
+        for (pa, pb) in a.p.iter().zip(&b.p) {
+            let error = (*pb - (*pa + d)).abs().max_element();
+            assert!(error < 1e-6, "{pb} is not {pa} + {d}: {error}");
+        }
+    }
+    d
+}
+
+#[test]
+fn an_obj_in_survey_coordinates_keeps_its_shape() {
+    let dir = tempfile::tempdir().unwrap();
+    let near_path = write_scaled_room(dir.path(), "near", [0.0; 3]);
+    let far_path = write_scaled_room(dir.path(), "far", SURVEY);
+    let near = scene::load(near_path.to_str().unwrap()).unwrap();
+    let far = scene::load(far_path.to_str().unwrap()).unwrap();
+    // Read in f32, the file's 0.3-unit steps would land on a grid of 1/2 along y.
+    let d = moved_by_about_one_offset(&near, &far);
+    assert!(d.abs().max_element() <= 0.3, "{d}");
+    let camera_d = far.camera.position - near.camera.position;
+    assert!(
+        (camera_d - d).abs().max_element() < 1e-5,
+        "{camera_d} vs {d}"
+    );
+}
+
+/// The scaled room at the origin in a TOML scene, moved by a transform, with a camera and
+/// a point light at `at` + their near places, each written in the file as an f64.
+fn scaled_room_toml(dir: &Path, name: &str, at: [f64; 3]) -> PathBuf {
+    write_scaled_room(dir, "room", [0.0; 3]);
+    let [x, y, z] = at;
+    let text = format!(
+        "[camera]\nposition = [{x}, {}, {}]\nlook_at = [{x}, {}, {z}]\nfov_y = 40\n\
+         [film]\nwidth = 16\nheight = 16\n\
+         [[point_light]]\nposition = [{}, {}, {z}]\nintensity = [0.2, 0.2, 0.2]\n\
+         [[mesh]]\npath = \"room.obj\"\ntransform = {{ translate = [{x}, {y}, {z}] }}\n",
+        y + 0.3,
+        z - 1.0125,
+        y + 0.3,
+        x + 0.15,
+        y + 0.45,
+    );
+    let path = dir.join(name);
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+#[test]
+fn a_room_placed_at_survey_coordinates_renders_as_at_the_origin() {
+    let dir = tempfile::tempdir().unwrap();
+    let near = load(&scaled_room_toml(dir.path(), "near.toml", [0.0; 3])).scene;
+    let far = load(&scaled_room_toml(dir.path(), "far.toml", SURVEY)).scene;
+    let d = moved_by_about_one_offset(&near, &far);
+    assert!(d.abs().max_element() <= 0.3, "{d}");
+    let moved = |a: Vec3, b: Vec3| (b - (a + d)).abs().max_element() < 1e-6;
+    assert!(moved(near.camera.position, far.camera.position));
+    assert!(moved(near.camera.look_at, far.camera.look_at));
+    let light = |s: &Scene| s.point_lights[0].position;
+    assert!(
+        moved(light(&near), light(&far)),
+        "{} {}",
+        light(&near),
+        light(&far)
+    );
+
+    let (a, a_se) = bpt_image(&near);
+    let (b, b_se) = bpt_image(&far);
+    common::reference::compare_images("the room at the origin", 16, (&b, &b_se), (&a, &a_se))
+        .assert_agrees("the room at survey coordinates");
 }

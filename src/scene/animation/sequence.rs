@@ -173,7 +173,8 @@ pub fn load_sequence(
     let mut shapes = Vec::with_capacity((last - first) as usize + 1);
     for n in first..=last {
         let name = pattern.file(n);
-        let mesh = load_obj_mesh(&dir.join(&name))?;
+        // Posed in f32 at every frame: positions from the origin, as the file gives them.
+        let mesh = load_obj_mesh(&dir.join(&name))?.into_absolute();
         let shape = shape_of(&mesh.triangles);
         if let Some(m) = &first_mesh {
             check_same_topology(m, &mesh, (&first_name, &name)).map_err(&invalid)?;

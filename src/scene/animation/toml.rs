@@ -4,13 +4,14 @@
 use std::ops::Range;
 use std::path::Path;
 
-use glam::{Quat, Vec3};
+use glam::{DVec3, Quat, Vec3};
 use serde::Deserialize;
 use toml::Spanned;
 
 use super::sequence::{load_sequence, SequencePattern};
 use super::{pose_keyed, Keyframes, MeshMotion, Motion, Transform};
 use crate::scene::obj::{check_referenced_file, load_obj_mesh, ObjMesh};
+use crate::scene::recentre::to_scene;
 use crate::scene::{validate, Camera, Location, SceneError};
 
 /// Maps a byte range of the scene file to its place (file:line:col).
@@ -32,7 +33,8 @@ pub struct MeshToml {
 struct TransformToml {
     scale: Option<Scale>,
     rotate: Option<RotationToml>,
-    translate: Option<[f32; 3]>,
+    /// Read in f64: a still mesh is placed at it exactly ([`MeshToml::load`]).
+    translate: Option<[f64; 3]>,
 }
 
 #[derive(Deserialize)]
@@ -57,7 +59,7 @@ struct KeyframeToml {
     time: f32,
     scale: Option<Scale>,
     rotate: Option<RotationToml>,
-    translate: Option<[f32; 3]>,
+    translate: Option<[f64; 3]>,
 }
 
 #[derive(Deserialize)]
@@ -74,8 +76,10 @@ struct SequenceToml {
 // `[[camera.keyframe]]` headers is an implicit table, and toml has no span for it
 // (a `Spanned` table then fails to deserialize).
 pub struct CameraToml {
-    position: Option<Spanned<[f32; 3]>>,
-    look_at: Option<Spanned<[f32; 3]>>,
+    /// Positions are read in f64 and moved with the scene before they are rounded
+    /// ([`to_scene`]).
+    position: Option<Spanned<[f64; 3]>>,
+    look_at: Option<Spanned<[f64; 3]>>,
     up: Option<Spanned<[f32; 3]>>,
     fov_y: Option<Spanned<f32>>,
     #[serde(default)]
@@ -86,8 +90,8 @@ pub struct CameraToml {
 #[serde(deny_unknown_fields)]
 struct CameraKeyToml {
     time: f32,
-    position: Option<[f32; 3]>,
-    look_at: Option<[f32; 3]>,
+    position: Option<[f64; 3]>,
+    look_at: Option<[f64; 3]>,
     up: Option<[f32; 3]>,
     fov_y: Option<f32>,
 }
@@ -95,6 +99,9 @@ struct CameraKeyToml {
 /// A `[[mesh]]` entry loaded: its triangles posed at time 0 and its materials (indices
 /// local to the mesh), and how it moves (`range` still to be set by the caller).
 pub struct LoadedMesh {
+    /// Positions relative to `mesh.origin`: a still mesh's anchor (its file's origin
+    /// under its transform, with the translation, in f64) with its rotation and scale
+    /// applied; a moving mesh's origin is zero.
     pub mesh: ObjMesh,
     pub motion: Option<MeshMotion>,
 }
@@ -105,14 +112,14 @@ pub struct LoadedMesh {
 fn transform_of(
     scale: Option<&Scale>,
     rotate: Option<&RotationToml>,
-    translate: Option<[f32; 3]>,
+    translate: Option<[f64; 3]>,
 ) -> Result<Transform, String> {
     let scale = match scale {
         None => Vec3::ONE,
         Some(Scale::Uniform(s)) => Vec3::splat(*s),
         Some(Scale::PerAxis(s)) => Vec3::from(*s),
     };
-    let translate = translate.map_or(Vec3::ZERO, Vec3::from);
+    let translate = translate.map_or(Vec3::ZERO, |t| DVec3::from(t).as_vec3());
     if !scale.is_finite() || scale.cmpeq(Vec3::ZERO).any() || !translate.is_finite() {
         return Err(format!(
             "scale {scale} must be finite and non-zero, translate {translate} finite"
@@ -224,16 +231,22 @@ impl MeshToml {
             }
         };
         let keys = self.keys(&invalid)?;
+        if keys.is_none() && sequence.is_none() {
+            return Ok(LoadedMesh {
+                mesh: self.placed_still(mesh, base.as_ref()),
+                motion: None,
+            });
+        }
 
+        let mesh = mesh.into_absolute();
         let rest = mesh.triangles;
         let mut triangles = rest.clone();
         let key0 = keys.as_ref().map(|k| k.sample(0.0));
         let file0 = sequence.as_ref().map(|s| (s, s.segment(0.0)));
         pose_keyed(&rest, file0, base.as_ref(), key0.as_ref(), &mut triangles);
-        let moves = keys.is_some() || sequence.is_some();
         Ok(LoadedMesh {
             mesh: ObjMesh { triangles, ..mesh },
-            motion: moves.then(|| MeshMotion {
+            motion: Some(MeshMotion {
                 name: rel.clone(),
                 range: 0..0,
                 motion: Motion::Keyed {
@@ -244,6 +257,36 @@ impl MeshToml {
                 },
             }),
         })
+    }
+
+    /// A still mesh under its `base` transform: its positions rotated and scaled (in
+    /// f32, as [`pose_keyed`] does, so that near the origin they are the posed ones, bit
+    /// for bit, once the translation is added), its origin the f64 anchor they are
+    /// relative to: the file's origin transformed, plus the translation read in f64.
+    fn placed_still(&self, mesh: ObjMesh, base: Option<&Transform>) -> ObjMesh {
+        let Some(base) = base else {
+            return mesh;
+        };
+        let linear = Transform {
+            translate: Vec3::ZERO,
+            ..*base
+        };
+        let mut triangles = mesh.triangles.clone();
+        pose_keyed(&mesh.triangles, None, Some(&linear), None, &mut triangles);
+        let mut origin = mesh.origin * base.scale.as_dvec3();
+        if base.rotate != Quat::IDENTITY {
+            origin = base.rotate.as_dquat() * origin;
+        }
+        let translate = self
+            .transform
+            .as_ref()
+            .and_then(|t| t.get_ref().translate)
+            .map_or(DVec3::ZERO, DVec3::from);
+        ObjMesh {
+            triangles,
+            origin: origin + translate,
+            ..mesh
+        }
     }
 
     /// The `[[mesh.keyframe]]` track: times increasing, and every key's scale with the
@@ -292,10 +335,12 @@ impl CameraToml {
     /// fields are the defaults of every key; without keys it must give position, look_at
     /// and fov_y (up defaults to +y). Every key's camera is validated. `[camera]`'s own
     /// errors are placed at its first field, or at `file` where it has none.
+    /// Positions are moved by −`offset`, the scene's ([`crate::scene::recentre`]).
     pub fn resolve(
         &self,
         at: &At,
         file: &Location,
+        offset: Option<DVec3>,
     ) -> Result<(Camera, Option<Keyframes<Camera>>), SceneError> {
         let first_field = [
             self.position.as_ref().map(Spanned::span),
@@ -312,8 +357,8 @@ impl CameraToml {
         let up = self.up.as_ref().map(|v| *v.get_ref());
         let fov_y = self.fov_y.as_ref().map(|v| *v.get_ref());
         let err = |at: Location, message: String| SceneError::Camera { at, message };
-        let complete = |position: Option<[f32; 3]>,
-                        look_at: Option<[f32; 3]>,
+        let complete = |position: Option<[f64; 3]>,
+                        look_at: Option<[f64; 3]>,
                         up: Option<[f32; 3]>,
                         fov_y: Option<f32>,
                         at: &Location,
@@ -326,8 +371,8 @@ impl CameraToml {
                 )
             };
             let camera = Camera {
-                position: position.ok_or_else(|| missing("position"))?.into(),
-                look_at: look_at.ok_or_else(|| missing("look_at"))?.into(),
+                position: to_scene(position.ok_or_else(|| missing("position"))?, offset),
+                look_at: to_scene(look_at.ok_or_else(|| missing("look_at"))?, offset),
                 up: up.map_or(Vec3::Y, Vec3::from),
                 fov_y: fov_y.ok_or_else(|| missing("fov_y"))?,
             };

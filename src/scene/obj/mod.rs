@@ -20,8 +20,9 @@ use std::collections::HashMap;
 use std::fmt::Write as _;
 use std::path::Path;
 
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 
+use super::recentre::{self, Anchored};
 use super::{
     framing_camera, validate, FilmSize, Location, Material, RenderSettings, Scene, SceneError,
     Triangle,
@@ -39,11 +40,31 @@ pub const DEFAULT_MATERIAL_NAME: &str = "obj-default";
 /// Triangles of one OBJ file and the materials they index (local indices).
 #[derive(Clone, Debug, Default)]
 pub struct ObjMesh {
+    /// Positions relative to [`Self::origin`].
     pub triangles: Vec<Triangle>,
     pub materials: Vec<Material>,
     /// How the file's faces join its vertices, as a hash: two files with the same faces
     /// (over vertices at any positions, listed in any order) have the same value.
     pub connectivity: u64,
+    /// Where the triangles' positions are measured from: the centre of the file's
+    /// bounds, read in f64, when the file lies far from the origin for its size
+    /// ([`recentre::offset_for`]), else zero. So a file at 5·10⁶ keeps the precision of
+    /// its positions, which f32 would round to steps of 0.5 there.
+    pub origin: DVec3,
+}
+
+impl ObjMesh {
+    /// The mesh with its positions measured from the origin, rounded to f32 as the file
+    /// would be read in f32 (a moving mesh's, which is posed in f32 at every frame).
+    pub fn into_absolute(mut self) -> Self {
+        if self.origin != DVec3::ZERO {
+            for t in &mut self.triangles {
+                t.p = t.p.map(|p| (self.origin + p.as_dvec3()).as_vec3());
+            }
+            self.origin = DVec3::ZERO;
+        }
+        self
+    }
 }
 
 /// The text of a scene, OBJ or MTL file, without the byte-order mark some editors write
@@ -149,7 +170,8 @@ fn label(path: &Path) -> String {
 }
 
 /// Loads an `.obj` file as a whole scene: its triangles and materials, a camera framing
-/// its bounding box ([`framing_camera`]) and a 512×512 film.
+/// its bounding box ([`framing_camera`]) and a 512×512 film; moved to the origin when
+/// it lies far from it ([`recentre`]).
 pub fn load_obj_scene(path: &Path) -> Result<Scene, SceneError> {
     let mesh = load_obj_mesh(path)?;
     let at = Location::file(label(path));
@@ -171,6 +193,11 @@ pub fn load_obj_scene(path: &Path) -> Result<Scene, SceneError> {
         point_lights: Vec::new(),
         settings: RenderSettings::default(),
     };
+    let whole = Anchored {
+        range: 0..scene.triangles.len(),
+        anchor: mesh.origin,
+    };
+    recentre::place_soup(&scene.name, &mut scene.triangles, &[whole]);
     // The pre-scan has rejected non-finite vertices, so the bounds are finite.
     scene.camera = framing_camera(&scene.bounds());
     validate::validate_scene(&scene, &at)?;
@@ -191,6 +218,7 @@ pub fn load_obj_mesh(path: &Path) -> Result<ObjMesh, SceneError> {
         triangles: Vec::new(),
         materials: tobj_materials.iter().map(convert_material).collect(),
         connectivity: scan.connectivity,
+        origin: file_origin(&models),
     };
     warn_of_unknown_materials(&scan, &out.materials, &file);
     let mut default_index: Option<u32> = None;
@@ -202,9 +230,22 @@ pub fn load_obj_mesh(path: &Path) -> Result<ObjMesh, SceneError> {
                 (out.materials.len() - 1) as u32
             }),
         };
-        push_model_triangles(model, material, &file, &mut out.triangles)?;
+        push_model_triangles(model, material, out.origin, &file, &mut out.triangles)?;
     }
     Ok(out)
+}
+
+/// The origin of a file's positions ([`ObjMesh::origin`]), from its bounds in f64.
+fn file_origin(models: &[tobj::Model]) -> DVec3 {
+    let (mut min, mut max) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+    for model in models {
+        for p in model.mesh.positions.chunks_exact(3) {
+            let p = DVec3::from_slice(p);
+            min = min.min(p);
+            max = max.max(p);
+        }
+    }
+    recentre::offset_for(min, max).unwrap_or(DVec3::ZERO)
 }
 
 /// Parses pre-scanned OBJ text with `tobj`, with the MTL files it names (relative to
@@ -302,21 +343,24 @@ fn warn_of_unknown_materials(scan: &ObjScan, materials: &[Material], file: &str)
     }
 }
 
-/// The triangles of one `tobj` model, all of `material`, appended to `triangles`; with
-/// normals where every vertex of the model has one.
+/// The triangles of one `tobj` model, all of `material`, appended to `triangles` with
+/// their positions measured from `origin`; with normals where every vertex of the model
+/// has one.
 fn push_model_triangles(
     model: &tobj::Model,
     material: u32,
+    origin: DVec3,
     file: &str,
     triangles: &mut Vec<Triangle>,
 ) -> Result<(), SceneError> {
     let m = &model.mesh;
     let has_normals = !m.normals.is_empty() && m.normals.len() == m.positions.len();
     for (k, tri) in m.indices.chunks_exact(3).enumerate() {
+        let from_origin = |i: u32| vec3_at(&m.positions, i).map(|p| (p - origin).as_vec3());
         let p = [
-            vec3_at(&m.positions, tri[0]),
-            vec3_at(&m.positions, tri[1]),
-            vec3_at(&m.positions, tri[2]),
+            from_origin(tri[0]),
+            from_origin(tri[1]),
+            from_origin(tri[2]),
         ];
         let [Some(p0), Some(p1), Some(p2)] = p else {
             return Err(SceneError::Syntax {
@@ -333,7 +377,7 @@ fn push_model_triangles(
                 vec3_at(&m.normals, tri[1]),
                 vec3_at(&m.normals, tri[2]),
             ) {
-                (Some(a), Some(b), Some(c)) => Some([a, b, c]),
+                (Some(a), Some(b), Some(c)) => Some([a, b, c].map(|n| n.as_vec3())),
                 _ => None,
             }
         } else {
@@ -348,17 +392,20 @@ fn push_model_triangles(
     Ok(())
 }
 
-/// Vector `i` of flat xyz `data`, if it has one.
-fn vec3_at(data: &[f32], i: u32) -> Option<Vec3> {
+/// Vector `i` of flat xyz `data` (read in f64: `tobj`'s `use_f64`), if it has one.
+fn vec3_at(data: &[f64], i: u32) -> Option<DVec3> {
     let i = i as usize * 3;
-    data.get(i..i + 3).map(Vec3::from_slice)
+    data.get(i..i + 3).map(DVec3::from_slice)
 }
 
+/// The material of an MTL entry. `tobj` reads its numbers in f64 (`use_f64`, for the
+/// positions); they are rounded to f32 as the renderer holds them.
 fn convert_material(m: &tobj::Material) -> Material {
     let d = Material::default();
-    let v3 = |a: Option<[f32; 3]>, default: Vec3| a.map(Vec3::from).unwrap_or(default);
-    let param3 = |key: &str| -> Option<[f32; 3]> {
-        let vals: Vec<f32> = m
+    let v3 = |a: Option<[f64; 3]>, default: Vec3| a.map_or(default, |a| DVec3::from(a).as_vec3());
+    let f = |a: Option<f64>, default: f32| a.map_or(default, |a| a as f32);
+    let param3 = |key: &str| -> Option<[f64; 3]> {
+        let vals: Vec<f64> = m
             .unknown_param
             .get(key)?
             .split_whitespace()
@@ -370,16 +417,16 @@ fn convert_material(m: &tobj::Material) -> Material {
     let dissolve = m.dissolve.or_else(|| {
         m.unknown_param
             .get("Tr")
-            .and_then(|t| t.trim().parse::<f32>().ok())
+            .and_then(|t| t.trim().parse::<f64>().ok())
             .map(|tr| 1.0 - tr)
     });
     Material {
         name: m.name.clone(),
         diffuse: v3(m.diffuse, d.diffuse),
         specular: v3(m.specular, d.specular),
-        shininess: m.shininess.unwrap_or(d.shininess),
-        ior: m.optical_density.unwrap_or(d.ior),
-        dissolve: dissolve.unwrap_or(d.dissolve),
+        shininess: f(m.shininess, d.shininess),
+        ior: f(m.optical_density, d.ior),
+        dissolve: f(dissolve, d.dissolve),
         illum: m.illumination_model.map_or(d.illum, u32::from),
         emission: v3(m.emissive.or_else(|| param3("Ke")), d.emission),
         bsdf: None,
