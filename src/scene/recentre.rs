@@ -13,19 +13,22 @@
 //! **Nothing is rounded to f32 before the offset is taken off.** The loaders read in f64
 //! what a far scene needs exactly:
 //! - an OBJ file far from the origin keeps its positions relative to its own centre
-//!   ([`ObjMesh::origin`](crate::scene::obj::ObjMesh::origin));
-//! - a still mesh is placed at an f64 anchor ([`Anchored`]): its transform's
-//!   translation, plus its file's origin transformed, while its f32 positions carry only
-//!   the rotation and scale;
+//!   ([`ObjMesh::origin`](crate::scene::obj::ObjMesh::origin)), and the files of an OBJ
+//!   sequence relative to its first file's;
+//! - a mesh is placed at an f64 anchor: its transform's translation, plus its file's
+//!   origin transformed, while its f32 positions carry only the rotation and scale. A
+//!   still mesh's triangles are placed there ([`Anchored`]); a moving mesh's base
+//!   transform translates by it ([`MovingAnchor`]);
 //! - the camera's and the point lights' positions are read in f64 and moved in f64
 //!   ([`to_scene`]).
 //!
 //! The offset is chosen from the f64 bounds ([`offset_of`]), and each position becomes
-//! f32 once, after the offset is subtracted. A moving mesh (keyframes or an OBJ
-//! sequence) is posed in f32 at every frame, so it is read as the file gives it, rounded
-//! to f32, and moved by its keys ([`shift_motions`]). Scenes near the origin (every
-//! built-in one) are left as they are, bit for bit, and so are scenes moved by code
-//! ([`Motion::Procedural`], which writes world positions itself).
+//! f32 once, after the offset is subtracted. A moving mesh is posed in f32 at every frame
+//! from its small positions and a base translation that is its anchor less the offset
+//! ([`place_motions`]); only keys that turn or scale it, which act about the origin, see
+//! its far translation. Scenes near the origin (every built-in one) are left as they
+//! are, bit for bit, and so are scenes moved by code ([`Motion::Procedural`], which
+//! writes world positions itself).
 
 use std::ops::Range;
 
@@ -135,45 +138,64 @@ pub fn to_scene(position: [f64; 3], offset: Option<DVec3>) -> Vec3 {
     (DVec3::from(position) - offset.unwrap_or(DVec3::ZERO)).as_vec3()
 }
 
-/// Moves the keyed meshes of `animated` by −`offset` ([`shift_keyed`]) and poses them
-/// at time 0 again, so that the scene stays its own pose at time 0, bit for bit. The
-/// soup, the camera (its keys too) and the point lights are the loader's to move.
-pub fn shift_motions(animated: &mut AnimatedScene, offset: DVec3) {
-    if animated.animation.meshes.is_empty() {
+/// A moving mesh of a loaded scene (its index among the animation's meshes) and the f64
+/// translation its base transform stands for: its file's origin under the transform,
+/// plus the transform's translation as read ([`place_motions`] rounds it).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MovingAnchor {
+    pub mesh: usize,
+    pub anchor: DVec3,
+}
+
+/// Gives each keyed mesh of `animated` its base translation, its anchor less `offset`
+/// (the scene's), and poses what moves at time 0 again, so that the scene stays its own
+/// pose at time 0, bit for bit. The soup's still triangles, the camera (its keys too)
+/// and the point lights are the loader's to move.
+pub fn place_motions(animated: &mut AnimatedScene, moving: &[MovingAnchor], offset: Option<DVec3>) {
+    if moving.is_empty() {
         return;
     }
-    let offset = offset.as_vec3();
-    for mesh in &mut animated.animation.meshes {
-        match &mut mesh.motion {
-            Motion::Keyed { base, keys, .. } => shift_keyed(base, keys.as_mut(), offset),
-            // Only built-in scenes move by code, and they are never moved.
+    for m in moving {
+        match &mut animated.animation.meshes[m.mesh].motion {
+            Motion::Keyed { base, keys, .. } => place_keyed(base, keys.as_mut(), m.anchor, offset),
+            // Only built-in scenes move by code, and they are not loaded.
             Motion::Procedural(_) => {}
         }
     }
     animated.pose_in_place(0.0);
 }
 
-/// Moves a keyed mesh, p(t) = key(t) · (base · shape), by −`offset`. Where the keys only
-/// translate, the fixed base translates less: the far translation and the offset cancel
-/// before the keys' small motion is added, so that the motion keeps its precision. Keys
-/// that turn or scale act about the origin, so they themselves translate less (every
-/// key alike: the keys interpolate their translations linearly); without keys, the base
-/// does, or a new one.
-fn shift_keyed(
+/// Places a keyed mesh, p(t) = key(t) · (base · shape), whose shape is measured from a
+/// point that `base` takes to `anchor`, in a scene moved by −`offset`. Where the keys only
+/// translate (or there are none), the base's translation is the anchor less the offset,
+/// subtracted in f64: the far translation and the offset cancel before anything is
+/// rounded, and the keys' small motion is added to small numbers. Keys that turn or
+/// scale act about the origin, so the base keeps the anchor (rounded to f32) and the keys
+/// translate less, every key alike (they interpolate their translations linearly).
+fn place_keyed(
     base: &mut Option<Transform>,
     keys: Option<&mut Keyframes<Transform>>,
-    offset: Vec3,
+    anchor: DVec3,
+    offset: Option<DVec3>,
 ) {
+    let offset = offset.unwrap_or(DVec3::ZERO);
     let only_translate = |k: &Transform| k.rotate == Quat::IDENTITY && k.scale == Vec3::ONE;
-    match (keys, base) {
-        (Some(keys), Some(base)) if keys.values().iter().all(only_translate) => {
-            base.translate -= offset
+    let translate = match keys {
+        Some(keys) if !keys.values().iter().all(only_translate) => {
+            if offset != DVec3::ZERO {
+                let offset = offset.as_vec3();
+                keys.map_values(|k| k.translate -= offset);
+            }
+            anchor.as_vec3()
         }
-        (Some(keys), _) => keys.map_values(|k| k.translate -= offset),
-        (None, Some(base)) => base.translate -= offset,
-        (None, base @ None) => {
+        _ => (anchor - offset).as_vec3(),
+    };
+    match base {
+        Some(base) => base.translate = translate,
+        None if translate == Vec3::ZERO => {}
+        None => {
             *base = Some(Transform {
-                translate: -offset,
+                translate,
                 ..Transform::IDENTITY
             })
         }

@@ -107,7 +107,7 @@ use toml::Spanned;
 use super::animation::toml::{CameraToml, MeshToml};
 use super::animation::{AnimatedScene, Animation, Keyframes};
 use super::obj::read_text;
-use super::recentre::{self, Anchored};
+use super::recentre::{self, Anchored, MovingAnchor};
 use super::{
     framing_camera, validate, BsdfKind, Camera, FilmSize, Location, Material, MaterialBsdf,
     MaterialLayer, MicrofacetModel, PointLight, RenderSettings, Scene, SceneError, Triangle,
@@ -536,6 +536,7 @@ pub fn parse_toml_animated(
         mut animation,
         overrides,
         anchored,
+        moving,
     } = load_meshes(&doc.mesh, dir, &at_span)?;
     apply_material_tables(&doc.material, &mut materials, &at_span)?;
     apply_mesh_materials(&overrides, &materials, &mut triangles, &at_span)?;
@@ -578,9 +579,7 @@ pub fn parse_toml_animated(
     animation.camera = place_camera(doc.camera.as_ref(), offset, &mut scene, (&at_span, &whole))?;
     validate::validate_scene(&scene, &whole)?;
     let mut animated = AnimatedScene { scene, animation };
-    if let Some(offset) = offset {
-        recentre::shift_motions(&mut animated, offset);
-    }
+    recentre::place_motions(&mut animated, &moving, offset);
     Ok(animated)
 }
 
@@ -636,6 +635,8 @@ struct Meshes<'d> {
     overrides: Vec<(usize, usize, &'d Spanned<String>)>,
     /// The still meshes whose positions are relative to an anchor of their own.
     anchored: Vec<Anchored>,
+    /// The moving meshes' anchors.
+    moving: Vec<MovingAnchor>,
 }
 
 /// Loads every mesh, its triangles indexing the materials of all meshes.
@@ -645,6 +646,7 @@ fn load_meshes<'d>(meshes: &'d [MeshToml], dir: &Path, at: &Loc) -> Result<Meshe
     let mut animation = Animation::default();
     let mut overrides = Vec::new();
     let mut anchored = Vec::new();
+    let mut moving = Vec::new();
     for mesh in meshes {
         let loaded = mesh.load(dir, at)?;
         let offset = materials.len() as u32;
@@ -662,6 +664,10 @@ fn load_meshes<'d>(meshes: &'d [MeshToml], dir: &Path, at: &Loc) -> Result<Meshe
         }
         if let Some(mut motion) = loaded.motion {
             motion.range = start..triangles.len();
+            moving.push(MovingAnchor {
+                mesh: animation.meshes.len(),
+                anchor: loaded.motion_anchor,
+            });
             animation.meshes.push(motion);
         }
         if let Some(name) = &mesh.material {
@@ -674,6 +680,7 @@ fn load_meshes<'d>(meshes: &'d [MeshToml], dir: &Path, at: &Loc) -> Result<Meshe
         animation,
         overrides,
         anchored,
+        moving,
     })
 }
 

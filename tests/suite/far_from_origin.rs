@@ -3,6 +3,11 @@
 //! of two units, renders the image it renders at the origin, and what moves in it moves
 //! as it does there. The room's coordinates are multiples of 1/128, so that the far copy
 //! holds the very same geometry and the two scenes differ by a translation alone.
+//!
+//! In survey coordinates (5·10⁶, where f32 steps are 1/2) a room 0.6 wide keeps its shape
+//! only because nothing is rounded to f32 before the move: OBJ positions, translations,
+//! the camera and the point lights are read in f64, and the room renders and moves (keys,
+//! an OBJ sequence) as at the origin, to a few float steps of its size.
 
 use std::path::{Path, PathBuf};
 
@@ -268,4 +273,63 @@ fn a_room_placed_at_survey_coordinates_renders_as_at_the_origin() {
     let (b, b_se) = bpt_image(&far);
     common::reference::compare_images("the room at the origin", 16, (&b, &b_se), (&a, &a_se))
         .assert_agrees("the room at survey coordinates");
+}
+
+/// `near` and `far` posed at each of `times` differ by one offset, to a few float steps
+/// of the room's size, and each is its own pose at time 0.
+fn moves_alike(near: &AnimatedScene, far: &AnimatedScene, times: &[f32]) {
+    assert_eq!(near.pose(0.0), near.scene);
+    assert_eq!(far.pose(0.0), far.scene);
+    let d = moved_by_about_one_offset(&near.scene, &far.scene);
+    assert!(d.abs().max_element() <= 0.3, "{d}");
+    for &t in times {
+        let (a, b) = (near.pose(t), far.pose(t));
+        assert_ne!(a.triangles, near.scene.triangles, "nothing moved at {t}");
+        let dt = moved_by_about_one_offset(&a, &b);
+        assert!((dt - d).abs().max_element() < 1e-6, "t = {t}: {dt} vs {d}");
+        let camera_d = b.camera.position - a.camera.position;
+        assert!((camera_d - d).abs().max_element() < 1e-6, "t = {t}");
+    }
+}
+
+#[test]
+fn a_keyed_mesh_in_survey_coordinates_moves_as_at_the_origin() {
+    let keys = "[[mesh.keyframe]]\ntime = 0.0\n[[mesh.keyframe]]\ntime = 1.0\n\
+                translate = [0.075, 0.15, 0.0375]\n\
+                [[camera.keyframe]]\ntime = 0.5\n[[camera.keyframe]]\ntime = 2.0\nfov_y = 30\n";
+    let dir = tempfile::tempdir().unwrap();
+    let scene = |name: &str, at: [f64; 3]| {
+        let path = scaled_room_toml(dir.path(), name, at);
+        let text = std::fs::read_to_string(&path).unwrap() + keys;
+        std::fs::write(&path, text).unwrap();
+        load(&path)
+    };
+    let (near, far) = (scene("near.toml", [0.0; 3]), scene("far.toml", SURVEY));
+    moves_alike(&near, &far, &[0.25, 0.5, 1.0, 1.5, 3.0]);
+}
+
+#[test]
+fn an_obj_sequence_in_survey_coordinates_moves_as_at_the_origin() {
+    // Two files of the room, the second 0.15 higher: each written in absolute
+    // coordinates, far from the origin in the far sequence.
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("room.mtl"), ROOM_MTL).unwrap();
+    let scene = |name: &str, [x, y, z]: [f64; 3]| {
+        for (k, lift) in [0.0, 0.15].into_iter().enumerate() {
+            let file = dir.path().join(format!("{name}_{k}.obj"));
+            std::fs::write(file, scaled_room_obj([x, y + lift, z])).unwrap();
+        }
+        let path = dir.path().join(format!("{name}.toml"));
+        let text = format!(
+            "[camera]\nposition = [{x}, {}, {}]\nlook_at = [{x}, {}, {z}]\nfov_y = 40\n\
+             [[mesh]]\npath = \"{name}_{{}}.obj\"\nsequence = {{ first = 0, last = 1, fps = 1.0 }}\n",
+            y + 0.3,
+            z - 1.0125,
+            y + 0.3,
+        );
+        std::fs::write(&path, text).unwrap();
+        load(&path)
+    };
+    let (near, far) = (scene("near", [0.0; 3]), scene("far", SURVEY));
+    moves_alike(&near, &far, &[0.25, 0.5, 1.0]);
 }

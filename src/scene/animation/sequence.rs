@@ -173,8 +173,11 @@ pub fn load_sequence(
     let mut shapes = Vec::with_capacity((last - first) as usize + 1);
     for n in first..=last {
         let name = pattern.file(n);
-        // Posed in f32 at every frame: positions from the origin, as the file gives them.
-        let mesh = load_obj_mesh(&dir.join(&name))?.into_absolute();
+        // Every file's positions measured from the first file's origin (`ObjMesh::origin`).
+        let mut mesh = load_obj_mesh(&dir.join(&name))?;
+        if let Some(first) = &first_mesh {
+            mesh = mesh.measured_from(first.origin);
+        }
         let shape = shape_of(&mesh.triangles);
         if let Some(m) = &first_mesh {
             check_same_topology(m, &mesh, (&first_name, &name)).map_err(&invalid)?;

@@ -98,12 +98,16 @@ struct CameraKeyToml {
 
 /// A `[[mesh]]` entry loaded: its triangles posed at time 0 and its materials (indices
 /// local to the mesh), and how it moves (`range` still to be set by the caller).
+///
+/// Its anchor is its file's origin under its transform plus the transform's translation,
+/// in f64 ([`crate::scene::recentre`]). A still mesh's positions (rotated and scaled) are
+/// relative to it: it is `mesh.origin`. A moving mesh's triangles are posed with its
+/// anchor rounded to f32, `mesh.origin` is zero, and the anchor is `motion_anchor`.
 pub struct LoadedMesh {
-    /// Positions relative to `mesh.origin`: a still mesh's anchor (its file's origin
-    /// under its transform, with the translation, in f64) with its rotation and scale
-    /// applied; a moving mesh's origin is zero.
     pub mesh: ObjMesh,
     pub motion: Option<MeshMotion>,
+    /// A moving mesh's anchor (zero for a still mesh).
+    pub motion_anchor: DVec3,
 }
 
 /// The transform of `scale`, `rotate` and `translate` (each the identity where left
@@ -164,6 +168,26 @@ fn rotation_of(r: &RotationToml) -> Result<Quat, String> {
             "rotate needs either axis = [x, y, z] and degrees = a, or quaternion = [x, y, z, w]"
                 .to_string(),
         ),
+    }
+}
+
+/// A still mesh under its `base` transform: its positions rotated and scaled (in f32, as
+/// [`pose_keyed`] does, so that near the origin they are the posed ones, bit for bit,
+/// once the translation is added), measured from `anchor`.
+fn placed_still(mesh: ObjMesh, base: Option<&Transform>, anchor: DVec3) -> ObjMesh {
+    let Some(base) = base else {
+        return mesh;
+    };
+    let linear = Transform {
+        translate: Vec3::ZERO,
+        ..*base
+    };
+    let mut triangles = mesh.triangles.clone();
+    pose_keyed(&mesh.triangles, None, Some(&linear), None, &mut triangles);
+    ObjMesh {
+        triangles,
+        origin: anchor,
+        ..mesh
     }
 }
 
@@ -231,21 +255,36 @@ impl MeshToml {
             }
         };
         let keys = self.keys(&invalid)?;
+        let anchor = self.anchor(mesh.origin, base.as_ref());
         if keys.is_none() && sequence.is_none() {
             return Ok(LoadedMesh {
-                mesh: self.placed_still(mesh, base.as_ref()),
+                mesh: placed_still(mesh, base.as_ref(), anchor),
                 motion: None,
+                motion_anchor: DVec3::ZERO,
             });
         }
 
-        let mesh = mesh.into_absolute();
+        // The base takes the shape's origin to the anchor (rounded here; the scene's
+        // offset is subtracted from it in f64 once it is known: `recentre::place_motions`).
+        let base = match base {
+            None if anchor == DVec3::ZERO => None,
+            base => Some(Transform {
+                translate: anchor.as_vec3(),
+                ..base.unwrap_or(Transform::IDENTITY)
+            }),
+        };
         let rest = mesh.triangles;
         let mut triangles = rest.clone();
         let key0 = keys.as_ref().map(|k| k.sample(0.0));
         let file0 = sequence.as_ref().map(|s| (s, s.segment(0.0)));
         pose_keyed(&rest, file0, base.as_ref(), key0.as_ref(), &mut triangles);
         Ok(LoadedMesh {
-            mesh: ObjMesh { triangles, ..mesh },
+            mesh: ObjMesh {
+                triangles,
+                origin: DVec3::ZERO,
+                ..mesh
+            },
+            motion_anchor: anchor,
             motion: Some(MeshMotion {
                 name: rel.clone(),
                 range: 0..0,
@@ -259,34 +298,22 @@ impl MeshToml {
         })
     }
 
-    /// A still mesh under its `base` transform: its positions rotated and scaled (in
-    /// f32, as [`pose_keyed`] does, so that near the origin they are the posed ones, bit
-    /// for bit, once the translation is added), its origin the f64 anchor they are
-    /// relative to: the file's origin transformed, plus the translation read in f64.
-    fn placed_still(&self, mesh: ObjMesh, base: Option<&Transform>) -> ObjMesh {
+    /// Where `base` (this mesh's transform) takes a file's `origin`: the rotation and
+    /// scale applied in f64, plus the translation as read, in f64.
+    fn anchor(&self, origin: DVec3, base: Option<&Transform>) -> DVec3 {
         let Some(base) = base else {
-            return mesh;
+            return origin;
         };
-        let linear = Transform {
-            translate: Vec3::ZERO,
-            ..*base
-        };
-        let mut triangles = mesh.triangles.clone();
-        pose_keyed(&mesh.triangles, None, Some(&linear), None, &mut triangles);
-        let mut origin = mesh.origin * base.scale.as_dvec3();
+        let mut anchor = origin * base.scale.as_dvec3();
         if base.rotate != Quat::IDENTITY {
-            origin = base.rotate.as_dquat() * origin;
+            anchor = base.rotate.as_dquat() * anchor;
         }
         let translate = self
             .transform
             .as_ref()
             .and_then(|t| t.get_ref().translate)
             .map_or(DVec3::ZERO, DVec3::from);
-        ObjMesh {
-            triangles,
-            origin: origin + translate,
-            ..mesh
-        }
+        anchor + translate
     }
 
     /// The `[[mesh.keyframe]]` track: times increasing, and every key's scale with the

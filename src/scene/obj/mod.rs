@@ -54,15 +54,16 @@ pub struct ObjMesh {
 }
 
 impl ObjMesh {
-    /// The mesh with its positions measured from the origin, rounded to f32 as the file
-    /// would be read in f32 (a moving mesh's, which is posed in f32 at every frame).
-    pub fn into_absolute(mut self) -> Self {
-        if self.origin != DVec3::ZERO {
+    /// The mesh with its positions measured from `origin` instead, the difference of the
+    /// two origins taken in f64 (the files of a sequence share their first file's).
+    pub fn measured_from(mut self, origin: DVec3) -> Self {
+        let shift = self.origin - origin;
+        if shift != DVec3::ZERO {
             for t in &mut self.triangles {
-                t.p = t.p.map(|p| (self.origin + p.as_dvec3()).as_vec3());
+                t.p = t.p.map(|p| (shift + p.as_dvec3()).as_vec3());
             }
-            self.origin = DVec3::ZERO;
         }
+        self.origin = origin;
         self
     }
 }
