@@ -7,7 +7,7 @@ SCENE ?= cornell-box
 # material sorting where it pays (README: the integrators), for a fixed time.
 RENDER_FLAGS ?= --integrator cis-lbdpt --width 256 --height 256 --time 20
 
-.PHONY: deps build render test slurm-test lint doc bench clean
+.PHONY: deps build render test slurm-test lint doc gpu-bundle bench clean
 
 deps:
 	@command -v $(CARGO) >/dev/null || { echo "make: cargo not found: install a Rust toolchain (rustup) first" >&2; exit 1; }
@@ -52,6 +52,12 @@ slurm-test: deps
 lint:
 	$(CARGO) fmt --all -- --check
 	$(CARGO) clippy --profile ci --locked --all-targets -- -D warnings
+
+# What checking splitray on a GPU machine without a Rust toolchain or a Vulkan loader
+# needs (binaries, loader, validation layer), in .gpu-bundle/: tools/gpu-check.sh runs it
+# there in a copy of this checkout.
+gpu-bundle: deps
+	bash tools/gpu-bundle.sh
 
 # The API documentation in target/doc, with broken or private intra-doc links as errors.
 # In the `ci` profile it reuses what `make test` built (about 25 s on 2 cores then).
