@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Checks splitray on this machine's GPU with the bundle tools/gpu-bundle.sh made
 # (.gpu-bundle/ in this checkout), where neither a Rust toolchain nor a Vulkan loader is
-# installed. Parts, in order (default: all three):
+# installed. Parts, in order (default: all four):
 #
 #   info   `splitray info`: the devices, their queues and the streams' queues;
 #   tests  every test of the library and of tests/suite, with the validation layer on
@@ -10,14 +10,20 @@
 #   bench  `splitray bench bdpt` on lamps, fixture and the Cornell box: lvc-bdpt and
 #          cis-lbdpt at equal spp (512², 8 passes, median of 2 rounds) with 1 and 3
 #          streams and material sorting on and off: times, per-stream busy time and
-#          overlap, per-kernel GPU times.
+#          overlap, per-kernel GPU times;
+#   mse    pt, lvc-bdpt and cis-lbdpt at equal time (4 s each, in 4 turns) on fixture and
+#          lamps at 64²: relative MSE against 30-s lvc-bdpt references rendered first
+#          with a seed of their own (the benchmark takes their own noise out).
 #
 #   tools/gpu-check.sh [RESULTS] [PART...]     # RESULTS defaults to gpu-results/
 #
-# GPU_CHECK_TESTS=PATTERN runs only the tests whose names contain it; GPU_CHECK_SIZE and
-# GPU_CHECK_SPP set the benchmark's film side and passes (on a CPU device, say).
+# Parts can run in several calls with the same RESULTS (`info tests`, then `bench mse`):
+# the summary gathers them. GPU_CHECK_TESTS=PATTERN runs only the tests whose names
+# contain it; GPU_CHECK_SIZE and GPU_CHECK_SPP set the equal-spp film side and passes,
+# GPU_CHECK_REF_S and GPU_CHECK_MSE_S the seconds of each reference and contestant (on a
+# CPU device, say).
 #
-# Each part writes its log (and the benchmark its JSON) to RESULTS and a line to
+# Each part writes its log (and the benchmarks their JSON) to RESULTS and a line to
 # RESULTS/summary; the exit status is non-zero when a part failed. Nothing is installed:
 # the packages are unpacked into a temporary folder and found through LD_LIBRARY_PATH and
 # VK_LAYER_PATH. The tests were built with the checkout's path (BUILD_ROOT in the
@@ -28,9 +34,15 @@ cd "$(dirname "$0")/.."
 bundle=.gpu-bundle
 results=${1:-gpu-results}
 shift || true
-if [[ $# -gt 0 ]]; then parts=("$@"); else parts=(info tests bench); fi
+if [[ $# -gt 0 ]]; then parts=("$@"); else parts=(info tests bench mse); fi
+for part in "${parts[@]}"; do
+    [[ $part =~ ^(info|tests|bench|mse)$ ]] ||
+        { echo "$0: unknown part '$part' (info, tests, bench or mse)" >&2; exit 2; }
+done
 size=${GPU_CHECK_SIZE:-512}
 spp=${GPU_CHECK_SPP:-8}
+reference_s=${GPU_CHECK_REF_S:-30}
+contestant_s=${GPU_CHECK_MSE_S:-4}
 [[ -f $bundle/manifest ]] || { echo "$0: no $bundle/manifest: run tools/gpu-bundle.sh first" >&2; exit 2; }
 # shellcheck source=/dev/null
 source "$bundle/manifest"
@@ -68,8 +80,21 @@ if [[ ! -x $BUILD_ROOT/target/ci/splitray ]]; then
     mkdir -p "$BUILD_ROOT/target/ci" && cp "$work/splitray-ci" "$BUILD_ROOT/target/ci/splitray"
 fi
 
+# The equal-time comparison: references first, then the contestants in turns.
+equal_time() {
+    local scene
+    for scene in fixture lamps; do
+        "$work/splitray" render "$scene" --integrator lvc-bdpt --width 64 --height 64 \
+            --time "$reference_s" --seed 977 -o "$work/reference-$scene.exr" || return
+    done
+    "$work/splitray" bench bdpt fixture lamps --integrators pt,lvc-bdpt,cis-lbdpt \
+        --width 64 --height 64 --time "$contestant_s" --rounds 4 --spp 0 \
+        --reference "$work/reference-fixture.exr" --reference "$work/reference-lamps.exr" \
+        --json "$results/bench-mse.json"
+}
+
 echo "bundle of $COMMIT built $BUILT; checked $(date -u +%Y-%m-%dT%H:%M:%SZ) on $(hostname)" \
-    | tee "$results/summary"
+    | tee -a "$results/summary"
 status=0
 record() { # record PART RC SECONDS: a line of the summary
     local verdict=passed
@@ -84,6 +109,7 @@ for part in "${parts[@]}"; do
         ;;
     tests)
         rc=0
+        : >"$results/tests.log"
         # The live-view tests open windows on a virtual X display (Xvfb).
         skip=()
         command -v Xvfb >/dev/null || {
@@ -104,9 +130,8 @@ for part in "${parts[@]}"; do
             --spp "$spp" --spp-rounds 2 --streams 1,3 --sort on,off \
             --json "$results/bench-bdpt.json" >"$results/bench-bdpt.log" 2>&1
         ;;
-    *)
-        echo "$0: unknown part '$part' (info, tests or bench)" >&2
-        exit 2
+    mse)
+        equal_time >"$results/mse.log" 2>&1
         ;;
     esac
     record "$part" $? $((SECONDS - start))
