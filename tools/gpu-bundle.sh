@@ -22,15 +22,11 @@ bundle=${1:-.gpu-bundle}
 packages=(libvulkan1 vulkan-validationlayers libglvnd0 libgl1 libglx0 libegl1 libopengl0 libgles2)
 
 cargo build --release --locked
-# The `ci` binary the command-line tests run (CARGO_BIN_EXE_splitray) is built with them.
-artifacts=$(cargo test --profile ci --locked --no-run --lib --test suite --message-format=json)
-tests=$(python3 -c '
-import json, sys
-for line in sys.stdin:
-    m = json.loads(line)
-    if m.get("reason") == "compiler-artifact" and m.get("profile", {}).get("test") and m.get("executable"):
-        print(m["target"]["name"] + "=" + m["executable"])
-' <<<"$artifacts")
+# The `ci` binary the command-line tests run (CARGO_BIN_EXE_splitray) is built with them;
+# cargo names each test executable as "Executable <source> (<path>)".
+built=$(cargo test --profile ci --locked --no-run --lib --test suite 2>&1) ||
+    { echo "$built" >&2; exit 1; }
+tests=$(sed -n 's/^ *Executable .*(\(.*\))$/\1/p' <<<"$built")
 
 rm -rf "$bundle"
 mkdir -p "$bundle/debs"
@@ -41,10 +37,11 @@ pack() { # pack SOURCE NAME: a stripped, gzipped copy of binary SOURCE as NAME.g
 pack target/release/splitray splitray
 pack target/ci/splitray splitray-ci
 names=()
-while IFS='=' read -r name path; do
-    pack "$path" "test-$name"
-    names+=("test-$name")
-done <<<"$tests"
+for path in $tests; do
+    name=test-$(basename "$path" | sed 's/-[0-9a-f]*$//') # deps/suite-<hash>: test-suite
+    pack "$path" "$name"
+    names+=("$name")
+done
 [[ ${#names[@]} -eq 2 ]] || { echo "$0: expected 2 test binaries, found: ${names[*]}" >&2; exit 1; }
 
 (cd "$bundle/debs" && apt-get -q -o APT::Sandbox::User=root download "${packages[@]}")
