@@ -76,8 +76,12 @@ elif [[ $(cd "$BUILD_ROOT" && pwd -P) != "$here" ]]; then
     echo "$0: the tests were built in $BUILD_ROOT, which is another folder: run this in it" >&2
     exit 2
 fi
-if [[ ! -x $BUILD_ROOT/target/ci/splitray ]]; then
-    mkdir -p "$BUILD_ROOT/target/ci" && cp "$work/splitray-ci" "$BUILD_ROOT/target/ci/splitray"
+# A binary that cargo built there is left alone; one from an older bundle is replaced.
+ci_binary=$BUILD_ROOT/target/ci/splitray
+stamp=$BUILD_ROOT/target/ci/.splitray-from-gpu-bundle
+if [[ ! -e $ci_binary ]] || { [[ -f $stamp ]] && [[ $(cat "$stamp") != "$COMMIT $BUILT" ]]; }; then
+    mkdir -p "$(dirname "$ci_binary")" && cp "$work/splitray-ci" "$ci_binary" &&
+        echo "$COMMIT $BUILT" >"$stamp"
 fi
 
 # The equal-time comparison: references first, then the contestants in turns.
