@@ -148,21 +148,24 @@ pub struct MovingAnchor {
 }
 
 /// Gives each keyed mesh of `animated` its base translation, its anchor less `offset`
-/// (the scene's), and poses what moves at time 0 again, so that the scene stays its own
-/// pose at time 0, bit for bit. The soup's still triangles, the camera (its keys too)
+/// (the scene's), and, where that moved a mesh, poses what moves at time 0 again, so
+/// that the scene stays its own pose at time 0, bit for bit. The soup's still triangles, the camera (its keys too)
 /// and the point lights are the loader's to move.
 pub fn place_motions(animated: &mut AnimatedScene, moving: &[MovingAnchor], offset: Option<DVec3>) {
-    if moving.is_empty() {
-        return;
-    }
+    let mut moved = false;
     for m in moving {
         match &mut animated.animation.meshes[m.mesh].motion {
-            Motion::Keyed { base, keys, .. } => place_keyed(base, keys.as_mut(), m.anchor, offset),
+            Motion::Keyed { base, keys, .. } => {
+                moved |= place_keyed(base, keys.as_mut(), m.anchor, offset)
+            }
             // Only built-in scenes move by code, and they are not loaded.
             Motion::Procedural(_) => {}
         }
     }
-    animated.pose_in_place(0.0);
+    // Near the origin the loader's pose at time 0 already is the scene's.
+    if moved {
+        animated.pose_in_place(0.0);
+    }
 }
 
 /// Places a keyed mesh, p(t) = key(t) · (base · shape), whose shape is measured from a
@@ -172,34 +175,39 @@ pub fn place_motions(animated: &mut AnimatedScene, moving: &[MovingAnchor], offs
 /// rounded, and the keys' small motion is added to small numbers. Keys that turn or
 /// scale act about the origin, so the base keeps the anchor (rounded to f32) and the keys
 /// translate less, every key alike (they interpolate their translations linearly).
+/// Returns whether that changed the motion.
 fn place_keyed(
     base: &mut Option<Transform>,
     keys: Option<&mut Keyframes<Transform>>,
     anchor: DVec3,
     offset: Option<DVec3>,
-) {
+) -> bool {
     let offset = offset.unwrap_or(DVec3::ZERO);
     let only_translate = |k: &Transform| k.rotate == Quat::IDENTITY && k.scale == Vec3::ONE;
+    let mut keys_moved = false;
     let translate = match keys {
         Some(keys) if !keys.values().iter().all(only_translate) => {
             if offset != DVec3::ZERO {
                 let offset = offset.as_vec3();
                 keys.map_values(|k| k.translate -= offset);
+                keys_moved = true;
             }
             anchor.as_vec3()
         }
         _ => (anchor - offset).as_vec3(),
     };
-    match base {
-        Some(base) => base.translate = translate,
-        None if translate == Vec3::ZERO => {}
+    let base_moved = match base {
+        Some(base) => std::mem::replace(&mut base.translate, translate) != translate,
+        None if translate == Vec3::ZERO => false,
         None => {
             *base = Some(Transform {
                 translate,
                 ..Transform::IDENTITY
-            })
+            });
+            true
         }
-    }
+    };
+    keys_moved || base_moved
 }
 
 #[cfg(test)]
